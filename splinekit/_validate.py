@@ -1,0 +1,149 @@
+"""Input checks shared by every constructor and operation.
+
+Each function converts its argument to a C-contiguous float64 (or int) array of
+the expected shape and raises a :class:`~splinekit.errors.SplineKitError`
+subclass naming the argument when it cannot.
+"""
+
+from __future__ import annotations
+
+import operator
+
+import numpy as np
+
+from .errors import (
+    ControlPointError,
+    DegreeError,
+    DomainError,
+    ParameterError,
+    WeightError,
+)
+from .tolerances import DEFAULT
+
+
+def _as_float_array(value, name: str, error=ParameterError) -> np.ndarray:
+    try:
+        arr = np.asarray(value, dtype=np.float64)
+    except (TypeError, ValueError) as exc:
+        raise error(f"{name} must be numeric, got {type(value).__name__}: {exc}") from None
+    return arr
+
+
+def as_int(value, name: str, minimum: int | None = None, error=ParameterError) -> int:
+    """Return ``value`` as a Python int, refusing floats such as 2.5 and bools."""
+    if isinstance(value, bool):
+        raise error(f"{name} must be an integer, got bool {value!r}")
+    try:
+        result = operator.index(value)
+    except TypeError:
+        raise error(f"{name} must be an integer, got {value!r}") from None
+    if minimum is not None and result < minimum:
+        raise error(f"{name} must be >= {minimum}, got {result}")
+    return int(result)
+
+
+def as_degree(value, name: str = "degree") -> int:
+    """A polynomial degree: an integer >= 1."""
+    return as_int(value, name, minimum=1, error=DegreeError)
+
+
+def as_points(value, name: str = "control_points", leading: int = 1, min_count=None) -> np.ndarray:
+    """Control points as a float64 array of shape ``(n_1, ..., n_leading, dim)``.
+
+    ``leading`` is the number of index axes (1 for curves, 2 for surfaces).
+    ``min_count`` is a tuple of minimum lengths of the index axes.
+    """
+    arr = _as_float_array(value, name, ControlPointError)
+    if arr.ndim != leading + 1:
+        axes = ", ".join(["n"] * leading if leading == 1 else ["nu", "nv"])
+        raise ControlPointError(
+            f"{name} must have shape ({axes}, dim), got an array of shape {arr.shape}"
+        )
+    if arr.shape[-1] < 1:
+        raise ControlPointError(f"{name} must have at least one coordinate, got shape {arr.shape}")
+    if min_count is not None:
+        for axis, (have, need) in enumerate(zip(arr.shape[:-1], min_count)):
+            if have < need:
+                raise ControlPointError(
+                    f"{name} needs at least {need} points along axis {axis}, got {have}"
+                )
+    bad = ~np.isfinite(arr)
+    if bad.any():
+        index = tuple(int(i) for i in np.argwhere(bad)[0][:-1])
+        raise ControlPointError(f"{name}{list(index)} is not finite: {arr[index].tolist()}")
+    return np.ascontiguousarray(arr)
+
+
+def as_weights(value, shape: tuple, name: str = "weights") -> np.ndarray:
+    """Rational weights: finite, strictly positive, of the given shape."""
+    arr = _as_float_array(value, name, WeightError)
+    if arr.shape != tuple(shape):
+        raise WeightError(f"{name} must have shape {tuple(shape)}, got {arr.shape}")
+    bad = ~(np.isfinite(arr) & (arr > 0))
+    if bad.any():
+        index = tuple(int(i) for i in np.argwhere(bad)[0])
+        raise WeightError(
+            f"{name}{list(index)} = {arr[index]!r}: weights must be finite and > 0"
+        )
+    return np.ascontiguousarray(arr)
+
+
+def as_params(value, domain: tuple, name: str = "u", rtol: float = DEFAULT.param) -> np.ndarray:
+    """Parameters as a float64 array of any shape, checked to lie in ``domain``.
+
+    Values within ``rtol * (b - a)`` outside ``[a, b]`` are clamped onto it;
+    anything further out, or non-finite, raises :class:`DomainError`.
+    """
+    arr = _as_float_array(value, name, DomainError)
+    a, b = domain
+    slack = rtol * max(b - a, 1.0)
+    ok = (arr >= a - slack) & (arr <= b + slack)  # False for NaN
+    if not ok.all():
+        bad = arr[~ok].ravel()[0]
+        raise DomainError(f"{name} = {bad!r} lies outside the parameter domain [{a!r}, {b!r}]")
+    return np.clip(arr, a, b)
+
+
+def as_order(value, name: str = "order") -> int:
+    """A derivative order: an integer >= 0."""
+    return as_int(value, name, minimum=0)
+
+
+def as_direction(value) -> int:
+    """``"u"`` -> 0, ``"v"`` -> 1."""
+    if value in ("u", "U", 0):
+        return 0
+    if value in ("v", "V", 1):
+        return 1
+    raise ParameterError(f"direction must be 'u' or 'v', got {value!r}")
+
+
+def as_affine(matrix, dim: int) -> tuple[np.ndarray, np.ndarray]:
+    """Split an affine map into (linear ``(dim, dim)``, translation ``(dim,)``).
+
+    Accepts a ``(dim, dim)`` linear map or a ``(dim + 1, dim + 1)`` homogeneous
+    matrix whose last row is ``[0, ..., 0, 1]``.
+    """
+    m = _as_float_array(matrix, "matrix")
+    if not np.isfinite(m).all():
+        raise ParameterError("matrix has non-finite entries")
+    if m.shape == (dim, dim):
+        return m, np.zeros(dim)
+    if m.shape == (dim + 1, dim + 1):
+        expected = np.zeros(dim + 1)
+        expected[-1] = 1.0
+        if not np.allclose(m[-1], expected, rtol=0, atol=1e-12):
+            raise ParameterError(
+                f"the last row of a homogeneous matrix must be {expected.tolist()}, got {m[-1].tolist()}"
+            )
+        return m[:dim, :dim], m[:dim, dim]
+    raise ParameterError(
+        f"matrix must have shape ({dim}, {dim}) or ({dim + 1}, {dim + 1}) for {dim}-D points, got {m.shape}"
+    )
+
+
+def frozen(arr: np.ndarray) -> np.ndarray:
+    """A read-only, C-contiguous float64 copy-if-needed of ``arr``."""
+    out = np.array(arr, dtype=np.float64, order="C", copy=True)
+    out.setflags(write=False)
+    return out

@@ -1,0 +1,57 @@
+"""Bernstein polynomials, computed by the stable triangular scheme.
+
+``B_i^n(t) = C(n, i) t^i (1 - t)^(n - i)``. The values come from the same
+Cox-de Boor triangle as the B-spline basis on the Bézier knot vector
+``[0]*(n+1) + [1]*(n+1)``, which for t in [0, 1] only forms convex
+combinations and so stays accurate at high degree (no large binomials).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .._validate import as_int
+from .bspline import basis_ders_t, basis_funs_t
+
+__all__ = ["bernstein", "all_bernstein", "bezier_knots"]
+
+
+def bezier_knots(degree: int) -> np.ndarray:
+    """The knot vector ``[0]*(p+1) + [1]*(p+1)`` of a degree-``p`` Bézier segment."""
+    return np.concatenate([np.zeros(degree + 1), np.ones(degree + 1)])
+
+
+def all_bernstein(n: int, t, order: int = 0) -> np.ndarray:
+    """All degree-``n`` Bernstein polynomials (and derivatives) at ``t``.
+
+    Returns ``(n + 1,) + t.shape`` for ``order == 0``, else
+    ``(order + 1, n + 1) + t.shape``. Valid for any real ``t`` (polynomial
+    extension outside [0, 1]).
+    """
+    n = as_int(n, "n", minimum=0)
+    t = np.asarray(t, dtype=np.float64)
+    shape = t.shape
+    flat = t.ravel()
+    if n == 0:
+        vals = np.ones((1, flat.size))
+        out = vals if order == 0 else np.concatenate([vals[None], np.zeros((order, 1, flat.size))])
+    else:
+        span = np.full(flat.size, n)
+        if order == 0:
+            out = basis_funs_t(n, bezier_knots(n), span, flat)
+        else:
+            out = basis_ders_t(n, bezier_knots(n), span, flat, order)
+    return out.reshape(out.shape[:-1] + shape)
+
+
+def bernstein(n: int, i: int, t) -> np.ndarray:
+    """Bernstein basis polynomial ``B_i^n`` at the array ``t`` (shape of ``t``).
+
+    ``B_i^n`` is identically zero for ``i < 0`` or ``i > n``.
+    """
+    n = as_int(n, "n", minimum=0)
+    i = as_int(i, "i")
+    t = np.asarray(t, dtype=np.float64)
+    if i < 0 or i > n:
+        return np.zeros(t.shape)
+    return all_bernstein(n, t)[i]

@@ -1,0 +1,105 @@
+"""Knot vectors: validation, multiplicities and standard constructions.
+
+A knot vector of a degree-``p`` spline with ``n`` control points has
+``n + p + 1`` non-decreasing finite values ``U[0..n+p]``; the parameter domain is
+``[U[p], U[n]]``. No value may appear more than ``p + 1`` times, and a value
+strictly inside the domain no more than ``p`` times (the curve would fall apart).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .._validate import frozen
+from ..errors import KnotVectorError
+
+__all__ = [
+    "validate_knots",
+    "domain",
+    "distinct",
+    "multiplicity",
+    "clamped_uniform",
+    "is_clamped",
+]
+
+
+def validate_knots(knots, degree: int, n_ctrl: int, name: str = "knots") -> np.ndarray:
+    """Check a knot vector against its degree and control-point count.
+
+    Returns a read-only float64 copy. Raises :class:`KnotVectorError` naming
+    the first offending index.
+    """
+    try:
+        U = np.asarray(knots, dtype=np.float64)
+    except (TypeError, ValueError) as exc:
+        raise KnotVectorError(f"{name} must be a 1-D array of numbers: {exc}") from None
+    if U.ndim != 1:
+        raise KnotVectorError(f"{name} must be 1-D, got shape {U.shape}")
+    expected = n_ctrl + degree + 1
+    if U.size != expected:
+        raise KnotVectorError(
+            f"{name} has {U.size} values; a degree-{degree} spline with {n_ctrl} control "
+            f"points needs len(control_points) + degree + 1 = {expected}"
+        )
+    bad = np.flatnonzero(~np.isfinite(U))
+    if bad.size:
+        raise KnotVectorError(f"{name}[{bad[0]}] = {U[bad[0]]!r} is not finite")
+    dec = np.flatnonzero(np.diff(U) < 0)
+    if dec.size:
+        i = dec[0]
+        raise KnotVectorError(
+            f"{name} must be non-decreasing, but {name}[{i + 1}] = {U[i + 1]!r} < {name}[{i}] = {U[i]!r}"
+        )
+    a, b = U[degree], U[n_ctrl]
+    if not a < b:
+        raise KnotVectorError(
+            f"{name} gives an empty domain [{name}[{degree}], {name}[{n_ctrl}]] = [{a!r}, {b!r}]"
+        )
+    values, counts = np.unique(U, return_counts=True)
+    over = np.flatnonzero(counts > degree + 1)
+    if over.size:
+        v = values[over[0]]
+        raise KnotVectorError(
+            f"knot {v!r} appears {counts[over[0]]} times in {name}; at most degree + 1 = {degree + 1} allowed"
+        )
+    inner = (values > a) & (values < b) & (counts > degree)
+    if inner.any():
+        k = np.flatnonzero(inner)[0]
+        raise KnotVectorError(
+            f"interior knot {values[k]!r} has multiplicity {counts[k]} in {name}; "
+            f"at most the degree {degree} keeps the spline connected"
+        )
+    return frozen(U)
+
+
+def domain(degree: int, knots: np.ndarray) -> tuple[float, float]:
+    """The parameter domain ``(U[p], U[n])``."""
+    n = knots.size - degree - 1
+    return float(knots[degree]), float(knots[n])
+
+
+def distinct(knots: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Distinct knot values and their multiplicities (OCC's representation)."""
+    values, counts = np.unique(knots, return_counts=True)
+    return values, counts
+
+
+def multiplicity(knots: np.ndarray, u: float, tol: float = 0.0) -> int:
+    """How many knots lie within ``tol`` of ``u``."""
+    return int(np.count_nonzero(np.abs(knots - u) <= tol))
+
+
+def is_clamped(degree: int, knots: np.ndarray) -> bool:
+    """True when the first and the last ``degree + 1`` knots are equal."""
+    return bool(knots[0] == knots[degree] and knots[-1] == knots[-degree - 1])
+
+
+def clamped_uniform(degree: int, n_ctrl: int, start: float = 0.0, end: float = 1.0) -> np.ndarray:
+    """Clamped knot vector with uniformly spaced interior knots on ``[start, end]``.
+
+    Needs ``n_ctrl >= degree + 1``.
+    """
+    if n_ctrl < degree + 1:
+        raise KnotVectorError(f"a degree-{degree} spline needs at least {degree + 1} control points, got {n_ctrl}")
+    inner = np.linspace(start, end, n_ctrl - degree + 1)[1:-1]
+    return np.concatenate([np.full(degree + 1, start), inner, np.full(degree + 1, end)])

@@ -1,0 +1,64 @@
+"""The exception tree of splinekit.
+
+Every error raised on bad input derives from :class:`SplineKitError`, which is a
+``ValueError`` so that code written against plain numpy/scipy habits still
+catches it. Messages name the offending value or index and what was expected.
+"""
+
+from __future__ import annotations
+
+__all__ = [
+    "SplineKitError",
+    "DegreeError",
+    "KnotVectorError",
+    "ControlPointError",
+    "WeightError",
+    "ParameterError",
+    "DomainError",
+    "KnotRemovalError",
+    "BackendError",
+    "MissingDependencyError",
+]
+
+
+class SplineKitError(ValueError):
+    """Base class of every error splinekit raises on bad input."""
+
+
+class DegreeError(SplineKitError):
+    """A degree is not an integer >= 1, or is inconsistent with the data."""
+
+
+class KnotVectorError(SplineKitError):
+    """A knot vector is malformed: wrong length, decreasing, non-finite, or a
+    multiplicity above what the degree allows."""
+
+
+class ControlPointError(SplineKitError):
+    """Control points have the wrong shape or non-finite coordinates."""
+
+
+class WeightError(SplineKitError):
+    """Rational weights are non-positive, non-finite or of the wrong shape."""
+
+
+class ParameterError(SplineKitError):
+    """An argument other than geometry is malformed (a direction name, an
+    order, a count, a matrix)."""
+
+
+class DomainError(SplineKitError):
+    """A parameter value lies outside the parameter domain."""
+
+
+class KnotRemovalError(SplineKitError):
+    """A knot cannot be removed without moving the geometry more than the
+    requested tolerance (or it is not a knot at all)."""
+
+
+class BackendError(SplineKitError, RuntimeError):
+    """An external kernel (OpenCascade, manifold3d) reported a failure."""
+
+
+class MissingDependencyError(SplineKitError, ImportError):
+    """An optional backend is not installed; the message names the package."""
