@@ -1,0 +1,516 @@
+"""Tensor-product B-spline and NURBS surfaces as immutable value types.
+
+Control points are ``(nu, nv, dim)``; a rational surface keeps homogeneous
+coefficients ``(w * P, w)`` ``(nu, nv, dim + 1)`` internally. Knot operations in
+one direction reuse the curve algebra of :mod:`splinekit.basis.algebra` with the
+other direction carried along as a trailing axis.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .._validate import (
+    as_affine,
+    as_degree,
+    as_direction,
+    as_int,
+    as_order,
+    as_params,
+    as_points,
+    as_weights,
+    frozen,
+)
+from ..basis import algebra
+from ..basis.bspline import basis_ders_t, basis_funs_t, find_span
+from ..basis.knots import clamped_uniform, domain, is_clamped, validate_knots
+from ..basis.rational import rational_surface_derivatives
+from ..errors import DomainError, KnotRemovalError, KnotVectorError, ParameterError
+from ..tolerances import DEFAULT
+
+__all__ = ["SplineSurface", "BSplineSurface", "NurbsSurface"]
+
+
+def _tensor_combine(coefs, p, q, su, sv, Nu, Nv):
+    """``sum_ij Nu[..., i, m] Nv[..., j, m] C[su-p+i, sv-q+j]``.
+
+    ``coefs`` ``(nu, nv, k)``, ``Nu`` ``(a, p + 1, m)``, ``Nv`` ``(b, q + 1, m)``;
+    returns ``(a, b, m, k)``. Loops run over the degrees only.
+    """
+    nu, nv, k = coefs.shape
+    flat = coefs.reshape(nu * nv, k)
+    out = None
+    for i in range(p + 1):
+        base = (su - p + i) * nv + (sv - q)
+        inner = None
+        for j in range(q + 1):
+            term = Nv[:, j, :, None] * flat[base + j]  # (b, m, k)
+            inner = term if inner is None else inner + term
+        term = Nu[:, None, i, :, None] * inner[None]  # (a, b, m, k)
+        out = term if out is None else out + term
+    return out
+
+
+class SplineSurface:
+    """Common implementation of :class:`BSplineSurface` and :class:`NurbsSurface`."""
+
+    __slots__ = ("_pu", "_pv", "_ku", "_kv", "_coefs", "_rational", "_cache")
+
+    @classmethod
+    def _trusted(cls, pu, pv, ku, kv, coefs, rational):
+        if rational and cls is BSplineSurface:
+            cls = NurbsSurface
+        obj = object.__new__(cls)
+        obj._set(int(pu), int(pv), ku, kv, coefs, bool(rational))
+        return obj
+
+    def _set(self, pu, pv, ku, kv, coefs, rational):
+        for name, value in (
+            ("_pu", pu),
+            ("_pv", pv),
+            ("_ku", frozen(ku)),
+            ("_kv", frozen(kv)),
+            ("_coefs", frozen(coefs)),
+            ("_rational", rational),
+            ("_cache", {}),
+        ):
+            object.__setattr__(self, name, value)
+
+    def _like(self, pu, pv, ku, kv, coefs):
+        if self._rational and not (coefs[..., -1] > 0).all():
+            raise KnotRemovalError("the operation would produce non-positive weights")
+        return type(self)._trusted(pu, pv, ku, kv, coefs, self._rational)
+
+    def __setattr__(self, name, value):
+        raise AttributeError(f"{type(self).__name__} is immutable; operations return new surfaces")
+
+    # -- attributes -------------------------------------------------------------------
+    degree_u = property(lambda self: self._pu, doc="Degree in u.")
+    degree_v = property(lambda self: self._pv, doc="Degree in v.")
+    knots_u = property(lambda self: self._ku, doc="Full knot vector in u (read-only).")
+    knots_v = property(lambda self: self._kv, doc="Full knot vector in v (read-only).")
+    is_rational = property(lambda self: self._rational)
+
+    @property
+    def control_points(self) -> np.ndarray:
+        """Cartesian control points ``(nu, nv, dim)`` (read-only)."""
+        if not self._rational:
+            return self._coefs
+        if "points" not in self._cache:
+            self._cache["points"] = frozen(self._coefs[..., :-1] / self._coefs[..., -1:])
+        return self._cache["points"]
+
+    @property
+    def weights(self):
+        """``(nu, nv)`` weights of a rational surface, else ``None``."""
+        return self._coefs[..., -1] if self._rational else None
+
+    @property
+    def homogeneous_points(self) -> np.ndarray:
+        """``(w * P, w)`` ``(nu, nv, dim + 1)``."""
+        if self._rational:
+            return self._coefs
+        ones = np.ones(self._coefs.shape[:2] + (1,))
+        return frozen(np.concatenate([self._coefs, ones], axis=-1))
+
+    @property
+    def dim(self) -> int:
+        return self._coefs.shape[-1] - self._rational
+
+    @property
+    def shape(self) -> tuple[int, int]:
+        """Control net size ``(nu, nv)``."""
+        return self._coefs.shape[:2]
+
+    @property
+    def domain(self) -> tuple[tuple[float, float], tuple[float, float]]:
+        """``((u0, u1), (v0, v1))``."""
+        return domain(self._pu, self._ku), domain(self._pv, self._kv)
+
+    def __eq__(self, other):
+        if not isinstance(other, SplineSurface):
+            return NotImplemented
+        return (
+            (self._rational, self._pu, self._pv) == (other._rational, other._pu, other._pv)
+            and self._ku.shape == other._ku.shape
+            and self._kv.shape == other._kv.shape
+            and self._coefs.shape == other._coefs.shape
+            and bool(np.array_equal(self._ku, other._ku))
+            and bool(np.array_equal(self._kv, other._kv))
+            and bool(np.array_equal(self._coefs, other._coefs))
+        )
+
+    def __hash__(self):
+        return hash((self._rational, self._pu, self._pv, self._ku.tobytes(), self._kv.tobytes(), self._coefs.tobytes()))
+
+    def almost_equal(self, other, tol: float = 1e-12) -> bool:
+        return (
+            isinstance(other, SplineSurface)
+            and (self._rational, self._pu, self._pv) == (other._rational, other._pu, other._pv)
+            and self._ku.shape == other._ku.shape
+            and self._kv.shape == other._kv.shape
+            and self._coefs.shape == other._coefs.shape
+            and bool(np.allclose(self._ku, other._ku, rtol=0, atol=tol))
+            and bool(np.allclose(self._kv, other._kv, rtol=0, atol=tol))
+            and bool(np.allclose(self._coefs, other._coefs, rtol=0, atol=tol))
+        )
+
+    def __repr__(self):
+        (a, b), (c, d) = self.domain
+        return (
+            f"{type(self).__name__}(degree=({self._pu}, {self._pv}), control_net={self.shape}, dim={self.dim}, "
+            f"domain=[{a:g}, {b:g}] x [{c:g}, {d:g}])"
+        )
+
+    # -- evaluation -------------------------------------------------------------------
+    def _uv(self, u, v):
+        (du, dv) = self.domain
+        u = as_params(u, du, "u")
+        v = as_params(v, dv, "v")
+        try:
+            u, v = np.broadcast_arrays(u, v)
+        except ValueError:
+            raise ParameterError(f"u and v must have the same shape, got {u.shape} and {v.shape}") from None
+        return u, v
+
+    def evaluate(self, u, v) -> np.ndarray:
+        """Points at the pairs ``(u[i], v[i])``: ``u.shape + (dim,)``."""
+        u, v = self._uv(u, v)
+        fu, fv = u.ravel(), v.ravel()
+        su = find_span(self._pu, self._ku, fu)
+        sv = find_span(self._pv, self._kv, fv)
+        Nu = basis_funs_t(self._pu, self._ku, su, fu)[None]
+        Nv = basis_funs_t(self._pv, self._kv, sv, fv)[None]
+        pts = _tensor_combine(self._coefs, self._pu, self._pv, su, sv, Nu, Nv)[0, 0]
+        if self._rational:
+            pts = pts[:, :-1] / pts[:, -1:]
+        return pts.reshape(u.shape + (self.dim,))
+
+    __call__ = evaluate
+
+    def derivatives(self, u, v, order: int = 1) -> np.ndarray:
+        """Partial derivatives ``(order + 1, order + 1) + u.shape + (dim,)``.
+
+        Entry ``[k, l]`` is ``d^(k+l) S / du^k dv^l`` (rational: A4.4).
+        """
+        order = as_order(order)
+        u, v = self._uv(u, v)
+        fu, fv = u.ravel(), v.ravel()
+        su = find_span(self._pu, self._ku, fu)
+        sv = find_span(self._pv, self._kv, fv)
+        Nu = basis_ders_t(self._pu, self._ku, su, fu, order)
+        Nv = basis_ders_t(self._pv, self._kv, sv, fv, order)
+        ders = _tensor_combine(self._coefs, self._pu, self._pv, su, sv, Nu, Nv)
+        if self._rational:
+            ders = rational_surface_derivatives(ders)
+        return ders.reshape((order + 1, order + 1) + u.shape + (self.dim,))
+
+    def _grid_basis(self, us, vs, order=0):
+        (du, dv) = self.domain
+        us = as_params(us, du, "us").ravel()
+        vs = as_params(vs, dv, "vs").ravel()
+        out = []
+        for p, U, n, x in ((self._pu, self._ku, self.shape[0], us), (self._pv, self._kv, self.shape[1], vs)):
+            span = find_span(p, U, x)
+            vals = basis_ders_t(p, U, span, x, order)  # (order+1, p+1, m)
+            dense = np.zeros((order + 1, x.size, n))
+            rows = np.arange(x.size)
+            for r in range(p + 1):
+                dense[:, rows, span - p + r] = vals[:, r]
+            out.append(dense)
+        return out
+
+    def _grid_homogeneous(self, Nu, Nv):
+        """``Nu @ C @ Nv^T`` per coordinate: ``Nu`` ``(mu, nu)``, ``Nv`` ``(mv, nv)`` -> ``(mu, mv, k)``."""
+        nu, nv, k = self._coefs.shape
+        R = (Nu @ self._coefs.reshape(nu, nv * k)).reshape(-1, nv, k)  # (mu, nv, k)
+        return np.matmul(Nv, R)  # broadcast over mu: (mu, mv, k)
+
+    def evaluate_grid(self, us, vs) -> np.ndarray:
+        """Points on the tensor grid ``us x vs``: ``(len(us), len(vs), dim)``.
+
+        Computed as ``Nu @ P @ Nv^T`` with the basis matrices of the two
+        parameter vectors, never point by point.
+        """
+        Nu, Nv = self._grid_basis(us, vs)
+        out = self._grid_homogeneous(Nu[0], Nv[0])
+        if self._rational:
+            out = out[..., :-1] / out[..., -1:]
+        return out
+
+    def derivatives_grid(self, us, vs, order: int = 1) -> np.ndarray:
+        """Partial derivatives on a grid: ``(order + 1, order + 1, len(us), len(vs), dim)``."""
+        order = as_order(order)
+        Nu, Nv = self._grid_basis(us, vs, order)
+        ders = np.stack([np.stack([self._grid_homogeneous(Nu[a], Nv[b]) for b in range(order + 1)]) for a in range(order + 1)])
+        if self._rational:
+            ders = rational_surface_derivatives(ders)
+        return ders
+
+    @staticmethod
+    def _unit_normals(d):
+        """Unit normals from a derivative stack ``(>=2, >=2, ..., 3)``.
+
+        Where ``Su x Sv`` vanishes (a collapsed edge such as the pole of a
+        revolved sphere) the limit direction ``Suv x Sv + Su x Suv`` is used.
+        """
+        Su, Sv = d[1, 0], d[0, 1]
+        n = np.cross(Su, Sv)
+        length = np.linalg.norm(n, axis=-1)
+        scale = np.maximum(np.linalg.norm(Su, axis=-1) * np.linalg.norm(Sv, axis=-1), 1e-300)
+        weak = length <= 1e-12 * np.maximum(scale, np.max(np.abs(d[0, 0]), axis=-1) ** 2 + 1e-300)
+        if weak.any():
+            Suv = d[1, 1]
+            alt = np.cross(Suv[weak], Sv[weak]) + np.cross(Su[weak], Suv[weak])
+            n[weak] = alt
+            length = np.linalg.norm(n, axis=-1)
+        return np.divide(n, length[..., None], out=np.zeros_like(n), where=length[..., None] > 0)
+
+    def _require_3d(self):
+        if self.dim != 3:
+            raise ParameterError(f"normals need a surface in 3-D space, this one has dim={self.dim}")
+
+    def normal(self, u, v) -> np.ndarray:
+        """Unit normals ``(Su x Sv) / |Su x Sv|`` at the pairs ``(u, v)``: ``u.shape + (3,)``."""
+        self._require_3d()
+        return self._unit_normals(self.derivatives(u, v, 1))
+
+    def normal_grid(self, us, vs) -> np.ndarray:
+        """Unit normals on the grid ``us x vs``: ``(len(us), len(vs), 3)``."""
+        self._require_3d()
+        return self._unit_normals(self.derivatives_grid(us, vs, 1))
+
+    # -- knot algebra -----------------------------------------------------------------
+    def _dir(self, direction):
+        d = as_direction(direction)
+        if d == 0:
+            return d, self._pu, self._ku, self._coefs
+        return d, self._pv, self._kv, self._coefs.transpose(1, 0, 2)
+
+    def _rebuild(self, d, p, U, coefs):
+        if d == 0:
+            return self._like(p, self._pv, U, self._kv, coefs)
+        return self._like(self._pu, p, self._ku, U, np.ascontiguousarray(coefs.transpose(1, 0, 2)))
+
+    def _knot_value(self, d, u, name="u"):
+        a, b = self.domain[d]
+        try:
+            u = float(u)
+        except (TypeError, ValueError):
+            raise ParameterError(f"{name} must be a number, got {u!r}") from None
+        if not np.isfinite(u) or u < a or u > b:
+            raise DomainError(f"{name} = {u!r} lies outside the {'uv'[d]} domain [{a!r}, {b!r}]")
+        U = self._ku if d == 0 else self._kv
+        near = np.abs(U - u) <= DEFAULT.knot * (b - a)
+        return float(U[near][0]) if near.any() else u
+
+    def refine(self, knots, direction="u"):
+        """Insert every value of ``knots`` in the given direction."""
+        d, p, U, C = self._dir(direction)
+        extra = np.asarray(knots, dtype=np.float64).ravel()
+        if extra.size == 0:
+            return self
+        extra = np.array([self._knot_value(d, x, "knots") for x in extra])
+        tau = np.sort(np.concatenate([U, extra]), kind="stable")
+        tau = validate_knots(tau, p, tau.size - p - 1, "refined knots")
+        return self._rebuild(d, p, tau, algebra.refine(p, U, C, tau))
+
+    def insert_knot(self, u, times: int = 1, direction="u"):
+        """Insert the knot ``u`` ``times`` times in the given direction."""
+        times = as_int(times, "times", minimum=0)
+        d, p, U, _ = self._dir(direction)
+        u = self._knot_value(d, u)
+        a, b = self.domain[d]
+        have = int(np.count_nonzero(U == u))
+        limit = p if a < u < b else p + 1
+        if have + times > limit:
+            raise KnotVectorError(
+                f"inserting knot {u!r} {times} times would give multiplicity {have + times}; at most {limit} allowed"
+            )
+        return self.refine(np.full(times, u), direction)
+
+    def remove_knot(self, u, times: int = 1, tol: float | None = None, direction="u"):
+        """Remove an interior knot, moving the surface at most ``tol`` (default 1e-9)."""
+        times = as_int(times, "times", minimum=1)
+        tol = DEFAULT.point if tol is None else float(tol)
+        d, p, U, C = self._dir(direction)
+        u = self._knot_value(d, u)
+        a, b = self.domain[d]
+        have = int(np.count_nonzero(U == u))
+        if not a < u < b or have == 0:
+            raise KnotRemovalError(f"{u!r} is not an interior {'uv'[d]} knot of this surface")
+        if times > have:
+            raise KnotRemovalError(f"knot {u!r} has multiplicity {have}; cannot remove it {times} times")
+        tau, coefs, dev = algebra.remove_knots(p, U, C, u, times)
+        allowed = tol
+        if self._rational:
+            w = self._coefs[..., -1]
+            allowed = tol * w.min() / (1.0 + np.linalg.norm(self.control_points, axis=-1).max())
+        worst = float(np.max(dev))
+        if worst > allowed:
+            raise KnotRemovalError(
+                f"removing {'uv'[d]} knot {u!r} {times} time(s) would move the surface by up to {worst:.3g} "
+                f"(coefficient space), more than the tolerance {allowed:.3g}"
+            )
+        return self._rebuild(d, p, tau, coefs)
+
+    def elevate_degree(self, by: int = 1, direction="u"):
+        """Raise the degree in one direction by ``by``; the surface is unchanged."""
+        by = as_int(by, "by", minimum=0)
+        if by == 0:
+            return self
+        d, p, U, C = self._dir(direction)
+        U2, C2 = algebra.elevate(p, U, C, by)
+        return self._rebuild(d, p + by, U2, C2)
+
+    def clamp(self):
+        """The same surface on clamped knot vectors in both directions."""
+        s = self
+        for direction in ("u", "v"):
+            d, p, U, C = s._dir(direction)
+            if not is_clamped(p, U):
+                U2, C2 = algebra.clamp(p, U, C)
+                s = s._rebuild(d, p, U2, C2)
+        return s
+
+    def split(self, u, direction="u"):
+        """Two surfaces split at the interior parameter ``u`` of one direction."""
+        d, p, U, C = self._dir(direction)
+        u = self._knot_value(d, u)
+        a, b = self.domain[d]
+        if not a < u < b:
+            raise DomainError(f"split parameter {u!r} must lie strictly inside ({a!r}, {b!r})")
+        (kl, cl), (kr, cr) = algebra.split(p, U, C, u)
+        return self._rebuild(d, p, kl, cl), self._rebuild(d, p, kr, cr)
+
+    def bezier_breakpoints(self):
+        """``(bu, bv)``: distinct knots of each domain; patch ``[i][j]`` of :meth:`to_bezier`
+        covers ``[bu[i], bu[i+1]] x [bv[j], bv[j+1]]``."""
+        out = []
+        for p, U in ((self._pu, self._ku), (self._pv, self._kv)):
+            a, b = domain(p, U)
+            out.append(np.unique(U[(U >= a) & (U <= b)]))
+        return tuple(out)
+
+    def to_bezier(self):
+        """Bézier decomposition: a list (over u spans) of lists (over v spans) of
+        :class:`~splinekit.BezierSurface`, each on [0, 1] x [0, 1]."""
+        from .bezier import BezierSurface
+
+        _, su = algebra.bezier_segments(self._pu, self._ku, self._coefs)  # (su, pu+1, nv, k)
+        _, sv = algebra.bezier_segments(self._pv, self._kv, su.transpose(2, 0, 1, 3))  # (sv, pv+1, su, pu+1, k)
+        patches = sv.transpose(2, 3, 0, 1, 4)  # (su, pu+1, sv, pv+1, k)
+        return [
+            [BezierSurface._from_coefs(patches[i, :, j], self._rational) for j in range(patches.shape[2])]
+            for i in range(patches.shape[0])
+        ]
+
+    def isocurve(self, u=None, v=None):
+        """The curve ``v -> S(u, v)`` (give ``u``) or ``u -> S(u, v)`` (give ``v``)."""
+        from ..curves.bspline import BSplineCurve
+
+        if (u is None) == (v is None):
+            raise ParameterError("give exactly one of u or v")
+        d = 0 if u is not None else 1
+        (du, dv) = self.domain
+        value = as_params(u if d == 0 else v, du if d == 0 else dv, "u" if d == 0 else "v")
+        if value.ndim != 0:
+            raise ParameterError("isocurve takes a single parameter value")
+        _, p, U, C = self._dir(d)
+        flat = value.reshape(1)
+        span = find_span(p, U, flat)
+        N = basis_funs_t(p, U, span, flat)[:, 0]
+        coefs = np.tensordot(N, C[span[0] - p : span[0] + 1], axes=(0, 0))  # (n_other, k)
+        po, Uo = (self._pv, self._kv) if d == 0 else (self._pu, self._ku)
+        return BSplineCurve._trusted(po, Uo, coefs, self._rational)
+
+    def transpose(self):
+        """Swap the roles of u and v (the normal flips)."""
+        return self._like(self._pv, self._pu, self._kv, self._ku, np.ascontiguousarray(self._coefs.transpose(1, 0, 2)))
+
+    def reverse(self, direction="u"):
+        """Reverse the parameter direction (on the same domain)."""
+        d, p, U, C = self._dir(direction)
+        U2, C2 = algebra.reverse(p, U, C)
+        return self._rebuild(d, p, U2, C2)
+
+    def reparametrize(self, u_range=None, v_range=None):
+        """Map the domains affinely onto ``u_range`` / ``v_range`` (``(start, end)`` pairs)."""
+        knots = []
+        for p, U, n, rng in ((self._pu, self._ku, self.shape[0], u_range), (self._pv, self._kv, self.shape[1], v_range)):
+            if rng is None:
+                knots.append(U)
+                continue
+            s, e = (float(x) for x in rng)
+            if not (np.isfinite(s) and np.isfinite(e) and s < e):
+                raise DomainError(f"reparametrize needs finite start < end, got {rng!r}")
+            a, b = domain(p, U)
+            V = s + (U - a) * ((e - s) / (b - a))
+            V[p], V[n] = s, e
+            knots.append(V)
+        return self._like(self._pu, self._pv, knots[0], knots[1], self._coefs)
+
+    def transform(self, matrix):
+        """Apply an affine map (``(dim, dim)`` or ``(dim + 1, dim + 1)``) to the control points."""
+        L, t = as_affine(matrix, self.dim)
+        P = self.control_points @ L.T + t
+        if self._rational:
+            w = self._coefs[..., -1:]
+            P = np.concatenate([P * w, w], axis=-1)
+        return self._like(self._pu, self._pv, self._ku, self._kv, P)
+
+    def to_nurbs(self):
+        if self._rational:
+            return self
+        return NurbsSurface._trusted(self._pu, self._pv, self._ku, self._kv, self.homogeneous_points, True)
+
+
+class BSplineSurface(SplineSurface):
+    """Non-rational tensor-product B-spline surface.
+
+    Parameters
+    ----------
+    degree_u, degree_v : int
+        Degrees ``p, q >= 1``.
+    knots_u, knots_v : array_like
+        Knot vectors of lengths ``nu + p + 1`` and ``nv + q + 1``.
+    control_points : array_like, shape (nu, nv, dim)
+    """
+
+    __slots__ = ()
+
+    def __init__(self, degree_u, degree_v, knots_u, knots_v, control_points):
+        pu, pv = as_degree(degree_u, "degree_u"), as_degree(degree_v, "degree_v")
+        P = as_points(control_points, leading=2, min_count=(pu + 1, pv + 1))
+        ku = validate_knots(knots_u, pu, P.shape[0], "knots_u")
+        kv = validate_knots(knots_v, pv, P.shape[1], "knots_v")
+        self._set(pu, pv, ku, kv, P, False)
+
+    @classmethod
+    def uniform(cls, degree_u, degree_v, control_points):
+        """Surface on clamped uniform knot vectors over [0, 1] x [0, 1]."""
+        pu, pv = as_degree(degree_u, "degree_u"), as_degree(degree_v, "degree_v")
+        P = as_points(control_points, leading=2, min_count=(pu + 1, pv + 1))
+        return cls(pu, pv, clamped_uniform(pu, P.shape[0]), clamped_uniform(pv, P.shape[1]), P)
+
+
+class NurbsSurface(BSplineSurface):
+    """Rational tensor-product B-spline (NURBS) surface; ``weights`` ``(nu, nv)`` > 0."""
+
+    __slots__ = ()
+
+    def __init__(self, degree_u, degree_v, knots_u, knots_v, control_points, weights):
+        pu, pv = as_degree(degree_u, "degree_u"), as_degree(degree_v, "degree_v")
+        P = as_points(control_points, leading=2, min_count=(pu + 1, pv + 1))
+        ku = validate_knots(knots_u, pu, P.shape[0], "knots_u")
+        kv = validate_knots(knots_v, pv, P.shape[1], "knots_v")
+        w = as_weights(weights, P.shape[:2])
+        self._set(pu, pv, ku, kv, np.concatenate([P * w[..., None], w[..., None]], axis=-1), True)
+
+    @classmethod
+    def uniform(cls, degree_u, degree_v, control_points, weights=None):
+        pu, pv = as_degree(degree_u, "degree_u"), as_degree(degree_v, "degree_v")
+        P = as_points(control_points, leading=2, min_count=(pu + 1, pv + 1))
+        w = np.ones(P.shape[:2]) if weights is None else weights
+        return cls(pu, pv, clamped_uniform(pu, P.shape[0]), clamped_uniform(pv, P.shape[1]), P, w)
+
