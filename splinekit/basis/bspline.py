@@ -23,10 +23,16 @@ def find_span(degree: int, knots: np.ndarray, u: np.ndarray) -> np.ndarray:
     marginally outside it are extrapolated from the end spans.
     Returns an int64 array shaped like ``u``.
     """
+    lo, hi = span_bounds(degree, knots)
+    span = np.searchsorted(knots, u, side="right") - 1
+    return np.clip(span, lo, hi)
+
+
+def span_bounds(degree: int, knots: np.ndarray) -> tuple[int, int]:
+    """First and last non-empty knot spans of the domain ``[U[p], U[n]]``."""
     n = knots.size - degree - 1
     nonempty = np.flatnonzero(knots[degree:n] < knots[degree + 1 : n + 1]) + degree
-    span = np.searchsorted(knots, u, side="right") - 1
-    return np.clip(span, nonempty[0], nonempty[-1])
+    return int(nonempty[0]), int(nonempty[-1])
 
 
 def _left_right(degree, knots, span, u):
@@ -139,13 +145,15 @@ def design_matrix(degree: int, knots, u, order: int = 0) -> sp.csr_matrix:
 def combine(coefs: np.ndarray, degree: int, span: np.ndarray, funs: np.ndarray) -> np.ndarray:
     """``sum_r funs[..., r, m] * coefs[span[m] - p + r]``.
 
-    ``coefs`` is ``(n, k)``; ``funs`` is ``(..., p + 1, m)``; returns ``(..., m, k)``.
-    One gather per local basis function: the loop runs over the degree only.
+    ``coefs`` is ``(n, ...)``; ``funs`` is ``(..., p + 1, m)``; returns
+    ``(..., m) + coefs.shape[1:]``. One gather per local basis function: the
+    loop runs over the degree only.
     """
     out = None
     base = span - degree
+    trailing = (None,) * (coefs.ndim - 1)
     for r in range(degree + 1):
-        rows = coefs[base + r]  # (m, k)
-        term = funs[..., r, :, None] * rows
+        rows = coefs[base + r]  # (m, ...)
+        term = funs[(..., r, slice(None)) + trailing] * rows
         out = term if out is None else out + term
     return out

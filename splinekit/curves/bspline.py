@@ -23,7 +23,8 @@ from .._validate import (
     frozen,
 )
 from ..basis import algebra
-from ..basis.bspline import basis_ders_t, basis_funs_t, combine, find_span
+from ..basis.bspline import basis_ders_t, basis_funs_t, combine, find_span, span_bounds
+from ..basis.jit import kernels
 from ..basis.knots import clamped_uniform, domain, is_clamped, validate_knots
 from ..basis.rational import rational_curve_derivatives
 from ..errors import (
@@ -168,6 +169,11 @@ class SplineCurve:
         u = self._params(u)
         flat = u.ravel()
         p, U = self._degree, self._knots
+        jit = kernels(flat.size)
+        if jit is not None:
+            pts = np.empty((flat.size, self.dim))
+            jit.curve_points(p, U, *span_bounds(p, U), self._coefs, flat, self._rational, pts)
+            return pts.reshape(u.shape + (self.dim,))
         span = find_span(p, U, flat)
         N = basis_funs_t(p, U, span, flat)
         pts = combine(self._coefs, p, span, N)

@@ -22,7 +22,8 @@ from .._validate import (
     frozen,
 )
 from ..basis import algebra
-from ..basis.bspline import basis_ders_t, basis_funs_t, find_span
+from ..basis.bspline import basis_ders_t, basis_funs_t, combine, find_span, span_bounds
+from ..basis.jit import kernels
 from ..basis.knots import clamped_uniform, domain, is_clamped, validate_knots
 from ..basis.rational import rational_surface_derivatives
 from ..errors import DomainError, KnotRemovalError, KnotVectorError, ParameterError
@@ -177,6 +178,15 @@ class SplineSurface:
         """Points at the pairs ``(u[i], v[i])``: ``u.shape + (dim,)``."""
         u, v = self._uv(u, v)
         fu, fv = u.ravel(), v.ravel()
+        jit = kernels(fu.size)
+        if jit is not None:
+            pts = np.empty((fu.size, self.dim))
+            jit.surface_points(
+                self._pu, self._ku, *span_bounds(self._pu, self._ku),
+                self._pv, self._kv, *span_bounds(self._pv, self._kv),
+                self._coefs, fu, fv, self._rational, pts,
+            )
+            return pts.reshape(u.shape + (self.dim,))
         su = find_span(self._pu, self._ku, fu)
         sv = find_span(self._pv, self._kv, fv)
         Nu = basis_funs_t(self._pu, self._ku, su, fu)[None]
@@ -206,43 +216,70 @@ class SplineSurface:
         return ders.reshape((order + 1, order + 1) + u.shape + (self.dim,))
 
     def _grid_basis(self, us, vs, order=0):
+        """Per direction: ``(span (m,), values (order + 1, p + 1, m))``."""
         (du, dv) = self.domain
-        us = as_params(us, du, "us").ravel()
-        vs = as_params(vs, dv, "vs").ravel()
         out = []
-        for p, U, n, x in ((self._pu, self._ku, self.shape[0], us), (self._pv, self._kv, self.shape[1], vs)):
+        for p, U, x, name in ((self._pu, self._ku, us, "us"), (self._pv, self._kv, vs, "vs")):
+            x = as_params(x, du if name == "us" else dv, name).ravel()
             span = find_span(p, U, x)
-            vals = basis_ders_t(p, U, span, x, order)  # (order+1, p+1, m)
-            dense = np.zeros((order + 1, x.size, n))
-            rows = np.arange(x.size)
-            for r in range(p + 1):
-                dense[:, rows, span - p + r] = vals[:, r]
-            out.append(dense)
+            out.append((span, basis_ders_t(p, U, span, x, order)))
         return out
 
-    def _grid_homogeneous(self, Nu, Nv):
-        """``Nu @ C @ Nv^T`` per coordinate: ``Nu`` ``(mu, nu)``, ``Nv`` ``(mv, nv)`` -> ``(mu, mv, k)``."""
+    @staticmethod
+    def _dense(span, vals, n):
+        """Scatter local basis values ``(p + 1, m)`` into a dense ``(m, n)`` matrix."""
+        p1, m = vals.shape
+        dense = np.zeros((m, n))
+        rows = np.arange(m)
+        for r in range(p1):
+            dense[rows, span - p1 + 1 + r] = vals[r]
+        return dense
+
+    def _grid_contract(self, su, Nu_vals, sv, Nv_vals, divide):
+        """``Nu @ C @ Nv^T`` per coordinate -> ``(mu, mv, k)`` (or ``(mu, mv, dim)``
+        divided by the weight when ``divide``).
+
+        The u contraction gathers p + 1 rows of the net per grid row (small:
+        ``(mu, nv, k)``); the v contraction, which writes the output, runs in
+        the compiled kernel when available, else as one broadcast matmul. The
+        u step avoids BLAS on purpose: BLAS worker threads left spinning after
+        a call compete with the kernel's threads on a 2-core machine.
+        """
         nu, nv, k = self._coefs.shape
-        R = (Nu @ self._coefs.reshape(nu, nv * k)).reshape(-1, nv, k)  # (mu, nv, k)
-        return np.matmul(Nv, R)  # broadcast over mu: (mu, mv, k)
+        R = combine(self._coefs, self._pu, su, Nu_vals)  # (mu, nv, k)
+        mu, mv = R.shape[0], sv.size
+        jit = kernels(mu * mv)
+        if jit is not None:
+            n_out = k - 1 if divide else k
+            out = np.empty((mu, mv, n_out))
+            Nv_vals = np.ascontiguousarray(Nv_vals)
+            if k == 4 or (k < 4 and not divide):
+                R4 = R if k == 4 else np.concatenate([R, np.zeros((mu, nv, 4 - k))], axis=-1)
+                jit.grid_rows4(R4, sv, Nv_vals, self._pv, n_out, divide, out)
+            else:
+                jit.grid_rows(R, sv, Nv_vals, self._pv, divide, out)
+            return out
+        out = np.matmul(self._dense(sv, Nv_vals, nv), R)  # broadcast over mu: (mu, mv, k)
+        if divide:
+            out = out[..., :-1] / out[..., -1:]
+        return out
 
     def evaluate_grid(self, us, vs) -> np.ndarray:
         """Points on the tensor grid ``us x vs``: ``(len(us), len(vs), dim)``.
 
-        Computed as ``Nu @ P @ Nv^T`` with the basis matrices of the two
-        parameter vectors, never point by point.
+        Computed as ``Nu @ P @ Nv^T`` with the banded basis matrices of the
+        two parameter vectors, never point by point.
         """
-        Nu, Nv = self._grid_basis(us, vs)
-        out = self._grid_homogeneous(Nu[0], Nv[0])
-        if self._rational:
-            out = out[..., :-1] / out[..., -1:]
-        return out
+        (su, Nu), (sv, Nv) = self._grid_basis(us, vs)
+        return self._grid_contract(su, Nu[0], sv, Nv[0], self._rational)
 
     def derivatives_grid(self, us, vs, order: int = 1) -> np.ndarray:
         """Partial derivatives on a grid: ``(order + 1, order + 1, len(us), len(vs), dim)``."""
         order = as_order(order)
-        Nu, Nv = self._grid_basis(us, vs, order)
-        ders = np.stack([np.stack([self._grid_homogeneous(Nu[a], Nv[b]) for b in range(order + 1)]) for a in range(order + 1)])
+        (su, Nu), (sv, Nv) = self._grid_basis(us, vs, order)
+        ders = np.stack(
+            [np.stack([self._grid_contract(su, Nu[a], sv, Nv[b], False) for b in range(order + 1)]) for a in range(order + 1)]
+        )
         if self._rational:
             ders = rational_surface_derivatives(ders)
         return ders

@@ -1,0 +1,182 @@
+"""Compiled kernels for the hot evaluation paths (numba, ``cache=True``).
+
+This module imports numba and is itself imported only by
+:func:`splinekit.basis.jit.kernels` on the first large evaluation, never when
+splinekit is imported. Each kernel performs, per point, exactly the floating-
+point operations of the numpy path in the same order (span search, the A2.2
+triangle, the sequential sum over local basis functions), so both paths give
+the same numbers; the grid kernel sums over the v basis functions where the
+numpy path calls BLAS, which agrees to rounding.
+
+Points are processed in chunks under ``prange`` so each thread allocates its
+scratch arrays once per chunk, not once per point.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit, prange
+
+_CHUNK = 2048
+
+
+@njit(cache=True, inline="always")
+def _span(U, lo, hi, x):
+    """Largest i with U[i] <= x, clipped to [lo, hi] (same as the numpy find_span)."""
+    if x >= U[hi]:
+        return hi
+    if x < U[lo + 1]:
+        return lo
+    a, b = lo, hi
+    while b - a > 1:
+        mid = (a + b) // 2
+        if U[mid] <= x:
+            a = mid
+        else:
+            b = mid
+    return a
+
+
+@njit(cache=True, inline="always")
+def _basis(U, p, span, x, N, left, right):
+    """A2.2 into N[0..p], with the numpy path's operation order."""
+    for j in range(1, p + 1):
+        left[j] = x - U[span + 1 - j]
+        right[j] = U[span + j] - x
+    N[0] = 1.0
+    for j in range(1, p + 1):
+        saved = 0.0
+        for r in range(j):
+            temp = N[r] / (right[r + 1] + left[j - r])
+            N[r] = saved + right[r + 1] * temp
+            saved = left[j - r] * temp
+        N[j] = saved
+
+
+@njit(cache=True, parallel=True)
+def curve_points(p, U, lo, hi, C, u, rational, out):
+    """out[m, :dim] = sum_r N_r(u_m) C[span - p + r] (divided by the weight if rational)."""
+    m = u.shape[0]
+    k = C.shape[1]
+    n_chunks = (m + _CHUNK - 1) // _CHUNK
+    for c in prange(n_chunks):
+        N = np.empty(p + 1)
+        left = np.empty(p + 1)
+        right = np.empty(p + 1)
+        acc = np.empty(k)
+        for i in range(c * _CHUNK, min(m, (c + 1) * _CHUNK)):
+            x = u[i]
+            s = _span(U, lo, hi, x)
+            _basis(U, p, s, x, N, left, right)
+            base = s - p
+            for d in range(k):
+                acc[d] = N[0] * C[base, d]
+            for r in range(1, p + 1):
+                for d in range(k):
+                    acc[d] = acc[d] + N[r] * C[base + r, d]
+            if rational:
+                for d in range(k - 1):
+                    out[i, d] = acc[d] / acc[k - 1]
+            else:
+                for d in range(k):
+                    out[i, d] = acc[d]
+
+
+@njit(cache=True, parallel=True)
+def surface_points(pu, Uu, lou, hiu, pv, Uv, lov, hiv, C, u, v, rational, out):
+    """Pointwise tensor-product evaluation; C is (nu, nv, k)."""
+    m = u.shape[0]
+    k = C.shape[2]
+    n_chunks = (m + _CHUNK - 1) // _CHUNK
+    for c in prange(n_chunks):
+        Nu = np.empty(pu + 1)
+        Nv = np.empty(pv + 1)
+        left = np.empty(max(pu, pv) + 1)
+        right = np.empty(max(pu, pv) + 1)
+        acc = np.empty(k)
+        inner = np.empty(k)
+        for i in range(c * _CHUNK, min(m, (c + 1) * _CHUNK)):
+            su = _span(Uu, lou, hiu, u[i])
+            sv = _span(Uv, lov, hiv, v[i])
+            _basis(Uu, pu, su, u[i], Nu, left, right)
+            _basis(Uv, pv, sv, v[i], Nv, left, right)
+            bu, bv = su - pu, sv - pv
+            for a in range(pu + 1):
+                for d in range(k):
+                    inner[d] = Nv[0] * C[bu + a, bv, d]
+                for b in range(1, pv + 1):
+                    for d in range(k):
+                        inner[d] = inner[d] + Nv[b] * C[bu + a, bv + b, d]
+                if a == 0:
+                    for d in range(k):
+                        acc[d] = Nu[0] * inner[d]
+                else:
+                    for d in range(k):
+                        acc[d] = acc[d] + Nu[a] * inner[d]
+            if rational:
+                for d in range(k - 1):
+                    out[i, d] = acc[d] / acc[k - 1]
+            else:
+                for d in range(k):
+                    out[i, d] = acc[d]
+
+
+@njit(cache=True, parallel=True)
+def grid_rows4(R, sv, Nv, q, n_out, divide, out):
+    """``grid_rows`` for nets with 4 coefficient columns (3-D rational, or narrower
+    nets padded with zeros): four scalar accumulators the compiler keeps in
+    registers. Writes ``n_out`` columns; ``divide`` divides columns 0-2 by column 3."""
+    mu = R.shape[0]
+    mv = sv.shape[0]
+    for i in prange(mu):
+        for j in range(mv):
+            base = sv[j] - q
+            w = Nv[0, j]
+            a0 = w * R[i, base, 0]
+            a1 = w * R[i, base, 1]
+            a2 = w * R[i, base, 2]
+            a3 = w * R[i, base, 3]
+            for b in range(1, q + 1):
+                w = Nv[b, j]
+                a0 = a0 + w * R[i, base + b, 0]
+                a1 = a1 + w * R[i, base + b, 1]
+                a2 = a2 + w * R[i, base + b, 2]
+                a3 = a3 + w * R[i, base + b, 3]
+            if divide:
+                a0 = a0 / a3
+                a1 = a1 / a3
+                a2 = a2 / a3
+            out[i, j, 0] = a0
+            if n_out > 1:
+                out[i, j, 1] = a1
+            if n_out > 2:
+                out[i, j, 2] = a2
+            if n_out > 3:
+                out[i, j, 3] = a3
+
+
+@njit(cache=True, parallel=True)
+def grid_rows(R, sv, Nv, q, rational, out):
+    """out[i, j] = sum_b Nv[b, j] R[i, sv[j] - q + b] (divided by the weight if rational).
+
+    R is (mu, nv, k): the control net already contracted with the u basis.
+    """
+    mu = R.shape[0]
+    mv = sv.shape[0]
+    k = R.shape[2]
+    for i in prange(mu):
+        acc = np.empty(k)
+        for j in range(mv):
+            base = sv[j] - q
+            for d in range(k):
+                acc[d] = Nv[0, j] * R[i, base, d]
+            for b in range(1, q + 1):
+                w = Nv[b, j]
+                for d in range(k):
+                    acc[d] = acc[d] + w * R[i, base + b, d]
+            if rational:
+                for d in range(k - 1):
+                    out[i, j, d] = acc[d] / acc[k - 1]
+            else:
+                for d in range(k):
+                    out[i, j, d] = acc[d]

@@ -1,0 +1,118 @@
+"""Packaging contracts: import isolation, lazy backends, the demo command."""
+
+import os
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+import splinekit as sk
+from splinekit.basis import jit
+from splinekit.errors import MissingDependencyError, SplineKitError
+
+HEAVY = ("OCP", "build123d", "cadquery", "manifold3d", "matplotlib", "numba")
+
+
+def _run(code: str) -> str:
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    return out.stdout.strip()
+
+
+def test_import_loads_no_heavy_backend():
+    loaded = _run(
+        "import sys, splinekit; "
+        f"print(','.join(m for m in {HEAVY!r} if m in sys.modules))"
+    )
+    assert loaded == ""
+
+
+def test_import_works_without_ocp_and_occ_calls_name_the_package():
+    code = (
+        "import sys; sys.modules['OCP'] = None; sys.modules['build123d'] = None; sys.modules['cadquery'] = None\n"
+        "import splinekit as sk\n"
+        "c = sk.BSplineCurve(1, [0, 0, 1, 1], [[0, 0, 0], [1, 0, 0]])\n"
+        "try:\n"
+        "    sk.occ.to_occ(c)\n"
+        "except sk.errors.MissingDependencyError as e:\n"
+        "    print('missing:', e)\n"
+    )
+    out = _run(code)
+    assert out.startswith("missing:") and "cadquery" in out
+
+
+def test_missing_dependency_error_is_a_splinekit_error():
+    assert issubclass(MissingDependencyError, SplineKitError)
+    assert issubclass(MissingDependencyError, ImportError)
+
+
+def test_demo_writes_png_and_reports(tmp_path):
+    target = tmp_path / "demo.png"
+    result = subprocess.run(
+        [sys.executable, "-m", "splinekit.cli", "demo", "-o", str(target)],
+        capture_output=True,
+        text=True,
+        check=True,
+    )
+    assert target.stat().st_size > 10_000
+    with open(target, "rb") as fh:
+        assert fh.read(8) == b"\x89PNG\r\n\x1a\n"
+    text = result.stdout
+    assert "max deviation" in text and "area" in text
+    # every invariance check printed by the demo is at rounding level
+    devs = [float(line.rsplit(" ", 1)[1]) for line in text.splitlines() if "max deviation" in line]
+    assert devs and max(devs) < 1e-12
+
+
+def _random_nurbs_surface(rng, pu=3, pv=2, nu=9, nv=7, dim=3):
+    def knots(p, n):
+        inner = np.sort(rng.uniform(0, 1, n - p - 1))
+        inner[1] = inner[2]  # a double knot
+        return np.concatenate([[0] * (p + 1), inner, [1] * (p + 1)])
+
+    return sk.NurbsSurface(pu, pv, knots(pu, nu), knots(pv, nv), rng.normal(size=(nu, nv, dim)), rng.uniform(0.2, 5, (nu, nv)))
+
+
+@pytest.mark.parametrize("rational", [False, True])
+@pytest.mark.parametrize("dim", [2, 3, 5])
+def test_compiled_and_numpy_paths_agree(rational, dim, monkeypatch):
+    """The numba kernels repeat the numpy path's arithmetic: curves and scattered
+    surface points agree exactly; grids (BLAS order in numpy) to rounding."""
+    rng = np.random.default_rng(7 + dim)
+    S = _random_nurbs_surface(rng, dim=dim)
+    if not rational:
+        S = sk.BSplineSurface(S.degree_u, S.degree_v, S.knots_u, S.knots_v, S.control_points)
+    C = S.isocurve(u=0.37)
+    n = jit.MIN_POINTS + 5
+    u = rng.uniform(0, 1, n)
+    v = rng.uniform(0, 1, n)
+    us, vs = np.linspace(0, 1, 150), np.linspace(0, 1, 140)
+    fast = (C.evaluate(u), S.evaluate(u, v), S.evaluate_grid(us, vs), S.derivatives_grid(us, vs, 1))
+    monkeypatch.setenv("SPLINEKIT_NUMBA", "0")
+    slow = (C.evaluate(u), S.evaluate(u, v), S.evaluate_grid(us, vs), S.derivatives_grid(us, vs, 1))
+    np.testing.assert_array_equal(fast[0], slow[0])
+    np.testing.assert_array_equal(fast[1], slow[1])
+    scale = np.abs(S.control_points).max()
+    np.testing.assert_allclose(fast[2], slow[2], rtol=0, atol=1e-14 * scale)
+    np.testing.assert_allclose(fast[3], slow[3], rtol=1e-12, atol=1e-12 * scale)
+    # and the grid equals pointwise evaluation
+    U, V = np.meshgrid(us, vs, indexing="ij")
+    np.testing.assert_allclose(slow[2], S.evaluate(U, V), rtol=0, atol=1e-14 * scale)
+
+
+def test_numba_is_not_imported_for_small_batches():
+    out = _run(
+        "import sys, numpy as np, splinekit as sk\n"
+        "c = sk.BSplineCurve.uniform(3, np.random.rand(10, 3))\n"
+        "c.evaluate(np.linspace(0, 1, 1000))\n"
+        "print('numba' in sys.modules)"
+    )
+    assert out == "False"
+
+
+def test_env_switch_is_read_at_call_time(monkeypatch):
+    monkeypatch.setenv("SPLINEKIT_NUMBA", "0")
+    assert jit.kernels(10**7) is None
+    monkeypatch.delenv("SPLINEKIT_NUMBA")
+    assert jit.kernels(10) is None
+    assert os.environ.get("SPLINEKIT_NUMBA") is None
