@@ -80,6 +80,13 @@ def sizes(quick: bool) -> dict:
 # timing helpers
 
 
+LAST_FIRST_CALL = [0.0]  # time of the warm-up call of the latest measure()
+
+
+def first_call_note() -> str:
+    return f"first call {Table._fmt_t(LAST_FIRST_CALL[0])} (includes any JIT compile / cache load)"
+
+
 def measure(fn, max_repeats: int = 5):
     """Median wall time of ``fn()``; returns ``(seconds, repeats, last_result)``.
 
@@ -90,6 +97,7 @@ def measure(fn, max_repeats: int = 5):
     t0 = time.perf_counter()
     result = fn()
     first = time.perf_counter() - t0
+    LAST_FIRST_CALL[0] = first
     if first > 2.0:
         return first, 1, result
     repeats = max_repeats if first < 0.3 else min(3, max_repeats)
@@ -360,7 +368,7 @@ def bench_curves(tab, cfg, nurbs, bspl):
     for curve, label in ((bspl, "1a. cubic B-spline curve (non-rational), 50 ctrl pts"), (nurbs, "1b. cubic NURBS curve, 50 ctrl pts")):
         rational = curve.is_rational
         t_sk, k, ref = measure(lambda: curve.evaluate(u), R)
-        tab.add(label, "**splinekit** `evaluate`", N, t_sk, ref=t_sk, repeats=k)
+        tab.add(label, "**splinekit** `evaluate`", N, t_sk, ref=t_sk, repeats=k, note=first_call_note())
 
         # scipy BSpline
         try:
@@ -440,7 +448,8 @@ def bench_derivatives(tab, cfg, nurbs):
     U = np.asarray(nurbs.knots)
     H = np.asarray(nurbs.homogeneous_points)
     t_sk, k, ref = measure(lambda: nurbs.derivatives(u, 2), R)
-    tab.add(label, "**splinekit** `derivatives(u, 2)`", N, t_sk, ref=t_sk, repeats=k)
+    tab.add(label, "**splinekit** `derivatives(u, 2)`", N, t_sk, ref=t_sk, repeats=k,
+            note=first_call_note() + f"; max |value| {np.abs(ref).max():.3g} (diffs are absolute)")
 
     try:
         spl = BSpline(U, H, 3)
@@ -501,7 +510,7 @@ def bench_grid(tab, cfg, surf):
     N = n * n
     us = np.linspace(0.0, 1.0, n)
     t_sk, k, ref = measure(lambda: surf.evaluate_grid(us, us), R)
-    tab.add(label, "**splinekit** `evaluate_grid`", N, t_sk, ref=t_sk, repeats=k)
+    tab.add(label, "**splinekit** `evaluate_grid`", N, t_sk, ref=t_sk, repeats=k, note=first_call_note())
 
     t, k, _ = measure(lambda: np.copy(ref), R)
     tab.add(label, f"floor: `np.copy` of the {ref.shape} float64 output ({ref.nbytes / 1e6:.0f} MB)", N, t,
@@ -561,6 +570,50 @@ def bench_memory(surf, n):
     return peak - base, out.nbytes
 
 
+_RSS_CODE = r"""
+import gc, sys
+import numpy as np
+sys.path.insert(0, {bench_dir!r})
+import bench_eval as b
+
+def status(key):
+    with open("/proc/self/status") as f:
+        for line in f:
+            if line.startswith(key + ":"):
+                return int(line.split()[1]) * 1024
+    raise KeyError(key)
+
+_, _, _, surf = b.make_geometry()
+n = {n}
+us = np.linspace(0.0, 1.0, n)
+surf.evaluate_grid(us, us)  # warm-up: JIT / kernel cache, thread pool
+del _
+gc.collect()
+with open("/proc/self/clear_refs", "w") as f:  # reset VmHWM to the current RSS
+    f.write("5")
+base = status("VmRSS")
+out = surf.evaluate_grid(us, us)
+print(status("VmHWM") - base, out.nbytes)
+"""
+
+
+def rss_check(n: int):
+    """Peak RSS growth (bytes) of one ``evaluate_grid`` in a fresh process, or None.
+
+    A cross-check of the tracemalloc figure that also sees memory allocated
+    outside numpy's allocator (e.g. scratch arrays inside compiled kernels).
+    """
+    import os
+
+    code = _RSS_CODE.format(bench_dir=os.path.dirname(os.path.abspath(__file__)), n=n)
+    try:
+        res = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True, timeout=120)
+        extra, nbytes = (int(x) for x in res.stdout.split()[-2:])
+        return extra, nbytes
+    except Exception:  # noqa: BLE001 (no /proc or no clear_refs: skip the cross-check)
+        return None
+
+
 def bench_normals(tab, cfg, surf):
     n = cfg["normals"]
     label = f"4. surface unit normals, {n}x{n} grid"
@@ -568,7 +621,7 @@ def bench_normals(tab, cfg, surf):
     N = n * n
     us = np.linspace(0.0, 1.0, n)
     t_sk, k, ref = measure(lambda: surf.normal_grid(us, us), R)
-    tab.add(label, "**splinekit** `normal_grid`", N, t_sk, ref=t_sk, repeats=k)
+    tab.add(label, "**splinekit** `normal_grid`", N, t_sk, ref=t_sk, repeats=k, note=first_call_note())
 
     try:
         sp = splipy_surface(surf)
@@ -617,7 +670,7 @@ def bench_scattered(tab, cfg, surf, rng):
         u = rng.random(N)
         v = rng.random(N)
         t_sk, k, ref = measure(lambda: surf.evaluate(u, v), R)
-        tab.add(label, "**splinekit** `evaluate(u, v)`", N, t_sk, ref=t_sk, repeats=k)
+        tab.add(label, "**splinekit** `evaluate(u, v)`", N, t_sk, ref=t_sk, repeats=k, note=first_call_note())
 
         try:
             xi = np.column_stack([u, v])
@@ -699,6 +752,12 @@ def versions():
         parts.append(f"OCP {getattr(OCP, '__version__', '?')}")
     except Exception:  # noqa: BLE001
         parts.append("OCP missing")
+    try:
+        import numba
+
+        parts.append(f"numba {numba.__version__} ({numba.config.NUMBA_NUM_THREADS} threads)")
+    except Exception:  # noqa: BLE001
+        parts.append("numba missing")
     parts.append(f"splinekit {sk.__version__}")
     return ", ".join(parts)
 
@@ -718,6 +777,7 @@ def main(argv=None):
     extra, outbytes = bench_memory(surf, cfg["grid"])
     bench_normals(tab, cfg, surf)
     bench_scattered(tab, cfg, surf, rng)
+    rss = rss_check(cfg["grid"])
     t_imp, ocp_loaded, scipy_loaded = import_time()
 
     mem_ratio = extra / outbytes
@@ -732,6 +792,8 @@ def main(argv=None):
     print()
     print("Times are for the full point count; ratio = peer time / splinekit time (> 1: splinekit is faster).")
     print("Rows marked 'extrapolated from N points' were timed on an evenly strided subset and scaled linearly.")
+    print("splinekit's compiled kernels (numba, used from 20,000 points unless SPLINEKIT_NUMBA=0) run on all CPUs; "
+          "scipy, the numpy reference and the per-point loops run on one.")
     print("Max abs diff compares each peer's output with splinekit's on the points it computed.")
     print()
     print(tab.render())
@@ -749,6 +811,12 @@ def main(argv=None):
           f"{extra / 1e6:.1f} MB = {mem_ratio:.2f}x the {outbytes / 1e6:.0f} MB output array "
           f"({(extra - outbytes) / 1e6:.1f} MB of temporaries beyond the output) -> "
           f"{'met' if mem_met else 'not met'} (target <= 3x)")
+    if rss is None:
+        print("- RSS cross-check: not available on this system (needs /proc/self/clear_refs)")
+    else:
+        print(f"- cross-check in a fresh process (peak RSS growth, VmHWM after resetting it, also sees memory "
+              f"allocated outside numpy, e.g. in compiled kernels): {rss[0] / 1e6:.1f} MB = "
+              f"{rss[0] / rss[1]:.2f}x the output array")
     print(f"- `import splinekit` in a fresh interpreter (median of 5, in-process timer): {t_imp * 1e3:.0f} ms; "
           f"OCP loaded by the import: {'yes' if ocp_loaded else 'no'}; scipy loaded: {'yes' if scipy_loaded else 'no'}")
     if tab.failures:
