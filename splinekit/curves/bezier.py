@@ -49,6 +49,9 @@ class BezierCurve:
         object.__setattr__(obj, "_spline", BSplineCurve._trusted(p, bezier_knots(p), coefs, rational))
         return obj
 
+    def __reduce__(self):
+        return (type(self)._from_coefs, (np.array(self._spline._coefs), self.is_rational))
+
     def __setattr__(self, name, value):
         raise AttributeError("BezierCurve is immutable; operations return new curves")
 

@@ -74,6 +74,9 @@ class SplineCurve:
     def __setattr__(self, name, value):
         raise AttributeError(f"{type(self).__name__} is immutable; operations return new curves")
 
+    def __reduce__(self):  # pickling and copy go through the trusted constructor
+        return (_rebuild_curve, (type(self), self._degree, np.array(self._knots), np.array(self._coefs), self._rational))
+
     # -- attributes -------------------------------------------------------------------
     @property
     def degree(self) -> int:
@@ -238,6 +241,18 @@ class SplineCurve:
         tau = np.asarray(new_knots, dtype=np.float64)
         validate_knots(tau, self._degree, tau.size - self._degree - 1, "new_knots")
         return algebra.refinement_matrix(self._degree, self._knots, tau)
+
+    def elevation_matrix(self, by: int = 1):
+        """Sparse ``(n_new, n)`` matrix mapping control coefficients onto the
+        degree-elevated curve's (see :meth:`elevate_degree`)."""
+        import scipy.sparse as sp
+
+        by = as_int(by, "by", minimum=0)
+        if by == 0:
+            return sp.identity(len(self), format="csr")
+        _, M = algebra.elevate(self._degree, self._knots, np.eye(len(self)), by)
+        M[np.abs(M) < 1e-15] = 0.0
+        return sp.csr_matrix(M)
 
     def refine(self, knots):
         """Insert every value of ``knots`` (repeats allowed) at once (knot refinement)."""
@@ -508,3 +523,7 @@ class NurbsCurve(BSplineCurve):
         w = np.ones(P.shape[0]) if weights is None else weights
         return cls(p, clamped_uniform(p, P.shape[0], start, end), P, w)
 
+
+
+def _rebuild_curve(cls, degree, knots, coefs, rational):
+    return cls._trusted(degree, knots, coefs, rational)

@@ -46,6 +46,9 @@ class BezierSurface:
         object.__setattr__(obj, "_spline", s)
         return obj
 
+    def __reduce__(self):
+        return (type(self)._from_coefs, (np.array(self._spline._coefs), self.is_rational))
+
     def __setattr__(self, name, value):
         raise AttributeError("BezierSurface is immutable; operations return new surfaces")
 

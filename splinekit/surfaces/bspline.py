@@ -85,6 +85,10 @@ class SplineSurface:
     def __setattr__(self, name, value):
         raise AttributeError(f"{type(self).__name__} is immutable; operations return new surfaces")
 
+    def __reduce__(self):  # pickling and copy go through the trusted constructor
+        args = (type(self), self._pu, self._pv, np.array(self._ku), np.array(self._kv), np.array(self._coefs), self._rational)
+        return (_rebuild_surface, args)
+
     # -- attributes -------------------------------------------------------------------
     degree_u = property(lambda self: self._pu, doc="Degree in u.")
     degree_v = property(lambda self: self._pv, doc="Degree in v.")
@@ -594,3 +598,7 @@ class NurbsSurface(BSplineSurface):
         w = np.ones(P.shape[:2]) if weights is None else weights
         return cls(pu, pv, clamped_uniform(pu, P.shape[0]), clamped_uniform(pv, P.shape[1]), P, w)
 
+
+
+def _rebuild_surface(cls, pu, pv, ku, kv, coefs, rational):
+    return cls._trusted(pu, pv, ku, kv, coefs, rational)
