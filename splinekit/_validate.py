@@ -21,12 +21,20 @@ from .errors import (
 from .tolerances import DEFAULT
 
 
-def _as_float_array(value, name: str, error=ParameterError) -> np.ndarray:
+def as_float_array(value, name: str, error=ParameterError) -> np.ndarray:
+    """``value`` as a float64 array; booleans, integers and floats only.
+
+    Strings and complex numbers are refused rather than parsed or truncated.
+    """
     try:
-        arr = np.asarray(value, dtype=np.float64)
-    except (TypeError, ValueError) as exc:
-        raise error(f"{name} must be numeric, got {type(value).__name__}: {exc}") from None
-    return arr
+        raw = np.asarray(value)
+        if raw.dtype.kind in "biuf":
+            return raw.astype(np.float64, copy=False)
+        if raw.dtype.kind == "O":
+            return raw.astype(np.float64)
+    except (TypeError, ValueError, OverflowError) as exc:
+        raise error(f"{name} must be real numbers, got {type(value).__name__}: {exc}") from None
+    raise error(f"{name} must be real numbers, got an array of dtype {raw.dtype}")
 
 
 def as_int(value, name: str, minimum: int | None = None, error=ParameterError) -> int:
@@ -53,7 +61,7 @@ def as_points(value, name: str = "control_points", leading: int = 1, min_count=N
     ``leading`` is the number of index axes (1 for curves, 2 for surfaces).
     ``min_count`` is a tuple of minimum lengths of the index axes.
     """
-    arr = _as_float_array(value, name, ControlPointError)
+    arr = as_float_array(value, name, ControlPointError)
     if arr.ndim != leading + 1:
         axes = ", ".join(["n"] * leading if leading == 1 else ["nu", "nv"])
         raise ControlPointError(
@@ -76,14 +84,14 @@ def as_points(value, name: str = "control_points", leading: int = 1, min_count=N
 
 def as_weights(value, shape: tuple, name: str = "weights") -> np.ndarray:
     """Rational weights: finite, strictly positive, of the given shape."""
-    arr = _as_float_array(value, name, WeightError)
+    arr = as_float_array(value, name, WeightError)
     if arr.shape != tuple(shape):
         raise WeightError(f"{name} must have shape {tuple(shape)}, got {arr.shape}")
     bad = ~(np.isfinite(arr) & (arr > 0))
     if bad.any():
         index = tuple(int(i) for i in np.argwhere(bad)[0])
         raise WeightError(
-            f"{name}{list(index)} = {arr[index]!r}: weights must be finite and > 0"
+            f"{name}{list(index)} = {float(arr[index])!r}: weights must be finite and > 0"
         )
     return np.ascontiguousarray(arr)
 
@@ -94,12 +102,12 @@ def as_params(value, domain: tuple, name: str = "u", rtol: float = DEFAULT.param
     Values within ``rtol * (b - a)`` outside ``[a, b]`` are clamped onto it;
     anything further out, or non-finite, raises :class:`DomainError`.
     """
-    arr = _as_float_array(value, name, DomainError)
+    arr = as_float_array(value, name, DomainError)
     a, b = domain
     slack = rtol * max(b - a, 1.0)
     ok = (arr >= a - slack) & (arr <= b + slack)  # False for NaN
     if not ok.all():
-        bad = arr[~ok].ravel()[0]
+        bad = float(arr[~ok].ravel()[0])
         raise DomainError(f"{name} = {bad!r} lies outside the parameter domain [{a!r}, {b!r}]")
     return np.clip(arr, a, b)
 
@@ -124,7 +132,7 @@ def as_affine(matrix, dim: int) -> tuple[np.ndarray, np.ndarray]:
     Accepts a ``(dim, dim)`` linear map or a ``(dim + 1, dim + 1)`` homogeneous
     matrix whose last row is ``[0, ..., 0, 1]``.
     """
-    m = _as_float_array(matrix, "matrix")
+    m = as_float_array(matrix, "matrix")
     if not np.isfinite(m).all():
         raise ParameterError("matrix has non-finite entries")
     if m.shape == (dim, dim):

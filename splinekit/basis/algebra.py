@@ -91,6 +91,20 @@ def refinement_matrix(degree: int, knots: np.ndarray, new_knots: np.ndarray) -> 
             saved = (x - lo) * temp
         N[k] = saved
     cols = mu[None, :] - p + np.arange(p + 1)[:, None]
+    # On an unclamped knot vector some B-splines have no support inside the
+    # domain [a, b]; their coefficients never reach the geometry, and the Oslo
+    # formula (an extrapolating blossom there) may give them negative weights.
+    # Such a new coefficient copies the old one at the same end instead.
+    n_old = t.size - p - 1
+    a, b = t[p], t[n_old]
+    dead_lo = tau[j + p + 1] <= a
+    dead_hi = tau[j] >= b
+    if dead_lo.any() or dead_hi.any():
+        N[:, dead_lo | dead_hi] = 0.0
+        N[0, dead_lo | dead_hi] = 1.0
+        cols[0, dead_lo] = np.minimum(j[dead_lo], n_old - 1)
+        cols[0, dead_hi] = np.maximum(n_old - (n_new - j[dead_hi]), 0)
+        cols[1:, dead_lo | dead_hi] = cols[0, dead_lo | dead_hi]
     rows = np.broadcast_to(j, cols.shape)
     T = sp.csr_matrix((N.ravel(), (rows.ravel(), cols.ravel())), shape=(n_new, t.size - p - 1))
     T.eliminate_zeros()

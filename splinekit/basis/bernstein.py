@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .._validate import as_int
+from .._validate import as_float_array, as_int, as_order
 from .bspline import basis_ders_t, basis_funs_t
 
 __all__ = ["bernstein", "all_bernstein", "bezier_knots"]
@@ -29,7 +29,8 @@ def all_bernstein(n: int, t, order: int = 0) -> np.ndarray:
     extension outside [0, 1]).
     """
     n = as_int(n, "n", minimum=0)
-    t = np.asarray(t, dtype=np.float64)
+    order = as_order(order)
+    t = as_float_array(t, "t")
     shape = t.shape
     flat = t.ravel()
     if n == 0:
@@ -51,7 +52,7 @@ def bernstein(n: int, i: int, t) -> np.ndarray:
     """
     n = as_int(n, "n", minimum=0)
     i = as_int(i, "i")
-    t = np.asarray(t, dtype=np.float64)
+    t = as_float_array(t, "t")
     if i < 0 or i > n:
         return np.zeros(t.shape)
     return all_bernstein(n, t)[i]

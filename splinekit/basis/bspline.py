@@ -131,10 +131,20 @@ def design_matrix(degree: int, knots, u, order: int = 0) -> sp.csr_matrix:
 
     ``A @ control_points`` evaluates a non-rational spline (or its
     ``order``-th derivative) at ``u``; the same matrix serves fitting.
+    Checks its arguments (the other functions here are the unchecked kernels).
     """
-    U = np.asarray(knots, dtype=np.float64)
-    u = np.asarray(u, dtype=np.float64).ravel()
+    from .._validate import as_degree, as_float_array, as_order, as_params
+    from ..errors import KnotVectorError
+    from .knots import domain, validate_knots
+
+    degree = as_degree(degree)
+    order = as_order(order)
+    U = as_float_array(knots, "knots", KnotVectorError)
+    if U.ndim != 1 or U.size < 2 * degree + 2:
+        raise KnotVectorError(f"knots must be 1-D with at least 2 * degree + 2 = {2 * degree + 2} values, got shape {U.shape}")
     n = U.size - degree - 1
+    U = validate_knots(U, degree, n)
+    u = as_params(u, domain(degree, U), "u").ravel()
     span = find_span(degree, U, u)
     vals = basis_ders_t(degree, U, span, u, order)[order]  # (p+1, m)
     cols = span[None, :] - degree + np.arange(degree + 1)[:, None]

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .._validate import frozen
+from .._validate import as_float_array, frozen
 from ..errors import KnotVectorError
 
 __all__ = [
@@ -29,10 +29,7 @@ def validate_knots(knots, degree: int, n_ctrl: int, name: str = "knots") -> np.n
     Returns a read-only float64 copy. Raises :class:`KnotVectorError` naming
     the first offending index.
     """
-    try:
-        U = np.asarray(knots, dtype=np.float64)
-    except (TypeError, ValueError) as exc:
-        raise KnotVectorError(f"{name} must be a 1-D array of numbers: {exc}") from None
+    U = as_float_array(knots, name, KnotVectorError)
     if U.ndim != 1:
         raise KnotVectorError(f"{name} must be 1-D, got shape {U.shape}")
     expected = n_ctrl + degree + 1
@@ -43,22 +40,22 @@ def validate_knots(knots, degree: int, n_ctrl: int, name: str = "knots") -> np.n
         )
     bad = np.flatnonzero(~np.isfinite(U))
     if bad.size:
-        raise KnotVectorError(f"{name}[{bad[0]}] = {U[bad[0]]!r} is not finite")
+        raise KnotVectorError(f"{name}[{bad[0]}] = {float(U[bad[0]])!r} is not finite")
     dec = np.flatnonzero(np.diff(U) < 0)
     if dec.size:
         i = dec[0]
         raise KnotVectorError(
-            f"{name} must be non-decreasing, but {name}[{i + 1}] = {U[i + 1]!r} < {name}[{i}] = {U[i]!r}"
+            f"{name} must be non-decreasing, but {name}[{i + 1}] = {float(U[i + 1])!r} < {name}[{i}] = {float(U[i])!r}"
         )
     a, b = U[degree], U[n_ctrl]
     if not a < b:
         raise KnotVectorError(
-            f"{name} gives an empty domain [{name}[{degree}], {name}[{n_ctrl}]] = [{a!r}, {b!r}]"
+            f"{name} gives an empty domain [{name}[{degree}], {name}[{n_ctrl}]] = [{float(a)!r}, {float(b)!r}]"
         )
     values, counts = np.unique(U, return_counts=True)
     over = np.flatnonzero(counts > degree + 1)
     if over.size:
-        v = values[over[0]]
+        v = float(values[over[0]])
         raise KnotVectorError(
             f"knot {v!r} appears {counts[over[0]]} times in {name}; at most degree + 1 = {degree + 1} allowed"
         )
@@ -66,7 +63,7 @@ def validate_knots(knots, degree: int, n_ctrl: int, name: str = "knots") -> np.n
     if inner.any():
         k = np.flatnonzero(inner)[0]
         raise KnotVectorError(
-            f"interior knot {values[k]!r} has multiplicity {counts[k]} in {name}; "
+            f"interior knot {float(values[k])!r} has multiplicity {counts[k]} in {name}; "
             f"at most the degree {degree} keeps the spline connected"
         )
     return frozen(U)

@@ -15,6 +15,7 @@ import numpy as np
 from .._validate import (
     as_affine,
     as_degree,
+    as_float_array,
     as_int,
     as_order,
     as_params,
@@ -238,7 +239,7 @@ class SplineCurve:
 
     def refinement_matrix(self, new_knots):
         """Sparse ``(n_new, n)`` matrix mapping control coefficients onto ``new_knots``."""
-        tau = np.asarray(new_knots, dtype=np.float64)
+        tau = as_float_array(new_knots, "new_knots", KnotVectorError)
         validate_knots(tau, self._degree, tau.size - self._degree - 1, "new_knots")
         return algebra.refinement_matrix(self._degree, self._knots, tau)
 
@@ -256,7 +257,7 @@ class SplineCurve:
 
     def refine(self, knots):
         """Insert every value of ``knots`` (repeats allowed) at once (knot refinement)."""
-        extra = np.asarray(knots, dtype=np.float64).ravel()
+        extra = as_float_array(knots, "knots", KnotVectorError).ravel()
         if extra.size == 0:
             return self
         extra = np.array([self._knot_value(x, "knots") for x in extra])

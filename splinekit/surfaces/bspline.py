@@ -14,6 +14,7 @@ from .._validate import (
     as_affine,
     as_degree,
     as_direction,
+    as_float_array,
     as_int,
     as_order,
     as_params,
@@ -391,7 +392,7 @@ class SplineSurface:
     def refine(self, knots, direction="u"):
         """Insert every value of ``knots`` in the given direction."""
         d, p, U, C = self._dir(direction)
-        extra = np.asarray(knots, dtype=np.float64).ravel()
+        extra = as_float_array(knots, "knots", KnotVectorError).ravel()
         if extra.size == 0:
             return self
         extra = np.array([self._knot_value(d, x, "knots") for x in extra])
