@@ -3,9 +3,14 @@ tolerance take it as an argument whose default comes from :data:`DEFAULT`."""
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
-__all__ = ["Tolerances", "DEFAULT"]
+import numpy as np
+
+from .errors import ParameterError
+
+__all__ = ["Tolerances", "DEFAULT", "geometric_tolerance"]
 
 
 @dataclass(frozen=True)
@@ -22,8 +27,8 @@ class Tolerances:
         Relative distance (times the domain length) under which two knot values
         count as the same knot when a knot is looked up by value.
     point : float
-        Absolute geometric tolerance (model units) for knot removal and
-        closedness checks.
+        Geometric tolerance for knot removal and closedness checks, relative to
+        the control net's size (see :func:`geometric_tolerance`).
     """
 
     param: float = 1e-10
@@ -32,3 +37,18 @@ class Tolerances:
 
 
 DEFAULT = Tolerances()
+
+
+def geometric_tolerance(tol, points) -> float:
+    """``tol`` checked (finite, >= 0), or by default ``DEFAULT.point`` times the
+    size of the control net (its largest absolute coordinate, at least 1), so
+    that the default means the same for a part in metres and one in microns."""
+    if tol is None:
+        return DEFAULT.point * max(1.0, float(np.abs(points).max()))
+    try:
+        tol = float(tol)
+    except (TypeError, ValueError):
+        raise ParameterError(f"tol must be a number, got {tol!r}") from None
+    if not (math.isfinite(tol) and tol >= 0):
+        raise ParameterError(f"tol must be finite and >= 0, got {tol!r}")
+    return tol

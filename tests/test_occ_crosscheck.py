@@ -11,6 +11,9 @@ in a random box of size 0.1..100, weights uniform in [0.2, 5]; every test runs
 polynomial and rational. Each case draws from
 ``numpy.random.default_rng([SALT, seed, rational])`` and failure messages
 print the full case, so any failure is reproducible from its test id.
+Evaluation of large batches (at least ``splinekit.basis.jit.MIN_POINTS``
+points) may run compiled kernels instead of numpy; the ``large_batch`` tests
+check that path against OCC as well.
 
 Tolerances
 ----------
@@ -828,3 +831,61 @@ def test_bezier_surface(seed, rational):
     assert_close(ours.control_points, up["points"], RTOL * net, f"elevate({bu}, {bv}) poles", case)
     if rational:
         assert_close(ours.weights, up["weights"], RTOL * up["weights"].max(), f"elevate({bu}, {bv}) weights", case)
+
+
+# ========================================================================================
+# Large batches: evaluation of at least jit.MIN_POINTS points may take a compiled path
+# (numba kernels) instead of numpy; check that path against OCC too, on a subset.
+# ========================================================================================
+SALT_BATCH_CURVE = 401
+SALT_BATCH_SURFACE = 402
+
+
+def _batch_size() -> int:
+    from splinekit.basis import jit
+
+    return max(int(jit.MIN_POINTS), 1000)
+
+
+@RATIONAL
+@pytest.mark.parametrize("seed", range(7))
+def test_curve_large_batch_evaluation(seed, rational):
+    rng = make_rng(SALT_BATCH_CURVE, seed, rational)
+    p, U, P, W = random_curve_data(rng, rational, degree=curve_degree(seed))
+    case = curve_case(seed, SALT_BATCH_CURVE, p, U, P, W)
+    curve = sk_curve(p, U, P, W)
+    h = occ_bspline_curve(p, U, P, W)
+    us = np.concatenate([np.unique(U), interior_params(rng, U, p, _batch_size())])
+    pts = curve.evaluate(us)
+    pick = np.concatenate([np.arange(np.unique(U).size + 2), rng.choice(us.size, 300, replace=False)])
+    ref = np.array([_xyz(h.Value(float(us[i]))) for i in pick])
+    assert_derivative_close(pts[pick], ref, net_size(P), "batch evaluate vs Value", case + describe(params=us[pick]))
+
+
+@RATIONAL
+@pytest.mark.parametrize("seed", range(7))
+def test_surface_large_batch_evaluation(seed, rational):
+    rng = make_rng(SALT_BATCH_SURFACE, seed, rational)
+    pu, pv, ku, kv, P, W = random_surface_data(rng, rational, surface_degrees(seed))
+    case = surface_case(seed, SALT_BATCH_SURFACE, pu, pv, ku, kv, P, W)
+    surf = sk_surface(pu, pv, ku, kv, P, W)
+    h = occ_bspline_surface(pu, pv, ku, kv, P, W)
+    net = net_size(P)
+    n = _batch_size()
+
+    # scattered pairs
+    us, vs = surface_params(rng, ku, kv, pu, pv, n)
+    pts = surf.evaluate(us, vs)
+    pick = np.concatenate([np.arange(4), np.arange(n + 4, us.size), rng.choice(us.size, 300, replace=False)])
+    ref = np.array([_xyz(h.Value(float(us[i]), float(vs[i]))) for i in pick])
+    assert_derivative_close(pts[pick], ref, net, "batch evaluate vs Value", case + describe(u=us[pick], v=vs[pick]))
+
+    # a grid of at least n points, knot lines included
+    side = int(np.ceil(np.sqrt(n))) + 1
+    gu = np.sort(np.concatenate([np.unique(ku), interior_params(rng, ku, pu, side)]))
+    gv = np.sort(np.concatenate([np.unique(kv), interior_params(rng, kv, pv, side)]))
+    grid = surf.evaluate_grid(gu, gv)
+    iu = np.concatenate([[0, gu.size - 1], rng.integers(0, gu.size, 150)])
+    iv = np.concatenate([[0, gv.size - 1], rng.integers(0, gv.size, 150)])
+    ref = np.array([_xyz(h.Value(float(gu[i]), float(gv[j]))) for i, j in zip(iu, iv)])
+    assert_derivative_close(grid[iu, iv], ref, net, "batch evaluate_grid vs Value", case)

@@ -34,7 +34,7 @@ from ..errors import (
     KnotVectorError,
     ParameterError,
 )
-from ..tolerances import DEFAULT
+from ..tolerances import DEFAULT, geometric_tolerance
 
 __all__ = ["SplineCurve", "BSplineCurve", "NurbsCurve"]
 
@@ -223,25 +223,15 @@ class SplineCurve:
 
     # -- knot algebra -----------------------------------------------------------------
     def _knot_value(self, u, name="u"):
+        """A single parameter in the domain (clamped within the parameter
+        slack), snapped onto an existing knot within the knot tolerance."""
         a, b = self.domain
-        try:
-            u = float(u)
-        except (TypeError, ValueError):
-            raise ParameterError(f"{name} must be a number, got {u!r}") from None
-        if not np.isfinite(u) or u < a or u > b:
-            raise DomainError(f"{name} = {u!r} lies outside the parameter domain [{a!r}, {b!r}]")
-        # snap onto an existing knot within the knot tolerance
-        tol = DEFAULT.knot * (b - a)
-        near = np.abs(self._knots - u) <= tol
-        if near.any():
-            u = float(self._knots[near][0])
-        return u
-
-    def refinement_matrix(self, new_knots):
-        """Sparse ``(n_new, n)`` matrix mapping control coefficients onto ``new_knots``."""
-        tau = as_float_array(new_knots, "new_knots", KnotVectorError)
-        validate_knots(tau, self._degree, tau.size - self._degree - 1, "new_knots")
-        return algebra.refinement_matrix(self._degree, self._knots, tau)
+        value = as_params(u, (a, b), name)
+        if value.ndim != 0:
+            raise ParameterError(f"{name} must be a single number, got an array of shape {value.shape}")
+        u = float(value)
+        near = np.abs(self._knots - u) <= DEFAULT.knot * (b - a)
+        return float(self._knots[near][0]) if near.any() else u
 
     def elevation_matrix(self, by: int = 1):
         """Sparse ``(n_new, n)`` matrix mapping control coefficients onto the
@@ -282,12 +272,13 @@ class SplineCurve:
     def remove_knot(self, u, times: int = 1, tol: float | None = None):
         """Remove the interior knot ``u`` ``times`` times, moving the curve at most ``tol``.
 
-        ``tol`` is a distance in model units (default ``1e-9``). Raises
+        ``tol`` is a distance in model units; the default is ``1e-9`` times the
+        size of the control net (its largest coordinate, at least 1). Raises
         :class:`KnotRemovalError` when the knot is absent or the removal would
         move the curve further than ``tol``.
         """
         times = as_int(times, "times", minimum=1)
-        tol = DEFAULT.point if tol is None else float(tol)
+        tol = geometric_tolerance(tol, self.control_points)
         u = self._knot_value(u)
         a, b = self.domain
         have = int(np.count_nonzero(self._knots == u))
@@ -427,8 +418,9 @@ class SplineCurve:
         return total
 
     def is_closed(self, tol: float | None = None) -> bool:
-        """True when the end point equals the start point within ``tol``."""
-        tol = DEFAULT.point if tol is None else float(tol)
+        """True when the end point equals the start point within ``tol``
+        (default: 1e-9 times the control net's size)."""
+        tol = geometric_tolerance(tol, self.control_points)
         a, b = self.domain
         ends = self.evaluate(np.array([a, b]))
         return bool(np.linalg.norm(ends[1] - ends[0]) <= tol)

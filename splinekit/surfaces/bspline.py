@@ -28,7 +28,7 @@ from ..basis.jit import kernels
 from ..basis.knots import clamped_uniform, domain, is_clamped, validate_knots
 from ..basis.rational import rational_surface_derivatives
 from ..errors import DomainError, KnotRemovalError, KnotVectorError, ParameterError
-from ..tolerances import DEFAULT
+from ..tolerances import DEFAULT, geometric_tolerance
 
 __all__ = ["SplineSurface", "BSplineSurface", "NurbsSurface"]
 
@@ -378,13 +378,12 @@ class SplineSurface:
         return self._like(self._pu, p, self._ku, U, np.ascontiguousarray(coefs.transpose(1, 0, 2)))
 
     def _knot_value(self, d, u, name="u"):
+        """A single parameter of direction ``d``, clamped and snapped like the curves'."""
         a, b = self.domain[d]
-        try:
-            u = float(u)
-        except (TypeError, ValueError):
-            raise ParameterError(f"{name} must be a number, got {u!r}") from None
-        if not np.isfinite(u) or u < a or u > b:
-            raise DomainError(f"{name} = {u!r} lies outside the {'uv'[d]} domain [{a!r}, {b!r}]")
+        value = as_params(u, (a, b), name)
+        if value.ndim != 0:
+            raise ParameterError(f"{name} must be a single number, got an array of shape {value.shape}")
+        u = float(value)
         U = self._ku if d == 0 else self._kv
         near = np.abs(U - u) <= DEFAULT.knot * (b - a)
         return float(U[near][0]) if near.any() else u
@@ -415,9 +414,13 @@ class SplineSurface:
         return self.refine(np.full(times, u), direction)
 
     def remove_knot(self, u, times: int = 1, tol: float | None = None, direction="u"):
-        """Remove an interior knot, moving the surface at most ``tol`` (default 1e-9)."""
+        """Remove an interior knot, moving the surface at most ``tol``.
+
+        ``tol`` defaults to ``1e-9`` times the control net's size (its
+        largest coordinate, at least 1); see :meth:`SplineCurve.remove_knot`.
+        """
         times = as_int(times, "times", minimum=1)
-        tol = DEFAULT.point if tol is None else float(tol)
+        tol = geometric_tolerance(tol, self.control_points)
         d, p, U, C = self._dir(direction)
         u = self._knot_value(d, u)
         a, b = self.domain[d]
