@@ -6,11 +6,9 @@ write a shaded PNG so that anyone, including the test suite, can.
 
 from __future__ import annotations
 
-import os
-import tempfile
-
 import numpy as np
 
+from ._atomic import atomic_write
 from .errors import MissingDependencyError, ParameterError
 
 __all__ = ["render_surface"]
@@ -62,18 +60,10 @@ def render_surface(surface, path, resolution: int = 80, color: str = "normal", s
         P = surface.control_points
         ax.plot_wireframe(P[..., 0], P[..., 1], P[..., 2], color="0.3", linewidth=0.6, alpha=0.7)
         ax.scatter(P[..., 0].ravel(), P[..., 1].ravel(), P[..., 2].ravel(), color="crimson", s=6)
-    ax.set_box_aspect(np.ptp(X.reshape(-1, 3), axis=0) + 1e-9)
+    extent = np.ptp(X.reshape(-1, 3), axis=0) + 1e-9
+    ax.set_box_aspect(np.maximum(extent, 0.4 * extent.max()))  # keep flat surfaces readable
     ax.set_title(title or repr(surface), fontsize=8)
-    directory = os.path.dirname(os.path.abspath(path))
-    fd, tmp = tempfile.mkstemp(suffix=".png", dir=directory)
-    os.close(fd)
     try:
-        fig.savefig(tmp, format="png")
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
+        return atomic_write(path, lambda tmp: fig.savefig(tmp, format="png", bbox_inches="tight"))
     finally:
         plt.close(fig)
-    return path

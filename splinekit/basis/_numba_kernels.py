@@ -122,6 +122,59 @@ def surface_points(pu, Uu, lou, hiu, pv, Uv, lov, hiv, C, u, v, rational, out):
 
 
 @njit(cache=True, parallel=True)
+def surface_points4(pu, Uu, lou, hiu, pv, Uv, lov, hiv, C, u, v, n_out, divide, out):
+    """``surface_points`` for nets with 4 coefficient columns (3-D rational, or
+    narrower nets padded with zeros), with scalar accumulators. Same
+    operation order as the numpy path."""
+    m = u.shape[0]
+    n_chunks = (m + _CHUNK - 1) // _CHUNK
+    for c in prange(n_chunks):
+        Nu = np.empty(pu + 1)
+        Nv = np.empty(pv + 1)
+        left = np.empty(max(pu, pv) + 1)
+        right = np.empty(max(pu, pv) + 1)
+        for i in range(c * _CHUNK, min(m, (c + 1) * _CHUNK)):
+            su = _span(Uu, lou, hiu, u[i])
+            sv = _span(Uv, lov, hiv, v[i])
+            _basis(Uu, pu, su, u[i], Nu, left, right)
+            _basis(Uv, pv, sv, v[i], Nv, left, right)
+            bu, bv = su - pu, sv - pv
+            a0 = a1 = a2 = a3 = 0.0
+            for a in range(pu + 1):
+                w = Nv[0]
+                row = bu + a
+                i0 = w * C[row, bv, 0]
+                i1 = w * C[row, bv, 1]
+                i2 = w * C[row, bv, 2]
+                i3 = w * C[row, bv, 3]
+                for b in range(1, pv + 1):
+                    w = Nv[b]
+                    i0 = i0 + w * C[row, bv + b, 0]
+                    i1 = i1 + w * C[row, bv + b, 1]
+                    i2 = i2 + w * C[row, bv + b, 2]
+                    i3 = i3 + w * C[row, bv + b, 3]
+                w = Nu[a]
+                if a == 0:
+                    a0, a1, a2, a3 = w * i0, w * i1, w * i2, w * i3
+                else:
+                    a0 = a0 + w * i0
+                    a1 = a1 + w * i1
+                    a2 = a2 + w * i2
+                    a3 = a3 + w * i3
+            if divide:
+                a0 = a0 / a3
+                a1 = a1 / a3
+                a2 = a2 / a3
+            out[i, 0] = a0
+            if n_out > 1:
+                out[i, 1] = a1
+            if n_out > 2:
+                out[i, 2] = a2
+            if n_out > 3:
+                out[i, 3] = a3
+
+
+@njit(cache=True, parallel=True)
 def grid_rows4(R, sv, Nv, q, n_out, divide, out):
     """``grid_rows`` for nets with 4 coefficient columns (3-D rational, or narrower
     nets padded with zeros): four scalar accumulators the compiler keeps in

@@ -186,11 +186,14 @@ class SplineSurface:
         jit = kernels(fu.size)
         if jit is not None:
             pts = np.empty((fu.size, self.dim))
-            jit.surface_points(
-                self._pu, self._ku, *span_bounds(self._pu, self._ku),
-                self._pv, self._kv, *span_bounds(self._pv, self._kv),
-                self._coefs, fu, fv, self._rational, pts,
-            )
+            spans = (*span_bounds(self._pu, self._ku), *span_bounds(self._pv, self._kv))
+            bases = (self._pu, self._ku, *spans[:2], self._pv, self._kv, *spans[2:])
+            k = self._coefs.shape[-1]
+            if k == 4 or (k < 4 and not self._rational):
+                C4 = self._coefs if k == 4 else np.concatenate([self._coefs, np.zeros(self.shape + (4 - k,))], axis=-1)
+                jit.surface_points4(*bases, C4, fu, fv, self.dim, self._rational, pts)
+            else:
+                jit.surface_points(*bases, self._coefs, fu, fv, self._rational, pts)
             return pts.reshape(u.shape + (self.dim,))
         su = find_span(self._pu, self._ku, fu)
         sv = find_span(self._pv, self._kv, fv)
