@@ -116,3 +116,29 @@ def test_env_switch_is_read_at_call_time(monkeypatch):
     monkeypatch.delenv("SPLINEKIT_NUMBA")
     assert jit.kernels(10) is None
     assert os.environ.get("SPLINEKIT_NUMBA") is None
+
+
+def test_atomic_write_failure_keeps_existing_file(tmp_path):
+    from splinekit._atomic import atomic_write
+
+    target = tmp_path / "picture.png"
+    target.write_bytes(b"old contents")
+
+    def failing(tmp):
+        with open(tmp, "wb") as fh:
+            fh.write(b"half a file")
+        raise RuntimeError("disk full")
+
+    with pytest.raises(RuntimeError):
+        atomic_write(target, failing)
+    assert target.read_bytes() == b"old contents"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["picture.png"]
+
+
+def test_render_refuses_non_3d_surface(tmp_path):
+    from splinekit.plot import render_surface
+
+    flat = sk.BSplineSurface.uniform(1, 1, np.zeros((2, 2, 2)))
+    with pytest.raises(SplineKitError, match="3-D"):
+        render_surface(flat, tmp_path / "x.png")
+    assert not list(tmp_path.iterdir())
