@@ -50,9 +50,18 @@ def as_int(value, name: str, minimum: int | None = None, error=ParameterError) -
     return int(result)
 
 
+MAX_DEGREE = 128
+"""Largest degree (and derivative order) accepted. Cost grows like p**2 per
+point (p**3 for derivatives) and Bernstein coefficients of higher degree are
+far beyond double precision; OpenCascade stops at 25."""
+
+
 def as_degree(value, name: str = "degree") -> int:
-    """A polynomial degree: an integer >= 1."""
-    return as_int(value, name, minimum=1, error=DegreeError)
+    """A polynomial degree: an integer in ``[1, MAX_DEGREE]``."""
+    degree = as_int(value, name, minimum=1, error=DegreeError)
+    if degree > MAX_DEGREE:
+        raise DegreeError(f"{name} = {degree} exceeds the largest supported degree {MAX_DEGREE}")
+    return degree
 
 
 def as_points(value, name: str = "control_points", leading: int = 1, min_count=None) -> np.ndarray:
@@ -113,8 +122,11 @@ def as_params(value, domain: tuple, name: str = "u", rtol: float = DEFAULT.param
 
 
 def as_order(value, name: str = "order") -> int:
-    """A derivative order: an integer >= 0."""
-    return as_int(value, name, minimum=0)
+    """A derivative order: an integer in ``[0, MAX_DEGREE]``."""
+    order = as_int(value, name, minimum=0)
+    if order > MAX_DEGREE:
+        raise ParameterError(f"{name} = {order} exceeds the largest supported derivative order {MAX_DEGREE}")
+    return order
 
 
 def as_direction(value) -> int:

@@ -10,7 +10,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from .._validate import as_float_array, as_int, as_order
+from .._validate import MAX_DEGREE, as_float_array, as_int, as_order
+from ..errors import DegreeError
 from .bspline import basis_ders_t, basis_funs_t
 
 __all__ = ["bernstein", "all_bernstein", "bezier_knots"]
@@ -29,6 +30,8 @@ def all_bernstein(n: int, t, order: int = 0) -> np.ndarray:
     extension outside [0, 1]).
     """
     n = as_int(n, "n", minimum=0)
+    if n > MAX_DEGREE:
+        raise DegreeError(f"n = {n} exceeds the largest supported degree {MAX_DEGREE}")
     order = as_order(order)
     t = as_float_array(t, "t")
     shape = t.shape
@@ -51,6 +54,8 @@ def bernstein(n: int, i: int, t) -> np.ndarray:
     ``B_i^n`` is identically zero for ``i < 0`` or ``i > n``.
     """
     n = as_int(n, "n", minimum=0)
+    if n > MAX_DEGREE:
+        raise DegreeError(f"n = {n} exceeds the largest supported degree {MAX_DEGREE}")
     i = as_int(i, "i")
     t = as_float_array(t, "t")
     if i < 0 or i > n:

@@ -11,11 +11,11 @@ from __future__ import annotations
 
 import numpy as np
 
-from .._validate import as_int, as_points, as_weights
+from .._validate import as_points, as_weights
 from ..basis import algebra
 from ..basis.bernstein import bezier_knots
 from ..errors import ParameterError
-from .bspline import BSplineCurve, NurbsCurve, SplineCurve
+from .bspline import BSplineCurve, NurbsCurve, SplineCurve, _elevation_step
 
 __all__ = ["BezierCurve"]
 
@@ -109,7 +109,7 @@ class BezierCurve:
 
     def elevate(self, by: int = 1):
         """The same curve with degree ``p + by``."""
-        by = as_int(by, "by", minimum=0)
+        by = _elevation_step(by, self.degree)
         E = algebra.bezier_elevation_matrix(self.degree, by)
         return BezierCurve._from_coefs(E @ self._spline._coefs, self.is_rational)
 

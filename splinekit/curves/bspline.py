@@ -13,6 +13,7 @@ from __future__ import annotations
 import numpy as np
 
 from .._validate import (
+    MAX_DEGREE,
     as_affine,
     as_degree,
     as_float_array,
@@ -29,6 +30,7 @@ from ..basis.jit import kernels
 from ..basis.knots import clamped_uniform, domain, is_clamped, validate_knots
 from ..basis.rational import rational_curve_derivatives
 from ..errors import (
+    DegreeError,
     DomainError,
     KnotRemovalError,
     KnotVectorError,
@@ -238,7 +240,7 @@ class SplineCurve:
         degree-elevated curve's (see :meth:`elevate_degree`)."""
         import scipy.sparse as sp
 
-        by = as_int(by, "by", minimum=0)
+        by = _elevation_step(by, self._degree)
         if by == 0:
             return sp.identity(len(self), format="csr")
         _, M = algebra.elevate(self._degree, self._knots, np.eye(len(self)), by)
@@ -301,7 +303,7 @@ class SplineCurve:
 
     def elevate_degree(self, by: int = 1):
         """The same curve with degree raised by ``by`` (continuity kept at every knot)."""
-        by = as_int(by, "by", minimum=0)
+        by = _elevation_step(by, self._degree)
         if by == 0:
             return self
         U, coefs = algebra.elevate(self._degree, self._knots, self._coefs, by)
@@ -516,6 +518,14 @@ class NurbsCurve(BSplineCurve):
         w = np.ones(P.shape[0]) if weights is None else weights
         return cls(p, clamped_uniform(p, P.shape[0], start, end), P, w)
 
+
+
+def _elevation_step(by, degree: int) -> int:
+    """``by`` checked so that ``degree + by`` stays within MAX_DEGREE."""
+    by = as_int(by, "by", minimum=0)
+    if degree + by > MAX_DEGREE:
+        raise DegreeError(f"elevating degree {degree} by {by} exceeds the largest supported degree {MAX_DEGREE}")
+    return by
 
 
 def _rebuild_curve(cls, degree, knots, coefs, rational):

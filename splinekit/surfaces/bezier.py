@@ -8,10 +8,11 @@ from __future__ import annotations
 
 import numpy as np
 
-from .._validate import as_direction, as_int, as_points, as_weights
+from .._validate import as_direction, as_points, as_weights
 from ..basis import algebra
 from ..basis.bernstein import bezier_knots
 from ..errors import ParameterError
+from ..curves.bspline import _elevation_step
 from .bspline import BSplineSurface, NurbsSurface, SplineSurface
 
 __all__ = ["BezierSurface"]
@@ -99,8 +100,8 @@ class BezierSurface:
 
     def elevate(self, by: int = 1, direction="u"):
         """The same patch with one degree raised by ``by``."""
-        by = as_int(by, "by", minimum=0)
         d = as_direction(direction)
+        by = _elevation_step(by, self.degree_u if d == 0 else self.degree_v)
         C = self._spline._coefs
         if d == 0:
             C = np.einsum("ij,jk...->ik...", algebra.bezier_elevation_matrix(self.degree_u, by), C)

@@ -28,6 +28,7 @@ from ..basis.jit import kernels
 from ..basis.knots import clamped_uniform, domain, is_clamped, validate_knots
 from ..basis.rational import rational_surface_derivatives
 from ..errors import DomainError, KnotRemovalError, KnotVectorError, ParameterError
+from ..curves.bspline import _elevation_step
 from ..tolerances import DEFAULT, geometric_tolerance
 
 __all__ = ["SplineSurface", "BSplineSurface", "NurbsSurface"]
@@ -447,10 +448,10 @@ class SplineSurface:
 
     def elevate_degree(self, by: int = 1, direction="u"):
         """Raise the degree in one direction by ``by``; the surface is unchanged."""
-        by = as_int(by, "by", minimum=0)
+        d, p, U, C = self._dir(direction)
+        by = _elevation_step(by, p)
         if by == 0:
             return self
-        d, p, U, C = self._dir(direction)
         U2, C2 = algebra.elevate(p, U, C, by)
         return self._rebuild(d, p + by, U2, C2)
 
