@@ -144,14 +144,13 @@ def clamp(degree: int, knots: np.ndarray, coefs: np.ndarray):
         return knots, coefs
     tau = insert_knots_to_multiplicity(knots, [a, b], p)
     Q = refine(p, knots, coefs, tau)
-    # With a of multiplicity p and k knots before it, the first k - 1 control
-    # points act only left of the domain: the B-spline that starts at the
-    # knot before a is, on [a, b], the clamped end B-spline. Same at b.
-    k_lo = np.count_nonzero(tau < a)
-    k_hi = np.count_nonzero(tau > b)
+    # With a of multiplicity m >= p and k knots before it, the first
+    # k + m - (p + 1) control points act only left of the domain (for m = p the
+    # B-spline that starts at the knot before a is, on [a, b], the clamped end
+    # B-spline, so it stays). Same at b.
     n_tau = tau.size - p - 1
-    first = k_lo - 1 if k_lo else 0
-    last = n_tau - (k_hi - 1) if k_hi else n_tau
+    first = np.count_nonzero(tau < a) + np.count_nonzero(tau == a) - (p + 1)
+    last = n_tau - (np.count_nonzero(tau > b) + np.count_nonzero(tau == b) - (p + 1))
     return clamped_knots(p, knots), Q[first:last]
 
 
