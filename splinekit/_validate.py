@@ -105,6 +105,23 @@ def as_weights(value, shape: tuple, name: str = "weights") -> np.ndarray:
     return np.ascontiguousarray(arr)
 
 
+def homogeneous(points: np.ndarray, weights: np.ndarray) -> np.ndarray:
+    """``(w * P, w)`` with the weight as the last column; refuses overflow."""
+    with np.errstate(over="ignore", invalid="ignore"):
+        out = np.concatenate([points * weights[..., None], weights[..., None]], axis=-1)
+    if not np.isfinite(out).all():
+        index = tuple(int(i) for i in np.argwhere(~np.isfinite(out))[0][:-1])
+        raise ControlPointError(f"weight times control point {list(index)} overflows the float range")
+    return out
+
+
+def finite_points(points: np.ndarray, what: str) -> np.ndarray:
+    """``points`` unchanged if finite, else a ControlPointError saying ``what`` overflowed."""
+    if not np.isfinite(points).all():
+        raise ControlPointError(f"{what} gives non-finite control points (overflow)")
+    return points
+
+
 def as_params(value, domain: tuple, name: str = "u", rtol: float = DEFAULT.param) -> np.ndarray:
     """Parameters as a float64 array of any shape, checked to lie in ``domain``.
 
@@ -119,6 +136,17 @@ def as_params(value, domain: tuple, name: str = "u", rtol: float = DEFAULT.param
         bad = float(arr[~ok].ravel()[0])
         raise DomainError(f"{name} = {bad!r} lies outside the parameter domain [{a!r}, {b!r}]")
     return np.clip(arr, a, b)
+
+
+def as_real(value, name: str, error=ParameterError) -> float:
+    """A single finite real number."""
+    arr = as_float_array(value, name, error)
+    if arr.ndim != 0:
+        raise error(f"{name} must be a single number, got an array of shape {arr.shape}")
+    x = float(arr)
+    if not np.isfinite(x):
+        raise error(f"{name} must be finite, got {x!r}")
+    return x
 
 
 def as_order(value, name: str = "order") -> int:

@@ -47,7 +47,7 @@ def geometric_tolerance(tol, points) -> float:
         return DEFAULT.point * max(1.0, float(np.abs(points).max()))
     try:
         tol = float(tol)
-    except (TypeError, ValueError):
+    except (TypeError, ValueError, OverflowError):
         raise ParameterError(f"tol must be a number, got {tol!r}") from None
     if not (math.isfinite(tol) and tol >= 0):
         raise ParameterError(f"tol must be finite and >= 0, got {tol!r}")

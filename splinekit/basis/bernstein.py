@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 
 from .._validate import MAX_DEGREE, as_float_array, as_int, as_order
-from ..errors import DegreeError
+from ..errors import DegreeError, DomainError
 from .bspline import basis_ders_t, basis_funs_t
 
 __all__ = ["bernstein", "all_bernstein", "bezier_knots"]
@@ -20,6 +20,13 @@ __all__ = ["bernstein", "all_bernstein", "bezier_knots"]
 def bezier_knots(degree: int) -> np.ndarray:
     """The knot vector ``[0]*(p+1) + [1]*(p+1)`` of a degree-``p`` Bézier segment."""
     return np.concatenate([np.zeros(degree + 1), np.ones(degree + 1)])
+
+
+def _finite(t: np.ndarray) -> np.ndarray:
+    if not np.isfinite(t).all():
+        bad = float(t[~np.isfinite(t)].ravel()[0])
+        raise DomainError(f"t = {bad!r} is not finite")
+    return t
 
 
 def all_bernstein(n: int, t, order: int = 0) -> np.ndarray:
@@ -33,7 +40,7 @@ def all_bernstein(n: int, t, order: int = 0) -> np.ndarray:
     if n > MAX_DEGREE:
         raise DegreeError(f"n = {n} exceeds the largest supported degree {MAX_DEGREE}")
     order = as_order(order)
-    t = as_float_array(t, "t")
+    t = _finite(as_float_array(t, "t"))
     shape = t.shape
     flat = t.ravel()
     if n == 0:
@@ -57,7 +64,7 @@ def bernstein(n: int, i: int, t) -> np.ndarray:
     if n > MAX_DEGREE:
         raise DegreeError(f"n = {n} exceeds the largest supported degree {MAX_DEGREE}")
     i = as_int(i, "i")
-    t = as_float_array(t, "t")
+    t = _finite(as_float_array(t, "t"))
     if i < 0 or i > n:
         return np.zeros(t.shape)
     return all_bernstein(n, t)[i]

@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 
 from .._validate import as_float_array, frozen
-from ..errors import KnotVectorError
+from ..errors import DomainError, KnotVectorError
 
 __all__ = [
     "validate_knots",
@@ -20,7 +20,13 @@ __all__ = [
     "multiplicity",
     "clamped_uniform",
     "is_clamped",
+    "reparametrized",
 ]
+
+
+MIN_GAP = 1e-290
+"""Smallest positive gap between distinct knots: basis values and derivatives
+divide by gaps, and 1 / 1e-290 leaves headroom below the float maximum."""
 
 
 def validate_knots(knots, degree: int, n_ctrl: int, name: str = "knots") -> np.ndarray:
@@ -41,11 +47,23 @@ def validate_knots(knots, degree: int, n_ctrl: int, name: str = "knots") -> np.n
     bad = np.flatnonzero(~np.isfinite(U))
     if bad.size:
         raise KnotVectorError(f"{name}[{bad[0]}] = {float(U[bad[0]])!r} is not finite")
-    dec = np.flatnonzero(np.diff(U) < 0)
+    with np.errstate(over="ignore", invalid="ignore"):
+        width = U[-1] - U[0]
+        gaps = np.diff(U)
+    if not np.isfinite(width):
+        raise KnotVectorError(f"{name} spans [{float(U[0])!r}, {float(U[-1])!r}], wider than floating point can represent")
+    dec = np.flatnonzero(gaps < 0)
     if dec.size:
         i = dec[0]
         raise KnotVectorError(
             f"{name} must be non-decreasing, but {name}[{i + 1}] = {float(U[i + 1])!r} < {name}[{i}] = {float(U[i])!r}"
+        )
+    tiny = np.flatnonzero((gaps > 0) & (gaps < MIN_GAP))
+    if tiny.size:
+        i = tiny[0]
+        raise KnotVectorError(
+            f"{name}[{i}] = {float(U[i])!r} and {name}[{i + 1}] = {float(U[i + 1])!r} differ by less than "
+            f"{MIN_GAP:g}; basis functions divide by knot gaps and would overflow"
         )
     a, b = U[degree], U[n_ctrl]
     if not a < b:
@@ -67,6 +85,24 @@ def validate_knots(knots, degree: int, n_ctrl: int, name: str = "knots") -> np.n
             f"at most the degree {degree} keeps the spline connected"
         )
     return frozen(U)
+
+
+def reparametrized(degree: int, knots: np.ndarray, start, end) -> np.ndarray:
+    """``knots`` mapped affinely so that the domain becomes ``[start, end]`` (validated)."""
+    from .._validate import as_real
+
+    start = as_real(start, "start", DomainError)
+    end = as_real(end, "end", DomainError)
+    if not start < end:
+        raise DomainError(f"the new domain needs start < end, got [{start!r}, {end!r}]")
+    n = knots.size - degree - 1
+    a, b = domain(degree, knots)
+    with np.errstate(over="ignore", invalid="ignore"):
+        U = start + (knots - a) * ((end - start) / (b - a))
+    # exact ends; rounding is monotone, so the mapped vector stays sorted
+    U[knots == a] = start
+    U[knots == b] = end
+    return validate_knots(U, degree, n, "reparametrized knots")
 
 
 def domain(degree: int, knots: np.ndarray) -> tuple[float, float]:

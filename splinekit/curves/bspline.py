@@ -22,12 +22,14 @@ from .._validate import (
     as_params,
     as_points,
     as_weights,
+    finite_points,
     frozen,
+    homogeneous,
 )
 from ..basis import algebra
 from ..basis.bspline import basis_ders_t, basis_funs_t, combine, find_span, span_bounds
 from ..basis.jit import kernels
-from ..basis.knots import clamped_uniform, domain, is_clamped, validate_knots
+from ..basis.knots import clamped_uniform, domain, is_clamped, reparametrized, validate_knots
 from ..basis.rational import rational_curve_derivatives
 from ..errors import (
     DegreeError,
@@ -359,13 +361,7 @@ class SplineCurve:
 
     def reparametrize(self, start: float, end: float):
         """The same curve with its domain mapped affinely onto ``[start, end]``."""
-        start, end = float(start), float(end)
-        if not (np.isfinite(start) and np.isfinite(end) and start < end):
-            raise DomainError(f"reparametrize needs finite start < end, got [{start!r}, {end!r}]")
-        a, b = self.domain
-        U = start + (self._knots - a) * ((end - start) / (b - a))
-        U[self._degree] = start
-        U[len(self)] = end
+        U = reparametrized(self._degree, self._knots, start, end)
         return self._like(self._degree, U, self._coefs)
 
     def transform(self, matrix):
@@ -375,10 +371,10 @@ class SplineCurve:
         the weights stay as they are.
         """
         L, t = as_affine(matrix, self.dim)
-        P = self.control_points @ L.T + t
+        with np.errstate(over="ignore", invalid="ignore"):
+            P = finite_points(self.control_points @ L.T + t, "the transform")
         if self._rational:
-            w = self._coefs[:, -1:]
-            return self._like(self._degree, self._knots, np.hstack([P * w, w]))
+            return self._like(self._degree, self._knots, homogeneous(P, self._coefs[:, -1]))
         return self._like(self._degree, self._knots, P)
 
     def to_nurbs(self):
@@ -444,7 +440,7 @@ class SplineCurve:
         if weights is not None:
             w = as_weights(weights, (n,))
             w = np.concatenate([w, w[:p]])
-            coefs = np.column_stack([wrapped * w[:, None], w])
+            coefs = homogeneous(wrapped, w)
         else:
             coefs = wrapped
         U, C = algebra.clamp(p, knots, coefs)
@@ -508,7 +504,7 @@ class NurbsCurve(BSplineCurve):
         P = as_points(control_points, min_count=(p + 1,))
         U = validate_knots(knots, p, P.shape[0])
         w = as_weights(weights, (P.shape[0],))
-        self._set(p, U, np.column_stack([P * w[:, None], w]), True)
+        self._set(p, U, homogeneous(P, w), True)
 
     @classmethod
     def uniform(cls, degree, control_points, weights=None, start: float = 0.0, end: float = 1.0):

@@ -20,12 +20,14 @@ from .._validate import (
     as_params,
     as_points,
     as_weights,
+    finite_points,
     frozen,
+    homogeneous,
 )
 from ..basis import algebra
 from ..basis.bspline import basis_ders_t, basis_funs_t, combine, find_span, span_bounds
 from ..basis.jit import kernels
-from ..basis.knots import clamped_uniform, domain, is_clamped, validate_knots
+from ..basis.knots import clamped_uniform, domain, is_clamped, reparametrized, validate_knots
 from ..basis.rational import rational_surface_derivatives
 from ..errors import DomainError, KnotRemovalError, KnotVectorError, ParameterError
 from ..curves.bspline import _elevation_step
@@ -381,8 +383,9 @@ class SplineSurface:
             return self._like(p, self._pv, U, self._kv, coefs)
         return self._like(self._pu, p, self._ku, U, np.ascontiguousarray(coefs.transpose(1, 0, 2)))
 
-    def _knot_value(self, d, u, name="u"):
+    def _knot_value(self, d, u, name=None):
         """A single parameter of direction ``d``, clamped and snapped like the curves'."""
+        name = name or "uv"[d]
         a, b = self.domain[d]
         value = as_params(u, (a, b), name)
         if value.ndim != 0:
@@ -529,26 +532,23 @@ class SplineSurface:
     def reparametrize(self, u_range=None, v_range=None):
         """Map the domains affinely onto ``u_range`` / ``v_range`` (``(start, end)`` pairs)."""
         knots = []
-        for p, U, n, rng in ((self._pu, self._ku, self.shape[0], u_range), (self._pv, self._kv, self.shape[1], v_range)):
+        for p, U, rng in ((self._pu, self._ku, u_range), (self._pv, self._kv, v_range)):
             if rng is None:
                 knots.append(U)
                 continue
-            s, e = (float(x) for x in rng)
-            if not (np.isfinite(s) and np.isfinite(e) and s < e):
-                raise DomainError(f"reparametrize needs finite start < end, got {rng!r}")
-            a, b = domain(p, U)
-            V = s + (U - a) * ((e - s) / (b - a))
-            V[p], V[n] = s, e
-            knots.append(V)
+            pair = as_float_array(rng, "range", DomainError)
+            if pair.shape != (2,):
+                raise DomainError(f"a parameter range is a pair (start, end), got {rng!r}")
+            knots.append(reparametrized(p, U, pair[0], pair[1]))
         return self._like(self._pu, self._pv, knots[0], knots[1], self._coefs)
 
     def transform(self, matrix):
         """Apply an affine map (``(dim, dim)`` or ``(dim + 1, dim + 1)``) to the control points."""
         L, t = as_affine(matrix, self.dim)
-        P = self.control_points @ L.T + t
+        with np.errstate(over="ignore", invalid="ignore"):
+            P = finite_points(self.control_points @ L.T + t, "the transform")
         if self._rational:
-            w = self._coefs[..., -1:]
-            P = np.concatenate([P * w, w], axis=-1)
+            P = homogeneous(P, self._coefs[..., -1])
         return self._like(self._pu, self._pv, self._ku, self._kv, P)
 
     def to_nurbs(self):
@@ -597,7 +597,7 @@ class NurbsSurface(BSplineSurface):
         ku = validate_knots(knots_u, pu, P.shape[0], "knots_u")
         kv = validate_knots(knots_v, pv, P.shape[1], "knots_v")
         w = as_weights(weights, P.shape[:2])
-        self._set(pu, pv, ku, kv, np.concatenate([P * w[..., None], w[..., None]], axis=-1), True)
+        self._set(pu, pv, ku, kv, homogeneous(P, w), True)
 
     @classmethod
     def uniform(cls, degree_u, degree_v, control_points, weights=None):
