@@ -175,30 +175,57 @@ def surface_points4(pu, Uu, lou, hiu, pv, Uv, lov, hiv, C, u, v, n_out, divide, 
 
 
 @njit(cache=True, parallel=True)
-def grid_rows4(R, sv, Nv, q, n_out, divide, out):
-    """``grid_rows`` for nets with 4 coefficient columns (3-D rational, or narrower
-    nets padded with zeros): four scalar accumulators the compiler keeps in
-    registers. Writes ``n_out`` columns; ``divide`` divides columns 0-2 by column 3."""
-    mu = R.shape[0]
+def grid_tensor4(C, su, Nu, p, sv, Nv, q, n_out, divide, out):
+    """Tensor-grid evaluation for nets with 4 coefficient columns (3-D rational,
+    or narrower nets padded with zeros).
+
+    For each grid row i: ``row = sum_a Nu[a, i] C[su[i] - p + a]`` (the net
+    contracted in u, kept in a small contiguous buffer), then for each j
+    ``out[i, j] = sum_b Nv[b, j] row[sv[j] - q + b]``; scalar accumulators stay
+    in registers. Writes ``n_out`` columns; ``divide`` divides columns 0-2 by
+    column 3 (through one reciprocal, within an ulp of three divisions).
+    """
+    mu = su.shape[0]
     mv = sv.shape[0]
+    nv = C.shape[1]
     for i in prange(mu):
+        row = np.empty(nv * 4)
+        bu = su[i] - p
+        for l in range(nv):
+            w = Nu[0, i]
+            r0 = w * C[bu, l, 0]
+            r1 = w * C[bu, l, 1]
+            r2 = w * C[bu, l, 2]
+            r3 = w * C[bu, l, 3]
+            for a in range(1, p + 1):
+                w = Nu[a, i]
+                r0 = r0 + w * C[bu + a, l, 0]
+                r1 = r1 + w * C[bu + a, l, 1]
+                r2 = r2 + w * C[bu + a, l, 2]
+                r3 = r3 + w * C[bu + a, l, 3]
+            row[4 * l] = r0
+            row[4 * l + 1] = r1
+            row[4 * l + 2] = r2
+            row[4 * l + 3] = r3
         for j in range(mv):
-            base = sv[j] - q
+            base = 4 * (sv[j] - q)
             w = Nv[0, j]
-            a0 = w * R[i, base, 0]
-            a1 = w * R[i, base, 1]
-            a2 = w * R[i, base, 2]
-            a3 = w * R[i, base, 3]
+            a0 = w * row[base]
+            a1 = w * row[base + 1]
+            a2 = w * row[base + 2]
+            a3 = w * row[base + 3]
             for b in range(1, q + 1):
                 w = Nv[b, j]
-                a0 = a0 + w * R[i, base + b, 0]
-                a1 = a1 + w * R[i, base + b, 1]
-                a2 = a2 + w * R[i, base + b, 2]
-                a3 = a3 + w * R[i, base + b, 3]
+                o = base + 4 * b
+                a0 = a0 + w * row[o]
+                a1 = a1 + w * row[o + 1]
+                a2 = a2 + w * row[o + 2]
+                a3 = a3 + w * row[o + 3]
             if divide:
-                a0 = a0 / a3
-                a1 = a1 / a3
-                a2 = a2 / a3
+                inv = 1.0 / a3
+                a0 = a0 * inv
+                a1 = a1 * inv
+                a2 = a2 * inv
             out[i, j, 0] = a0
             if n_out > 1:
                 out[i, j, 1] = a1

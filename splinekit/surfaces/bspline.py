@@ -193,8 +193,7 @@ class SplineSurface:
             bases = (self._pu, self._ku, *spans[:2], self._pv, self._kv, *spans[2:])
             k = self._coefs.shape[-1]
             if k == 4 or (k < 4 and not self._rational):
-                C4 = self._coefs if k == 4 else np.concatenate([self._coefs, np.zeros(self.shape + (4 - k,))], axis=-1)
-                jit.surface_points4(*bases, C4, fu, fv, self.dim, self._rational, pts)
+                jit.surface_points4(*bases, self._coefs4(), fu, fv, self.dim, self._rational, pts)
             else:
                 jit.surface_points(*bases, self._coefs, fu, fv, self._rational, pts)
             return pts.reshape(u.shape + (self.dim,))
@@ -246,30 +245,39 @@ class SplineSurface:
             dense[rows, span - p1 + 1 + r] = vals[r]
         return dense
 
+    def _coefs4(self):
+        """Coefficients padded with zero columns to 4 (for the 4-lane kernels)."""
+        if "coefs4" not in self._cache:
+            k = self._coefs.shape[-1]
+            pad = np.zeros(self.shape + (max(0, 4 - k),))
+            self._cache["coefs4"] = np.ascontiguousarray(np.concatenate([self._coefs, pad], axis=-1))
+        return self._cache["coefs4"]
+
     def _grid_contract(self, su, Nu_vals, sv, Nv_vals, divide):
         """``Nu @ C @ Nv^T`` per coordinate -> ``(mu, mv, k)`` (or ``(mu, mv, dim)``
-        divided by the weight when ``divide``).
+        divided by the weight when ``divide``), from the banded basis values
+        ``Nu_vals`` ``(p + 1, mu)`` and ``Nv_vals`` ``(q + 1, mv)``.
 
-        The u contraction gathers p + 1 rows of the net per grid row (small:
-        ``(mu, nv, k)``); the v contraction, which writes the output, runs in
-        the compiled kernel when available, else as one broadcast matmul. The
-        u step avoids BLAS on purpose: BLAS worker threads left spinning after
-        a call compete with the kernel's threads on a 2-core machine.
+        Compiled path: both contractions in one kernel per grid row. numpy
+        path: the u contraction gathers p + 1 rows of the net per grid row
+        (small, ``(mu, nv, k)``) and the v contraction is one broadcast matmul.
+        The u step avoids BLAS on purpose: BLAS worker threads left spinning
+        after a call compete with the kernel's threads on a 2-core machine.
         """
         nu, nv, k = self._coefs.shape
-        R = combine(self._coefs, self._pu, su, Nu_vals)  # (mu, nv, k)
-        mu, mv = R.shape[0], sv.size
+        mu, mv = su.size, sv.size
         jit = kernels(mu * mv)
         if jit is not None:
-            n_out = k - 1 if divide else k
-            out = np.empty((mu, mv, n_out))
+            out = np.empty((mu, mv, k - 1 if divide else k))
             Nv_vals = np.ascontiguousarray(Nv_vals)
             if k == 4 or (k < 4 and not divide):
-                R4 = R if k == 4 else np.concatenate([R, np.zeros((mu, nv, 4 - k))], axis=-1)
-                jit.grid_rows4(R4, sv, Nv_vals, self._pv, n_out, divide, out)
+                jit.grid_tensor4(self._coefs4(), su, np.ascontiguousarray(Nu_vals), self._pu, sv, Nv_vals, self._pv,
+                                 out.shape[-1], divide, out)
             else:
+                R = combine(self._coefs, self._pu, su, Nu_vals)
                 jit.grid_rows(R, sv, Nv_vals, self._pv, divide, out)
             return out
+        R = combine(self._coefs, self._pu, su, Nu_vals)  # (mu, nv, k)
         out = np.matmul(self._dense(sv, Nv_vals, nv), R)  # broadcast over mu: (mu, mv, k)
         if divide:
             out = out[..., :-1] / out[..., -1:]
