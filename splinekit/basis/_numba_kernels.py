@@ -260,3 +260,76 @@ def grid_rows(R, sv, Nv, q, rational, out):
             else:
                 for d in range(k):
                     out[i, j, d] = acc[d]
+
+
+@njit(cache=True, parallel=True)
+def grid_normals4(C, su, Nu, p, sv, Nv, q, rational, out, weak):
+    """Unit normals on a tensor grid for nets with 4 coefficient columns.
+
+    ``Nu`` is ``(2, p + 1, mu)`` (values and first derivatives), ``Nv`` likewise.
+    Per grid row the net is contracted in u twice (value and u-derivative);
+    per point the homogeneous value H and partials Hu, Hv give
+    ``Su ~ Hu - wu C`` and ``Sv ~ Hv - wv C`` (positive factors dropped), whose
+    cross product is normalized. Points where ``|Su x Sv| <= 1e-10 (|Su| + |Sv|)^2``
+    are flagged in ``weak`` for the caller's limit-normal rule.
+    """
+    mu = su.shape[0]
+    mv = sv.shape[0]
+    nv = C.shape[1]
+    for i in prange(mu):
+        row = np.empty((2, nv * 4))
+        bu = su[i] - p
+        for t in range(2):
+            for l in range(nv):
+                for d in range(4):
+                    acc = Nu[t, 0, i] * C[bu, l, d]
+                    for a in range(1, p + 1):
+                        acc = acc + Nu[t, a, i] * C[bu + a, l, d]
+                    row[t, 4 * l + d] = acc
+        for j in range(mv):
+            base = 4 * (sv[j] - q)
+            h0 = h1 = h2 = h3 = 0.0
+            u0 = u1 = u2 = u3 = 0.0
+            v0 = v1 = v2 = v3 = 0.0
+            for b in range(q + 1):
+                o = base + 4 * b
+                w = Nv[0, b, j]
+                dw = Nv[1, b, j]
+                h0 += w * row[0, o]
+                h1 += w * row[0, o + 1]
+                h2 += w * row[0, o + 2]
+                h3 += w * row[0, o + 3]
+                u0 += w * row[1, o]
+                u1 += w * row[1, o + 1]
+                u2 += w * row[1, o + 2]
+                u3 += w * row[1, o + 3]
+                v0 += dw * row[0, o]
+                v1 += dw * row[0, o + 1]
+                v2 += dw * row[0, o + 2]
+                v3 += dw * row[0, o + 3]
+            if rational:
+                c0 = h0 / h3
+                c1 = h1 / h3
+                c2 = h2 / h3
+                u0 -= u3 * c0
+                u1 -= u3 * c1
+                u2 -= u3 * c2
+                v0 -= v3 * c0
+                v1 -= v3 * c1
+                v2 -= v3 * c2
+            n0 = u1 * v2 - u2 * v1
+            n1 = u2 * v0 - u0 * v2
+            n2 = u0 * v1 - u1 * v0
+            length = np.sqrt(n0 * n0 + n1 * n1 + n2 * n2)
+            size = np.sqrt(u0 * u0 + u1 * u1 + u2 * u2) + np.sqrt(v0 * v0 + v1 * v1 + v2 * v2)
+            if length <= 1e-10 * size * size or length == 0.0:
+                weak[i, j] = True
+                out[i, j, 0] = 0.0
+                out[i, j, 1] = 0.0
+                out[i, j, 2] = 0.0
+            else:
+                weak[i, j] = False
+                inv = 1.0 / length
+                out[i, j, 0] = n0 * inv
+                out[i, j, 1] = n1 * inv
+                out[i, j, 2] = n2 * inv

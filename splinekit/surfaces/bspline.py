@@ -365,6 +365,18 @@ class SplineSurface:
         """
         self._require_3d()
         (su, Nu), (sv, Nv) = self._grid_basis(us, vs, 1)
+        jit = kernels(su.size * sv.size)
+        if jit is not None:
+            out = np.empty((su.size, sv.size, 3))
+            weak = np.empty((su.size, sv.size), dtype=np.bool_)
+            jit.grid_normals4(self._coefs4(), su, np.ascontiguousarray(Nu), self._pu, sv, np.ascontiguousarray(Nv),
+                              self._pv, self._rational, out, weak)
+            if weak.any():
+                (du, dv) = self.domain
+                U, V = np.meshgrid(as_params(us, du, "us").ravel(), as_params(vs, dv, "vs").ravel(), indexing="ij")
+                n = self._limit_normals(U[weak], V[weak])
+                out[weak] = n / np.maximum(np.linalg.norm(n, axis=-1, keepdims=True), 1e-300)
+            return out
         Hu = self._grid_contract(su, Nu[1], sv, Nv[0], False)
         Hv = self._grid_contract(su, Nu[0], sv, Nv[1], False)
         if self._rational:

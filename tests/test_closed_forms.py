@@ -1,0 +1,58 @@
+"""Closed-form checks on exact rational geometry: a quarter of the unit sphere
+built by hand as a biquadratic NURBS patch (half-circle profile x quarter-circle
+sweep). Its points lie at radius 1 and its outward normal equals the position,
+also at the collapsed pole edges, where Su x Sv vanishes."""
+
+import math
+
+import numpy as np
+import pytest
+
+import splinekit as sk
+from splinekit.basis import jit
+
+
+def sphere_patch():
+    r = math.sqrt(0.5)
+    profile = np.array([[0, 0, 1], [1, 0, 1], [1, 0, 0], [1, 0, -1], [0, 0, -1]], float)
+    w_profile = np.array([1, r, 1, r, 1])
+    arc = [(1.0, 0.0), (1.0, 1.0), (0.0, 1.0)]
+    w_arc = np.array([1, r, 1])
+    P = np.array([[[x * c, x * s, z] for (c, s) in arc] for x, _, z in profile])
+    W = np.outer(w_profile, w_arc)
+    return sk.NurbsSurface(2, 2, [0, 0, 0, 0.5, 0.5, 1, 1, 1], [0, 0, 0, 1, 1, 1], P, W)
+
+
+@pytest.mark.parametrize("count", [41, 160])  # below and above the compiled-kernel threshold
+def test_sphere_points_and_normals(count):
+    assert (count * count >= jit.MIN_POINTS) == (count == 160)
+    s = sphere_patch()
+    g = np.linspace(0, 1, count)
+    X = s.evaluate_grid(g, g)
+    np.testing.assert_allclose(np.linalg.norm(X, axis=-1), 1.0, rtol=0, atol=1e-14)
+    np.testing.assert_allclose(s.normal_grid(g, g), X, rtol=0, atol=1e-13)
+    U, V = np.meshgrid(g, g, indexing="ij")
+    np.testing.assert_allclose(s.normal(U, V), X, rtol=0, atol=1e-13)
+
+
+def test_sphere_pole_normals_pointwise():
+    s = sphere_patch()
+    u = np.array([0.0, 0.0, 1.0, 1.0])
+    v = np.array([0.0, 0.7, 0.2, 1.0])
+    np.testing.assert_allclose(s.normal(u, v), [[0, 0, 1], [0, 0, 1], [0, 0, -1], [0, 0, -1]], atol=1e-14)
+
+
+def test_sphere_area_is_a_quarter_of_4pi():
+    from splinekit.cli import _area
+
+    assert _area(sphere_patch(), per_span=12) == pytest.approx(math.pi, rel=1e-9)
+
+
+def test_quarter_circle_arc_length_and_radius():
+    r = math.sqrt(0.5)
+    c = sk.NurbsCurve(2, [0, 0, 0, 1, 1, 1], [[1, 0], [1, 1], [0, 1]], [1, r, 1])
+    u = np.linspace(0, 1, 1001)
+    np.testing.assert_allclose(np.linalg.norm(c.evaluate(u), axis=-1), 1.0, rtol=0, atol=1e-15)
+    assert c.arc_length() == pytest.approx(math.pi / 2, rel=1e-12)
+    # unit tangent is perpendicular to the radius
+    np.testing.assert_allclose(np.einsum("ij,ij->i", c.tangent(u), c.evaluate(u)), 0.0, atol=1e-14)
