@@ -76,8 +76,9 @@ def _random_nurbs_surface(rng, pu=3, pv=2, nu=9, nv=7, dim=3):
 @pytest.mark.parametrize("rational", [False, True])
 @pytest.mark.parametrize("dim", [2, 3, 5])
 def test_compiled_and_numpy_paths_agree(rational, dim, monkeypatch):
-    """The numba kernels repeat the numpy path's arithmetic: curves and scattered
-    surface points agree exactly; grids (BLAS order in numpy) to rounding."""
+    """The numba kernels repeat the numpy path's arithmetic: curve points and
+    derivatives and scattered surface points agree exactly; grids and grid
+    normals (BLAS order and reciprocal in the kernels) to rounding."""
     rng = np.random.default_rng(7 + dim)
     S = _random_nurbs_surface(rng, dim=dim)
     if not rational:
@@ -87,11 +88,24 @@ def test_compiled_and_numpy_paths_agree(rational, dim, monkeypatch):
     u = rng.uniform(0, 1, n)
     v = rng.uniform(0, 1, n)
     us, vs = np.linspace(0, 1, 150), np.linspace(0, 1, 140)
-    fast = (C.evaluate(u), S.evaluate(u, v), S.evaluate_grid(us, vs), S.derivatives_grid(us, vs, 1))
+    def run():
+        return (
+            C.evaluate(u),
+            S.evaluate(u, v),
+            S.evaluate_grid(us, vs),
+            S.derivatives_grid(us, vs, 1),
+            C.derivatives(u, 3),
+            S.normal_grid(us, vs) if dim == 3 else None,
+        )
+
+    fast = run()
     monkeypatch.setenv("SPLINEKIT_NUMBA", "0")
-    slow = (C.evaluate(u), S.evaluate(u, v), S.evaluate_grid(us, vs), S.derivatives_grid(us, vs, 1))
+    slow = run()
     np.testing.assert_array_equal(fast[0], slow[0])
     np.testing.assert_array_equal(fast[1], slow[1])
+    np.testing.assert_array_equal(fast[4], slow[4])
+    if dim == 3:
+        np.testing.assert_allclose(fast[5], slow[5], rtol=0, atol=1e-12)
     scale = np.abs(S.control_points).max()
     np.testing.assert_allclose(fast[2], slow[2], rtol=0, atol=1e-14 * scale)
     np.testing.assert_allclose(fast[3], slow[3], rtol=1e-12, atol=1e-12 * scale)

@@ -333,3 +333,92 @@ def grid_normals4(C, su, Nu, p, sv, Nv, q, rational, out, weak):
                 out[i, j, 0] = n0 * inv
                 out[i, j, 1] = n1 * inv
                 out[i, j, 2] = n2 * inv
+
+
+@njit(cache=True, inline="always")
+def _basis_ders(U, p, span, x, order, ndu, a, left, right, ders):
+    """A2.3 into ders[0..order, 0..p] with the numpy path's operation order."""
+    for j in range(1, p + 1):
+        left[j] = x - U[span + 1 - j]
+        right[j] = U[span + j] - x
+    ndu[0, 0] = 1.0
+    for j in range(1, p + 1):
+        saved = 0.0
+        for r in range(j):
+            ndu[j, r] = right[r + 1] + left[j - r]
+            temp = ndu[r, j - 1] / ndu[j, r]
+            ndu[r, j] = saved + right[r + 1] * temp
+            saved = left[j - r] * temp
+        ndu[j, j] = saved
+    for r in range(p + 1):
+        ders[0, r] = ndu[r, p]
+        for k in range(1, order + 1):
+            ders[k, r] = 0.0
+    top = min(order, p)
+    for r in range(p + 1):
+        s1, s2 = 0, 1
+        a[0, 0] = 1.0
+        for k in range(1, top + 1):
+            d = 0.0
+            rk, pk = r - k, p - k
+            if r >= k:
+                a[s2, 0] = a[s1, 0] / ndu[pk + 1, rk]
+                d = a[s2, 0] * ndu[rk, pk]
+            j1 = 1 if rk >= -1 else -rk
+            j2 = k - 1 if r - 1 <= pk else p - r
+            for j in range(j1, j2 + 1):
+                a[s2, j] = (a[s1, j] - a[s1, j - 1]) / ndu[pk + 1, rk + j]
+                d = d + a[s2, j] * ndu[rk + j, pk]
+            if r <= pk:
+                a[s2, k] = -a[s1, k - 1] / ndu[pk + 1, r]
+                d = d + a[s2, k] * ndu[r, pk]
+            ders[k, r] = d
+            s1, s2 = s2, s1
+    factor = float(p)
+    for k in range(1, top + 1):
+        for r in range(p + 1):
+            ders[k, r] *= factor
+        factor *= p - k
+
+
+@njit(cache=True, parallel=True)
+def curve_derivatives(p, U, lo, hi, C, u, order, rational, binom, out):
+    """Derivatives 0..order at each u: ``out`` is ``(order + 1, m, dim)``.
+
+    Homogeneous sums as in the numpy path, then, if ``rational``, the quotient
+    rule of A4.2 (``binom[k, i] = C(k, i)``) in the order of
+    :func:`splinekit.basis.rational.rational_curve_derivatives`.
+    """
+    m = u.shape[0]
+    kdim = C.shape[1]
+    n_chunks = (m + _CHUNK - 1) // _CHUNK
+    for c in prange(n_chunks):
+        ndu = np.empty((p + 1, p + 1))
+        a = np.empty((2, p + 1))
+        left = np.empty(p + 1)
+        right = np.empty(p + 1)
+        ders = np.empty((order + 1, p + 1))
+        h = np.empty((order + 1, kdim))
+        for i in range(c * _CHUNK, min(m, (c + 1) * _CHUNK)):
+            x = u[i]
+            s = _span(U, lo, hi, x)
+            _basis_ders(U, p, s, x, order, ndu, a, left, right, ders)
+            base = s - p
+            for k in range(order + 1):
+                for d in range(kdim):
+                    acc = ders[k, 0] * C[base, d]
+                    for r in range(1, p + 1):
+                        acc = acc + ders[k, r] * C[base + r, d]
+                    h[k, d] = acc
+            if not rational:
+                for k in range(order + 1):
+                    for d in range(kdim):
+                        out[k, i, d] = h[k, d]
+                continue
+            w0 = h[0, kdim - 1]
+            for k in range(order + 1):
+                for d in range(kdim - 1):
+                    v = h[k, d]
+                    for j in range(1, k + 1):
+                        v -= binom[k, j] * h[j, kdim - 1] * out[k - j, i, d]
+                    out[k, i, d] = v / w0

@@ -10,6 +10,8 @@ splitting) acts on them, so rational and polynomial curves share one code path
 
 from __future__ import annotations
 
+from math import comb
+
 import numpy as np
 
 from .._validate import (
@@ -200,10 +202,16 @@ class SplineCurve:
         u = self._params(u)
         flat = u.ravel()
         p, U = self._degree, self._knots
-        span = find_span(p, U, flat)
-        ders = combine(self._coefs, p, span, basis_ders_t(p, U, span, flat, order))
-        if self._rational:
-            ders = rational_curve_derivatives(ders)
+        jit = kernels(flat.size)
+        if jit is not None:
+            ders = np.empty((order + 1, flat.size, self.dim))
+            binom = np.array([[comb(k, j) for j in range(order + 1)] for k in range(order + 1)], dtype=np.float64)
+            jit.curve_derivatives(p, U, *span_bounds(p, U), self._coefs, flat, order, self._rational, binom, ders)
+        else:
+            span = find_span(p, U, flat)
+            ders = combine(self._coefs, p, span, basis_ders_t(p, U, span, flat, order))
+            if self._rational:
+                ders = rational_curve_derivatives(ders)
         return ders.reshape((order + 1,) + u.shape + (self.dim,))
 
     def tangent(self, u) -> np.ndarray:
