@@ -63,19 +63,25 @@ class SplineCurve:
         if rational and cls is BSplineCurve:
             cls = NurbsCurve
         obj = object.__new__(cls)
-        object.__setattr__(obj, "_degree", int(degree))
-        object.__setattr__(obj, "_knots", frozen(knots))
-        object.__setattr__(obj, "_coefs", frozen(coefs))
-        object.__setattr__(obj, "_rational", bool(rational))
-        object.__setattr__(obj, "_cache", {})
+        obj._set(int(degree), knots, coefs, bool(rational))
         return obj
+
+    def _set(self, p, U, coefs, rational):
+        for name, value in (
+            ("_degree", p),
+            ("_knots", frozen(U)),
+            ("_coefs", frozen(coefs)),
+            ("_rational", rational),
+            ("_cache", {}),
+        ):
+            object.__setattr__(self, name, value)
 
     def _like(self, degree: int, knots: np.ndarray, coefs: np.ndarray):
         """A new curve of the same kind (rational or not) as ``self``."""
         if self._rational:
             w = coefs[:, -1]
             if not (w > 0).all():
-                raise KnotRemovalError("the operation would produce non-positive weights")
+                raise KnotRemovalError("the result would have non-positive weights")
         return type(self)._trusted(degree, knots, coefs, self._rational)
 
     def __setattr__(self, name, value):
@@ -478,13 +484,6 @@ class BSplineCurve(SplineCurve):
         P = as_points(control_points, min_count=(p + 1,))
         U = validate_knots(knots, p, P.shape[0])
         self._set(p, U, P, False)
-
-    def _set(self, p, U, coefs, rational):
-        object.__setattr__(self, "_degree", p)
-        object.__setattr__(self, "_knots", frozen(U))
-        object.__setattr__(self, "_coefs", frozen(coefs))
-        object.__setattr__(self, "_rational", rational)
-        object.__setattr__(self, "_cache", {})
 
     @classmethod
     def uniform(cls, degree, control_points, start: float = 0.0, end: float = 1.0):

@@ -83,7 +83,7 @@ class SplineSurface:
 
     def _like(self, pu, pv, ku, kv, coefs):
         if self._rational and not (coefs[..., -1] > 0).all():
-            raise KnotRemovalError("the operation would produce non-positive weights")
+            raise KnotRemovalError("the result would have non-positive weights")
         return type(self)._trusted(pu, pv, ku, kv, coefs, self._rational)
 
     def __setattr__(self, name, value):
