@@ -16,6 +16,7 @@ __all__ = [
     "ParameterError",
     "DomainError",
     "KnotRemovalError",
+    "MeshTopologyError",
     "BackendError",
     "MissingDependencyError",
 ]
@@ -54,6 +55,12 @@ class DomainError(SplineKitError):
 class KnotRemovalError(SplineKitError):
     """A knot cannot be removed without moving the geometry more than the
     requested tolerance (or it is not a knot at all)."""
+
+
+class MeshTopologyError(SplineKitError):
+    """A polygon mesh is malformed: an index out of range, a degenerate face, a
+    non-manifold edge, inconsistently oriented neighbours or bad coordinates.
+    The message names the face, edge or vertex."""
 
 
 class BackendError(SplineKitError, RuntimeError):

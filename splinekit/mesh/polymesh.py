@@ -1,0 +1,208 @@
+"""PolyMesh: vertex coordinates plus a :class:`~splinekit.mesh.topology.Topology`.
+
+Topology (integers) and geometry (coordinates) are kept apart, as in
+OpenSubdiv: subdivision refines the topology once and moves any per-vertex
+data with a sparse stencil matrix. Derived quantities are cached; both arrays
+are read-only, so a cache never goes stale.
+"""
+
+from __future__ import annotations
+
+from functools import cached_property
+
+import numpy as np
+
+from .._validate import as_float_array
+from ..errors import MeshTopologyError
+from .topology import Topology
+
+__all__ = ["PolyMesh", "as_face_arrays"]
+
+
+def as_face_arrays(faces) -> tuple[np.ndarray, np.ndarray]:
+    """Faces as ``(flat indices, offsets)``.
+
+    Accepts an ``(F, k)`` integer array (or nested lists of equal length) or a
+    sequence of per-face index sequences of any lengths.
+    """
+    try:
+        arr = np.asarray(faces)
+    except ValueError:  # ragged nested lists
+        arr = None
+    if arr is not None and arr.dtype != object and arr.ndim == 2:
+        if arr.size and arr.dtype.kind not in "iu":
+            if arr.dtype.kind == "f" and np.array_equal(arr, np.round(arr)) and np.isfinite(arr).all():
+                arr = arr.astype(np.int64)
+            else:
+                raise MeshTopologyError(f"faces must hold integer vertex indices, got dtype {arr.dtype}")
+        arr = arr.astype(np.int64, copy=False)
+        F, k = arr.shape
+        return arr.ravel(), np.arange(F + 1, dtype=np.int64) * k
+    if arr is not None and arr.dtype != object and arr.ndim == 1 and arr.size == 0:
+        return np.zeros(0, dtype=np.int64), np.zeros(1, dtype=np.int64)
+    try:
+        items = list(faces)
+    except TypeError:
+        raise MeshTopologyError(f"faces must be an (F, k) array or a sequence of index sequences, got {type(faces).__name__}") from None
+    parts = []
+    for f, face in enumerate(items):
+        try:
+            a = np.asarray(face)
+        except ValueError:
+            raise MeshTopologyError(f"face {f} is not a flat sequence of vertex indices") from None
+        if a.ndim != 1:
+            raise MeshTopologyError(f"face {f} must be a 1-D sequence of vertex indices, got shape {a.shape}")
+        if a.size and a.dtype.kind not in "iu":
+            raise MeshTopologyError(f"face {f} holds non-integer vertex indices (dtype {a.dtype})")
+        parts.append(a.astype(np.int64, copy=False))
+    sizes = np.array([p.size for p in parts], dtype=np.int64)
+    offsets = np.concatenate([[0], np.cumsum(sizes)]).astype(np.int64)
+    flat = np.concatenate(parts) if parts else np.zeros(0, dtype=np.int64)
+    return flat, offsets
+
+
+class PolyMesh:
+    """A polygon mesh with faces of any valence.
+
+    Parameters
+    ----------
+    vertices : array_like, shape (n, dim)
+        Vertex coordinates (usually ``dim = 3``), finite.
+    faces : (F, k) int array, or a sequence of per-face index sequences
+        Counter-clockwise seen from outside (consistently oriented).
+
+    Attributes
+    ----------
+    vertices : (n, dim) float64, read-only
+    faces : (F, k) int array when every face has k sides, else a list of arrays
+    face_indices, face_offsets : the flat CSR form of the faces
+    topology : :class:`~splinekit.mesh.topology.Topology`
+    """
+
+    __slots__ = ("_vertices", "topology", "__dict__")
+
+    def __init__(self, vertices, faces):
+        V = as_float_array(vertices, "vertices", MeshTopologyError)
+        if V.ndim != 2 or V.shape[1] < 1:
+            raise MeshTopologyError(f"vertices must have shape (n, dim), got {V.shape}")
+        bad = ~np.isfinite(V).all(axis=1)
+        if bad.any():
+            i = int(np.flatnonzero(bad)[0])
+            raise MeshTopologyError(f"vertex {i} has non-finite coordinates {V[i].tolist()}")
+        flat, offsets = as_face_arrays(faces)
+        self._init(V, Topology(len(V), flat, offsets, check=True))
+
+    def _init(self, vertices, topology):
+        V = np.array(vertices, dtype=np.float64, order="C", copy=True)
+        V.setflags(write=False)
+        object.__setattr__(self, "_vertices", V)
+        object.__setattr__(self, "topology", topology)
+
+    @classmethod
+    def from_topology(cls, vertices, topology: Topology):
+        """A mesh from already-checked connectivity (no validation)."""
+        obj = object.__new__(cls)
+        obj._init(vertices, topology)
+        return obj
+
+    def with_vertices(self, vertices):
+        """The same connectivity with new coordinates ``(n, dim)`` (checked)."""
+        V = as_float_array(vertices, "vertices", MeshTopologyError)
+        if V.shape[0] != self.topology.n_vertices or V.ndim != 2:
+            raise MeshTopologyError(f"expected vertices of shape ({self.topology.n_vertices}, dim), got {V.shape}")
+        if not np.isfinite(V).all():
+            i = int(np.flatnonzero(~np.isfinite(V).all(axis=1))[0])
+            raise MeshTopologyError(f"vertex {i} has non-finite coordinates")
+        return PolyMesh.from_topology(V, self.topology)
+
+    def __setattr__(self, name, value):
+        raise AttributeError("PolyMesh is immutable; operations return new meshes")
+
+    def __repr__(self):
+        t = self.topology
+        kind = f"{int(t.face_sizes[0])}-gons" if t.n_faces and t.is_uniform else "mixed faces"
+        return (
+            f"PolyMesh(vertices={t.n_vertices}, faces={t.n_faces} ({kind}), edges={t.n_edges}, "
+            f"{'closed' if t.is_closed else 'open'}, euler={t.euler_characteristic})"
+        )
+
+    def __eq__(self, other):
+        if not isinstance(other, PolyMesh):
+            return NotImplemented
+        a, b = self.topology, other.topology
+        return (
+            self._vertices.shape == other._vertices.shape
+            and np.array_equal(a.face_offsets, b.face_offsets)
+            and np.array_equal(a.face_indices, b.face_indices)
+            and bool(np.array_equal(self._vertices, other._vertices))
+        )
+
+    __hash__ = None
+
+    # -- data -------------------------------------------------------------------------------
+    @property
+    def vertices(self) -> np.ndarray:
+        """``(n, dim)`` vertex coordinates (read-only)."""
+        return self._vertices
+
+    @property
+    def face_indices(self) -> np.ndarray:
+        return self.topology.face_indices
+
+    @property
+    def face_offsets(self) -> np.ndarray:
+        return self.topology.face_offsets
+
+    @cached_property
+    def faces(self):
+        """``(F, k)`` int array when all faces have k sides, else a list of index arrays."""
+        t = self.topology
+        if t.is_uniform:
+            k = int(t.face_sizes[0]) if t.n_faces else 3
+            out = t.face_indices.reshape(t.n_faces, k)
+            out.setflags(write=False)
+            return out
+        return np.split(t.face_indices, t.face_offsets[1:-1])
+
+    @property
+    def n_vertices(self) -> int:
+        return self.topology.n_vertices
+
+    @property
+    def n_faces(self) -> int:
+        return self.topology.n_faces
+
+    @property
+    def edges(self) -> np.ndarray:
+        """``(E, 2)`` undirected edges."""
+        return self.topology.edges
+
+    @property
+    def is_closed(self) -> bool:
+        return self.topology.is_closed
+
+    @property
+    def euler_characteristic(self) -> int:
+        return self.topology.euler_characteristic
+
+    @property
+    def valence(self) -> np.ndarray:
+        return self.topology.valence
+
+    @property
+    def boundary_edges(self) -> np.ndarray:
+        return self.topology.boundary_edges
+
+    @property
+    def boundary_vertices(self) -> np.ndarray:
+        return self.topology.boundary_vertices
+
+    @property
+    def is_triangle_mesh(self) -> bool:
+        t = self.topology
+        return t.n_faces > 0 and bool((t.face_sizes == 3).all())
+
+    @property
+    def is_quad_mesh(self) -> bool:
+        t = self.topology
+        return t.n_faces > 0 and bool((t.face_sizes == 4).all())

@@ -1,0 +1,254 @@
+"""Polygon-mesh connectivity as flat integer arrays (no coordinates).
+
+Faces are stored as flat vertex indices plus offsets (CSR), like OpenSubdiv's
+Vtr level: face ``f`` is ``face_indices[face_offsets[f]:face_offsets[f + 1]]``.
+Every face corner is also a half-edge, from its vertex to the next corner's
+vertex. All relations (edges, edge-faces, twins, vertex-faces, boundary) are
+built with numpy sorting and cached; nothing loops per face or per vertex.
+"""
+
+from __future__ import annotations
+
+from functools import cached_property
+
+import numpy as np
+
+from ..errors import MeshTopologyError
+
+__all__ = ["Topology"]
+
+
+class Topology:
+    """Connectivity of a polygon mesh with ``n_vertices`` vertices.
+
+    Parameters
+    ----------
+    n_vertices : int
+        Number of vertices (isolated vertices are allowed).
+    face_indices : (H,) int array
+        Vertex indices of all faces, face after face.
+    face_offsets : (F + 1,) int array
+        Start of each face in ``face_indices``; the last entry is ``H``.
+    check : bool
+        Validate (index range, face size, repeated vertices, non-manifold
+        edges, orientation); :class:`MeshTopologyError` names the culprit.
+    """
+
+    def __init__(self, n_vertices: int, face_indices, face_offsets, check: bool = True):
+        self.n_vertices = int(n_vertices)
+        self.face_indices = np.ascontiguousarray(face_indices, dtype=np.int64)
+        self.face_offsets = np.ascontiguousarray(face_offsets, dtype=np.int64)
+        self.face_indices.setflags(write=False)
+        self.face_offsets.setflags(write=False)
+        if check:
+            self._check_faces()
+            self._check_edges()
+
+    # -- validation ---------------------------------------------------------------------
+    def _check_faces(self):
+        idx, n = self.face_indices, self.n_vertices
+        bad = np.flatnonzero((idx < 0) | (idx >= n))
+        if bad.size:
+            f = int(self.corner_face[bad[0]])
+            raise MeshTopologyError(
+                f"face {f} refers to vertex {int(idx[bad[0]])}, outside 0..{n - 1}"
+            )
+        small = np.flatnonzero(self.face_sizes < 3)
+        if small.size:
+            f = int(small[0])
+            raise MeshTopologyError(f"face {f} has {int(self.face_sizes[f])} vertices; a face needs at least 3")
+        # a repeated vertex inside one face: sort (face, vertex) pairs and look for equal neighbours
+        key = self.corner_face * max(n, 1) + idx
+        order = np.argsort(key, kind="stable")
+        dup = np.flatnonzero(np.diff(key[order]) == 0)
+        if dup.size:
+            c = order[dup[0]]
+            raise MeshTopologyError(f"face {int(self.corner_face[c])} uses vertex {int(idx[c])} more than once")
+
+    def _check_edges(self):
+        counts = np.bincount(self.halfedge_edge, minlength=len(self.edges))
+        over = np.flatnonzero(counts > 2)
+        if over.size:
+            e = int(over[0])
+            faces = self.corner_face[self.halfedge_edge == e]
+            raise MeshTopologyError(
+                f"edge {tuple(int(v) for v in self.edges[e])} is shared by {int(counts[e])} faces "
+                f"{faces.tolist()}; a manifold edge has at most 2"
+            )
+        # the two half-edges of an interior edge must run in opposite directions
+        h0, h1 = self._edge_halfedge_pairs
+        interior = h1 >= 0
+        same = interior & (self.halfedge_src[h0] == self.halfedge_src[np.where(interior, h1, 0)])
+        if same.any():
+            e = int(np.flatnonzero(same)[0])
+            f0, f1 = int(self.corner_face[h0[e]]), int(self.corner_face[h1[e]])
+            raise MeshTopologyError(
+                f"faces {f0} and {f1} are oriented inconsistently: both traverse edge "
+                f"{tuple(int(v) for v in self.edges[e])} in the same direction"
+            )
+
+    # -- faces and corners ----------------------------------------------------------------
+    @property
+    def n_faces(self) -> int:
+        return self.face_offsets.size - 1
+
+    @property
+    def n_halfedges(self) -> int:
+        return self.face_indices.size
+
+    @cached_property
+    def face_sizes(self) -> np.ndarray:
+        """Number of vertices of each face ``(F,)``."""
+        return np.diff(self.face_offsets)
+
+    @cached_property
+    def corner_face(self) -> np.ndarray:
+        """Face of each corner / half-edge ``(H,)``."""
+        return np.repeat(np.arange(self.n_faces), self.face_sizes)
+
+    @cached_property
+    def corner_index(self) -> np.ndarray:
+        """Position of each corner within its face ``(H,)``."""
+        return np.arange(self.n_halfedges) - self.face_offsets[self.corner_face]
+
+    @cached_property
+    def next_corner(self) -> np.ndarray:
+        """The following corner of the same face ``(H,)``."""
+        nxt = np.arange(1, self.n_halfedges + 1)
+        last = self.face_offsets[1:] - 1
+        nxt[last] = self.face_offsets[:-1]
+        return nxt
+
+    @cached_property
+    def prev_corner(self) -> np.ndarray:
+        """The preceding corner of the same face ``(H,)``."""
+        prv = np.empty(self.n_halfedges, dtype=np.int64)
+        prv[self.next_corner] = np.arange(self.n_halfedges)
+        return prv
+
+    @property
+    def halfedge_src(self) -> np.ndarray:
+        """Start vertex of each half-edge (the corner's vertex) ``(H,)``."""
+        return self.face_indices
+
+    @cached_property
+    def halfedge_dst(self) -> np.ndarray:
+        """End vertex of each half-edge ``(H,)``."""
+        return self.face_indices[self.next_corner]
+
+    @property
+    def is_uniform(self) -> bool:
+        """All faces have the same number of vertices."""
+        return self.n_faces == 0 or bool((self.face_sizes == self.face_sizes[0]).all())
+
+    # -- edges ----------------------------------------------------------------------------
+    @cached_property
+    def _edge_table(self):
+        a, b = self.halfedge_src, self.halfedge_dst
+        lo, hi = np.minimum(a, b), np.maximum(a, b)
+        key = lo * max(self.n_vertices, 1) + hi
+        uniq, inverse = np.unique(key, return_inverse=True)
+        n = max(self.n_vertices, 1)
+        edges = np.column_stack([uniq // n, uniq % n])
+        return edges, inverse.ravel()
+
+    @property
+    def edges(self) -> np.ndarray:
+        """Undirected edges ``(E, 2)``, each as ``(low, high)`` vertex index, sorted."""
+        return self._edge_table[0]
+
+    @property
+    def halfedge_edge(self) -> np.ndarray:
+        """Edge of each half-edge ``(H,)``."""
+        return self._edge_table[1]
+
+    @property
+    def n_edges(self) -> int:
+        return len(self.edges)
+
+    @cached_property
+    def _edge_halfedge_pairs(self):
+        """``(h0, h1)`` ``(E,)`` each: the half-edges of every edge, ``h1 = -1`` on the boundary."""
+        E = self.n_edges
+        order = np.argsort(self.halfedge_edge, kind="stable")
+        first = np.searchsorted(self.halfedge_edge[order], np.arange(E), side="left")
+        count = np.bincount(self.halfedge_edge, minlength=E)
+        h0 = order[first]
+        h1 = np.where(count >= 2, order[np.minimum(first + 1, order.size - 1)], -1)
+        return h0, h1
+
+    @cached_property
+    def edge_halfedges(self) -> np.ndarray:
+        """``(E, 2)`` half-edges of each edge; the second is -1 on a boundary edge."""
+        return np.column_stack(self._edge_halfedge_pairs)
+
+    @cached_property
+    def twin(self) -> np.ndarray:
+        """Opposite half-edge of each half-edge, -1 on the boundary ``(H,)``."""
+        h0, h1 = self._edge_halfedge_pairs
+        tw = np.full(self.n_halfedges, -1, dtype=np.int64)
+        interior = h1 >= 0
+        tw[h0[interior]] = h1[interior]
+        tw[h1[interior]] = h0[interior]
+        return tw
+
+    @cached_property
+    def edge_faces(self) -> np.ndarray:
+        """``(E, 2)`` faces on each side of an edge; -1 where there is none."""
+        eh = self.edge_halfedges
+        out = np.where(eh >= 0, self.corner_face[np.maximum(eh, 0)], -1)
+        return out
+
+    @cached_property
+    def boundary_edges(self) -> np.ndarray:
+        """Mask ``(E,)`` of edges with one face."""
+        return self.edge_halfedges[:, 1] < 0
+
+    @cached_property
+    def boundary_vertices(self) -> np.ndarray:
+        """Mask ``(V,)`` of vertices on a boundary edge."""
+        mask = np.zeros(self.n_vertices, dtype=bool)
+        mask[self.edges[self.boundary_edges].ravel()] = True
+        return mask
+
+    # -- vertices -------------------------------------------------------------------------
+    @cached_property
+    def valence(self) -> np.ndarray:
+        """Number of edges at each vertex ``(V,)`` (0 for isolated vertices)."""
+        return np.bincount(self.edges.ravel(), minlength=self.n_vertices)
+
+    @cached_property
+    def vertex_face_count(self) -> np.ndarray:
+        """Number of faces at each vertex ``(V,)``."""
+        return np.bincount(self.face_indices, minlength=self.n_vertices)
+
+    @cached_property
+    def vertex_faces(self):
+        """Vertex -> faces as CSR ``(offsets (V + 1,), faces (H,))``, faces of each vertex sorted."""
+        order = np.lexsort((self.corner_face, self.face_indices))
+        offsets = np.concatenate([[0], np.cumsum(self.vertex_face_count)])
+        return offsets, self.corner_face[order]
+
+    @cached_property
+    def vertex_edges(self):
+        """Vertex -> edges as CSR ``(offsets (V + 1,), edges (2E,))``."""
+        ends = self.edges.ravel()
+        order = np.argsort(ends, kind="stable")
+        offsets = np.concatenate([[0], np.cumsum(self.valence)])
+        return offsets, order // 2
+
+    @cached_property
+    def isolated_vertices(self) -> np.ndarray:
+        """Mask ``(V,)`` of vertices used by no face."""
+        return self.vertex_face_count == 0
+
+    # -- global ---------------------------------------------------------------------------
+    @property
+    def euler_characteristic(self) -> int:
+        """``V - E + F`` (isolated vertices count as vertices)."""
+        return self.n_vertices - self.n_edges + self.n_faces
+
+    @property
+    def is_closed(self) -> bool:
+        """True when the mesh has faces and no boundary edge."""
+        return self.n_faces > 0 and not bool(self.boundary_edges.any())
