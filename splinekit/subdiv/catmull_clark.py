@@ -1,0 +1,59 @@
+"""One level of Catmull-Clark refinement: topology and stencil matrix.
+
+Child vertices are ordered: the V vertex points (child ``v`` of parent vertex
+``v``), then the E edge points, then the F face points. Each parent corner
+becomes one quad ``(vertex point, edge point, face point, previous edge point)``,
+so any polygon goes in and quads come out.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import scipy.sparse as sp
+
+from ..mesh.topology import Topology
+from .masks import csr, diag, edge_blend, midpoint_matrix, neighbor_matrix, vertex_point_matrix
+
+
+def face_point_matrix(t: Topology) -> sp.csr_matrix:
+    """``(F, V)``: the centroid of each face."""
+    return csr(t.corner_face, t.face_indices, 1.0 / t.face_sizes[t.corner_face], (t.n_faces, t.n_vertices))
+
+
+def refine(t: Topology, edge_s: np.ndarray, vertex_s: np.ndarray):
+    """Returns ``(child topology, S (V + E + F, V) csr, child crease pairs (k, 2), their parent
+    sharpness (k,), child vertex sharpness)``."""
+    V, E, F = t.n_vertices, t.n_edges, t.n_faces
+    Sf = face_point_matrix(t)
+
+    # edge points: (v0 + v1 + f0 + f1) / 4 when smooth, the midpoint when sharp
+    interior = t.edge_faces >= 0
+    rows = np.repeat(np.arange(E), 2)[interior.ravel()]
+    cols = t.edge_faces.ravel()[interior.ravel()]
+    smooth_e = 0.5 * midpoint_matrix(t) + csr(rows, cols, np.full(rows.size, 0.25), (E, F)) @ Sf
+    ws = edge_blend(edge_s)
+    S_e = diag(1.0 - ws) @ smooth_e + diag(ws) @ midpoint_matrix(t)
+
+    # vertex points: ((n - 2) v + (1/n) sum(neighbours) + (1/n) sum(face points)) / n
+    n = t.valence.astype(np.float64)
+    live = n > 0
+    inv2 = np.where(live, 1.0 / np.maximum(n, 1) ** 2, 0.0)
+    centre = np.where(live, (n - 2) / np.maximum(n, 1), 1.0)
+    vf = csr(t.face_indices, t.corner_face, inv2[t.face_indices], (V, F))
+    smooth_v = diag(centre) + neighbor_matrix(t, inv2) + vf @ Sf
+    S_v = vertex_point_matrix(t, edge_s, vertex_s, smooth_v)
+
+    S = sp.vstack([S_v, S_e, Sf], format="csr")
+
+    c = np.arange(t.n_halfedges)
+    quads = np.column_stack(
+        [t.face_indices, V + t.halfedge_edge, V + E + t.corner_face, V + t.halfedge_edge[t.prev_corner]]
+    )
+    child = Topology(V + E + F, quads.ravel(), np.arange(c.size + 1) * 4, check=False)
+
+    sharp = np.flatnonzero(edge_s > 0)
+    pairs = np.concatenate(
+        [np.column_stack([t.edges[sharp, 0], V + sharp]), np.column_stack([V + sharp, t.edges[sharp, 1]])]
+    )
+    child_vertex_s = np.concatenate([vertex_s, np.zeros(child.n_vertices - V)])
+    return child, S, pairs, np.tile(edge_s[sharp], 2), child_vertex_s

@@ -1,0 +1,155 @@
+"""Sharpness of edges and vertices, and the vertex rules they imply.
+
+Semi-sharp creases follow DeRose, Kass & Truong 1998 as OpenSubdiv's Sdc
+layer does:
+
+- an edge of sharpness ``s >= 1`` is subdivided with the sharp (midpoint)
+  rule, ``0 < s < 1`` blends sharp and smooth rules with weight ``s``; each
+  level its child edges get ``max(s - 1, 0)`` (uniform decrement);
+- a vertex's rule comes from its own sharpness and the number of incident
+  sharp edges: smooth (0), dart (1, smooth mask), crease (2), corner (3 or more,
+  or a sharp vertex);
+- where the rule changes between parent and child level (sharpness crossing
+  zero), the parent-rule and child-rule positions are blended by the average
+  parent sharpness of the edges (and vertex) that become smooth.
+
+Boundary edges are infinitely sharp. With ``boundary="edge-and-corner"``
+(OpenSubdiv's default) a boundary vertex with a single incident face is also
+an infinitely sharp corner, so the limit surface interpolates it; with
+``"edge-only"`` it follows the boundary curve.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .._validate import as_float_array
+from ..errors import MeshTopologyError, ParameterError
+from ..mesh.topology import Topology
+
+__all__ = ["SMOOTH", "DART", "CREASE", "CORNER", "edge_sharpness", "vertex_sharpness", "vertex_rules", "BOUNDARY_MODES"]
+
+SMOOTH, DART, CREASE, CORNER = 0, 1, 2, 3
+BOUNDARY_MODES = ("edge-and-corner", "edge-only")
+
+
+def edge_lookup(topology: Topology, pairs: np.ndarray) -> np.ndarray:
+    """Indices in ``topology.edges`` of vertex pairs ``(k, 2)``; -1 where there is no such edge."""
+    n = max(topology.n_vertices, 1)
+    keys = topology.edges[:, 0] * n + topology.edges[:, 1]
+    lo, hi = np.minimum(pairs[:, 0], pairs[:, 1]), np.maximum(pairs[:, 0], pairs[:, 1])
+    q = lo * n + hi
+    pos = np.clip(np.searchsorted(keys, q), 0, max(len(keys) - 1, 0))
+    found = (len(keys) > 0) & (keys[pos] == q) if len(keys) else np.zeros(len(q), bool)
+    return np.where(found, pos, -1)
+
+
+def edge_sharpness(topology: Topology, creases) -> np.ndarray:
+    """Per-edge sharpness ``(E,)`` from ``creases``.
+
+    ``creases`` is ``None``, a mapping ``{(v0, v1): sharpness}``, a pair
+    ``(pairs (k, 2), sharpness (k,))``, or an ``(E,)`` array aligned with
+    ``topology.edges``. Sharpness is >= 0; ``inf`` is infinitely sharp.
+    Boundary edges are always infinitely sharp.
+    """
+    E = topology.n_edges
+    s = np.zeros(E)
+    if creases is not None:
+        if isinstance(creases, dict):
+            items = list(creases.items())
+            pairs = np.array([k for k, _ in items], dtype=np.int64).reshape(-1, 2) if items else np.zeros((0, 2), np.int64)
+            values = as_float_array([v for _, v in items], "crease sharpness")
+        elif isinstance(creases, tuple) and len(creases) == 2:
+            try:
+                pairs = np.asarray(creases[0], dtype=np.int64).reshape(-1, 2)
+            except (TypeError, ValueError):
+                raise ParameterError("crease edges must be an (k, 2) array of vertex indices") from None
+            values = as_float_array(creases[1], "crease sharpness").ravel()
+            if values.size == 1 and len(pairs) != 1:
+                values = np.full(len(pairs), float(values[0]))
+        else:
+            values = as_float_array(creases, "crease sharpness")
+            if values.shape != (E,):
+                raise ParameterError(
+                    f"creases must be a dict {{(v0, v1): sharpness}}, a pair (edges, sharpness) or an array of "
+                    f"{E} per-edge values, got shape {values.shape}"
+                )
+            pairs = topology.edges
+        if len(values) != len(pairs):
+            raise ParameterError(f"{len(pairs)} crease edges but {len(values)} sharpness values")
+        bad = np.flatnonzero(~(values >= 0))
+        if bad.size:
+            raise ParameterError(f"crease sharpness must be >= 0 (inf allowed), got {float(values[bad[0]])!r} for edge {pairs[bad[0]].tolist()}")
+        idx = edge_lookup(topology, pairs)
+        missing = np.flatnonzero(idx < 0)
+        if missing.size:
+            raise MeshTopologyError(f"crease edge {pairs[missing[0]].tolist()} is not an edge of the mesh")
+        s[idx] = values
+    s[topology.boundary_edges] = np.inf
+    return s
+
+
+def vertex_sharpness(topology: Topology, corners, boundary: str) -> np.ndarray:
+    """Per-vertex sharpness ``(V,)`` from ``corners`` (``{vertex: sharpness}`` or ``(V,)``) and
+    the boundary mode."""
+    if boundary not in BOUNDARY_MODES:
+        raise ParameterError(f"boundary must be one of {BOUNDARY_MODES}, got {boundary!r}")
+    V = topology.n_vertices
+    s = np.zeros(V)
+    if corners is not None:
+        if isinstance(corners, dict):
+            idx = np.array(list(corners.keys()), dtype=np.int64)
+            values = as_float_array(list(corners.values()), "corner sharpness")
+        else:
+            values = as_float_array(corners, "corner sharpness")
+            if values.shape != (V,):
+                raise ParameterError(f"corners must be a dict {{vertex: sharpness}} or {V} per-vertex values")
+            idx = np.arange(V)
+        if idx.size and (idx.min() < 0 or idx.max() >= V):
+            raise MeshTopologyError(f"corner vertex {int(idx[(idx < 0) | (idx >= V)][0])} is outside 0..{V - 1}")
+        if not (values >= 0).all():
+            raise ParameterError("corner sharpness must be >= 0 (inf allowed)")
+        s[idx] = values
+    if boundary == "edge-and-corner":
+        corner = topology.boundary_vertices & (topology.vertex_face_count == 1)
+        s[corner] = np.inf
+    return s
+
+
+def sharp_edge_counts(topology: Topology, sharp: np.ndarray) -> np.ndarray:
+    """Number of edges with ``sharp`` True at each vertex ``(V,)``."""
+    ends = topology.edges[sharp].ravel()
+    return np.bincount(ends, minlength=topology.n_vertices)
+
+
+def vertex_rules(topology: Topology, edge_s: np.ndarray, vertex_s: np.ndarray) -> np.ndarray:
+    """Rule code per vertex: SMOOTH, DART, CREASE or CORNER ``(V,)``."""
+    count = sharp_edge_counts(topology, edge_s > 0)
+    rule = np.minimum(count, 3)
+    rule[vertex_s > 0] = CORNER
+    return rule
+
+
+def transition_weights(topology: Topology, edge_s: np.ndarray, vertex_s: np.ndarray) -> np.ndarray:
+    """Blend weight of the parent rule where the rule changes at the next level ``(V,)``.
+
+    The average parent sharpness over the incident edges (and the vertex) whose
+    sharpness drops to zero at the child level, clipped to 1.
+    """
+    fading = (edge_s > 0) & (edge_s <= 1)
+    total = np.zeros(topology.n_vertices)
+    count = np.zeros(topology.n_vertices)
+    ends = topology.edges[fading]
+    np.add.at(total, ends.ravel(), np.repeat(edge_s[fading], 2))
+    np.add.at(count, ends.ravel(), 1.0)
+    vfading = (vertex_s > 0) & (vertex_s <= 1)
+    total[vfading] += vertex_s[vfading]
+    count[vfading] += 1.0
+    with np.errstate(invalid="ignore", divide="ignore"):
+        w = np.where(count > 0, total / np.maximum(count, 1), 0.0)
+    return np.minimum(w, 1.0)
+
+
+def child_sharpness(s: np.ndarray) -> np.ndarray:
+    """Uniform decrement: ``max(s - 1, 0)`` (``inf`` stays ``inf``)."""
+    return np.maximum(s - 1.0, 0.0)

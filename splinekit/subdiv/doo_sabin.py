@@ -1,0 +1,1 @@
+"""Doo-Sabin refinement (placeholder until implemented below)."""

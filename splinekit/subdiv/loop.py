@@ -1,0 +1,67 @@
+"""One level of Loop refinement (triangles): topology and stencil matrix.
+
+Child vertices: the V vertex points, then the E edge points. Each triangle
+``(a, b, c)`` becomes four. The smooth vertex rule uses Loop's original weight
+``beta(n) = (5/8 - (3/8 + cos(2 pi / n) / 4)^2) / n``, as OpenSubdiv does
+(libigl uses Warren's ``3 / (8 n)``, which differs except at valence 3 and 6).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import scipy.sparse as sp
+
+from ..errors import MeshTopologyError
+from ..mesh.topology import Topology
+from .masks import csr, diag, edge_blend, midpoint_matrix, neighbor_matrix, vertex_point_matrix
+
+
+def loop_beta(n: np.ndarray) -> np.ndarray:
+    """Loop's smooth-vertex neighbour weight for valence ``n`` (0 where ``n == 0``)."""
+    n = np.asarray(n, dtype=np.float64)
+    safe = np.maximum(n, 1)
+    beta = (0.625 - (0.375 + 0.25 * np.cos(2 * np.pi / safe)) ** 2) / safe
+    return np.where(n > 0, beta, 0.0)
+
+
+def refine(t: Topology, edge_s: np.ndarray, vertex_s: np.ndarray):
+    """Returns ``(child topology, S (V + E, V) csr, child crease pairs (k, 2), their parent
+    sharpness (k,), child vertex sharpness)``."""
+    if not (t.face_sizes == 3).all():
+        f = int(np.flatnonzero(t.face_sizes != 3)[0])
+        raise MeshTopologyError(f"Loop subdivision needs triangles; face {f} has {int(t.face_sizes[f])} vertices")
+    V, E = t.n_vertices, t.n_edges
+
+    # edge points: 3/8 (v0 + v1) + 1/8 (opposite vertices) when smooth
+    h = np.arange(t.n_halfedges)
+    opposite = t.face_indices[t.prev_corner]
+    smooth_e = 0.75 * midpoint_matrix(t) + csr(t.halfedge_edge[h], opposite, np.full(h.size, 0.125), (E, V))
+    ws = edge_blend(edge_s)
+    S_e = diag(1.0 - ws) @ smooth_e + diag(ws) @ midpoint_matrix(t)
+
+    # vertex points: (1 - n beta) v + beta sum(neighbours)
+    n = t.valence
+    beta = loop_beta(n)
+    smooth_v = diag(1.0 - n * beta) + neighbor_matrix(t, beta)
+    S_v = vertex_point_matrix(t, edge_s, vertex_s, smooth_v)
+    S = sp.vstack([S_v, S_e], format="csr")
+
+    tri = t.face_indices.reshape(-1, 3)
+    e = t.halfedge_edge.reshape(-1, 3) + V  # e[:, 0] = edge a-b, e[:, 1] = b-c, e[:, 2] = c-a
+    faces = np.stack(
+        [
+            np.column_stack([tri[:, 0], e[:, 0], e[:, 2]]),
+            np.column_stack([e[:, 0], tri[:, 1], e[:, 1]]),
+            np.column_stack([e[:, 2], e[:, 1], tri[:, 2]]),
+            np.column_stack([e[:, 0], e[:, 1], e[:, 2]]),
+        ],
+        axis=1,
+    ).reshape(-1)
+    child = Topology(V + E, faces, np.arange(4 * t.n_faces + 1) * 3, check=False)
+
+    sharp = np.flatnonzero(edge_s > 0)
+    pairs = np.concatenate(
+        [np.column_stack([t.edges[sharp, 0], V + sharp]), np.column_stack([V + sharp, t.edges[sharp, 1]])]
+    )
+    child_vertex_s = np.concatenate([vertex_s, np.zeros(child.n_vertices - V)])
+    return child, S, pairs, np.tile(edge_s[sharp], 2), child_vertex_s

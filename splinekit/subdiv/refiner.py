@@ -1,0 +1,141 @@
+"""Uniform refinement: topology refined once per level, geometry by sparse stencils.
+
+As in OpenSubdiv's Far layer, :class:`Refinement` refines only the
+connectivity (and the crease sharpness) and records, for every level, a sparse
+matrix ``S_k`` with ``data_k = S_k @ data_(k-1)``. Positions, colours, uv or any
+other per-vertex array are then refined by sparse products; the composed matrix
+``S_L ... S_1`` maps the control vertices straight to the finest level.
+"""
+
+from __future__ import annotations
+
+from functools import cached_property
+
+import numpy as np
+import scipy.sparse as sp
+
+from .._validate import as_float_array, as_int
+from ..errors import MeshTopologyError, ParameterError
+from ..mesh.polymesh import PolyMesh
+from ..mesh.topology import Topology
+from . import catmull_clark, doo_sabin, loop
+from .creases import child_sharpness, edge_lookup, edge_sharpness, vertex_sharpness
+
+__all__ = ["SCHEMES", "Refinement", "subdivide", "subdivision_matrix"]
+
+SCHEMES = {"catmull-clark": catmull_clark, "loop": loop, "doo-sabin": doo_sabin}
+MAX_LEVELS = 12
+
+
+def _scheme(name):
+    key = str(name).lower().replace("_", "-") if isinstance(name, str) else name
+    aliases = {"catmark": "catmull-clark", "cc": "catmull-clark", "catmull clark": "catmull-clark"}
+    key = aliases.get(key, key)
+    if key not in SCHEMES:
+        raise ParameterError(f"scheme must be one of {sorted(SCHEMES)}, got {name!r}")
+    return key
+
+
+class Refinement:
+    """A mesh's topology refined ``levels`` times by one scheme.
+
+    Parameters
+    ----------
+    mesh : PolyMesh or Topology
+    scheme : ``"catmull-clark"``, ``"loop"`` or ``"doo-sabin"``
+    levels : int, 0..12
+    creases : edge sharpness, see :func:`splinekit.subdiv.creases.edge_sharpness`
+    corners : vertex sharpness, ``{vertex: sharpness}`` or ``(V,)``
+    boundary : ``"edge-and-corner"`` (default; boundary corners with one face
+        are interpolated) or ``"edge-only"``
+
+    Attributes
+    ----------
+    topologies : list of Topology, ``levels + 1`` entries (the input first)
+    stencils : list of CSR matrices; ``stencils[k]`` maps level k to level k + 1
+    edge_sharpness : list of per-edge sharpness arrays, one per level
+    """
+
+    def __init__(self, mesh, scheme: str, levels: int = 1, creases=None, corners=None, boundary: str = "edge-and-corner"):
+        self.scheme = _scheme(scheme)
+        levels = as_int(levels, "levels", minimum=0)
+        if levels > MAX_LEVELS:
+            raise ParameterError(f"levels = {levels} is more than {MAX_LEVELS} (faces grow 4x per level)")
+        topo = mesh.topology if isinstance(mesh, PolyMesh) else mesh
+        if not isinstance(topo, Topology):
+            raise ParameterError(f"expected a PolyMesh or Topology, got {type(mesh).__name__}")
+        if topo.n_faces == 0:
+            raise MeshTopologyError("the mesh has no faces to subdivide")
+        module = SCHEMES[self.scheme]
+        edge_s = edge_sharpness(topo, creases)
+        vertex_s = vertex_sharpness(topo, corners, boundary)
+        self.boundary = boundary
+        self.topologies = [topo]
+        self.stencils = []
+        self.edge_sharpness = [edge_s]
+        self.vertex_sharpness = [vertex_s]
+        for _ in range(levels):
+            child, S, pairs, parent_s, child_vertex_s = module.refine(topo, edge_s, vertex_s)
+            child_edge_s = np.zeros(child.n_edges)
+            if len(pairs):
+                child_edge_s[edge_lookup(child, pairs)] = child_sharpness(parent_s)
+            child_edge_s[child.boundary_edges] = np.inf
+            topo, edge_s, vertex_s = child, child_edge_s, child_vertex_s
+            self.topologies.append(topo)
+            self.stencils.append(S)
+            self.edge_sharpness.append(edge_s)
+            self.vertex_sharpness.append(vertex_s)
+
+    @property
+    def levels(self) -> int:
+        return len(self.stencils)
+
+    @property
+    def topology(self) -> Topology:
+        """The finest level's connectivity."""
+        return self.topologies[-1]
+
+    @cached_property
+    def matrix(self) -> sp.csr_matrix:
+        """Composed ``(V_L, V_0)`` stencil ``S_L @ ... @ S_1``."""
+        M = sp.identity(self.topologies[0].n_vertices, format="csr")
+        for S in self.stencils:
+            M = S @ M
+        return sp.csr_matrix(M)
+
+    def apply(self, data, composed: bool = False) -> np.ndarray:
+        """Refine per-vertex ``data`` ``(V_0, ...)`` to the finest level.
+
+        Level by level (cheapest for one array), or with the composed matrix
+        when ``composed`` (cheapest when the same refinement serves many
+        frames once :attr:`matrix` is built).
+        """
+        X = as_float_array(data, "data")
+        n0 = self.topologies[0].n_vertices
+        if X.ndim == 0 or X.shape[0] != n0:
+            raise ParameterError(f"data must have {n0} rows (one per control vertex), got shape {X.shape}")
+        flat = X.reshape(n0, -1)
+        if composed:
+            out = self.matrix @ flat
+        else:
+            out = flat
+            for S in self.stencils:
+                out = S @ out
+        return np.asarray(out).reshape((out.shape[0],) + X.shape[1:])
+
+    def mesh(self, vertices) -> PolyMesh:
+        """The refined PolyMesh for control ``vertices``."""
+        return PolyMesh.from_topology(self.apply(vertices), self.topology)
+
+
+def subdivide(mesh: PolyMesh, scheme: str, levels: int = 1, creases=None, corners=None, boundary: str = "edge-and-corner") -> PolyMesh:
+    """Subdivide ``mesh`` ``levels`` times; see :class:`Refinement` for the arguments."""
+    if not isinstance(mesh, PolyMesh):
+        raise ParameterError(f"subdivide expects a PolyMesh, got {type(mesh).__name__}")
+    return Refinement(mesh, scheme, levels, creases, corners, boundary).mesh(mesh.vertices)
+
+
+def subdivision_matrix(mesh, scheme: str, levels: int = 1, creases=None, corners=None, boundary: str = "edge-and-corner"):
+    """``(topology, S)``: the finest connectivity and the composed sparse stencil."""
+    r = Refinement(mesh, scheme, levels, creases, corners, boundary)
+    return r.topology, r.matrix
