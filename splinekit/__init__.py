@@ -9,6 +9,8 @@ from .basis import bernstein, design_matrix
 from .curves import BezierCurve, BSplineCurve, NurbsCurve, SplineCurve
 from .errors import SplineKitError
 from .interop import occ
+from .mesh import PolyMesh
+from .subdiv import Refinement, SubdivisionSurface, subdivide, subdivision_matrix
 from .surfaces import BezierSurface, BSplineSurface, NurbsSurface, SplineSurface
 from .tolerances import Tolerances
 
@@ -25,6 +27,11 @@ __all__ = [
     "BSplineSurface",
     "NurbsSurface",
     "SplineSurface",
+    "PolyMesh",
+    "Refinement",
+    "SubdivisionSurface",
+    "subdivide",
+    "subdivision_matrix",
     "SplineKitError",
     "Tolerances",
     "errors",

@@ -30,6 +30,8 @@ def as_face_arrays(faces) -> tuple[np.ndarray, np.ndarray]:
     except ValueError:  # ragged nested lists
         arr = None
     if arr is not None and arr.dtype != object and arr.ndim == 2:
+        if arr.dtype.kind == "u" and arr.size and arr.max() > np.iinfo(np.int64).max:
+            raise MeshTopologyError(f"face index {int(arr.max())} is too large for a vertex index")
         if arr.size and arr.dtype.kind not in "iu":
             if arr.dtype.kind == "f" and np.array_equal(arr, np.round(arr)) and np.isfinite(arr).all():
                 arr = arr.astype(np.int64)
@@ -108,7 +110,7 @@ class PolyMesh:
     def with_vertices(self, vertices):
         """The same connectivity with new coordinates ``(n, dim)`` (checked)."""
         V = as_float_array(vertices, "vertices", MeshTopologyError)
-        if V.shape[0] != self.topology.n_vertices or V.ndim != 2:
+        if V.ndim != 2 or V.shape[0] != self.topology.n_vertices or V.shape[1] < 1:
             raise MeshTopologyError(f"expected vertices of shape ({self.topology.n_vertices}, dim), got {V.shape}")
         if not np.isfinite(V).all():
             i = int(np.flatnonzero(~np.isfinite(V).all(axis=1))[0])
@@ -120,7 +122,7 @@ class PolyMesh:
 
     def __repr__(self):
         t = self.topology
-        kind = f"{int(t.face_sizes[0])}-gons" if t.n_faces and t.is_uniform else "mixed faces"
+        kind = "empty" if not t.n_faces else f"{int(t.face_sizes[0])}-gons" if t.is_uniform else "mixed faces"
         return (
             f"PolyMesh(vertices={t.n_vertices}, faces={t.n_faces} ({kind}), edges={t.n_edges}, "
             f"{'closed' if t.is_closed else 'open'}, euler={t.euler_characteristic})"
@@ -206,3 +208,90 @@ class PolyMesh:
     def is_quad_mesh(self) -> bool:
         t = self.topology
         return t.n_faces > 0 and bool((t.face_sizes == 4).all())
+
+    # -- geometry (splinekit.mesh.geometry), cached; arrays are read-only -----------------
+    # Polygons are fan-triangulated from each face's first corner; see geometry.py for
+    # units, sign conventions and degenerate cases. Normals, mean curvature and volume
+    # need 3-D vertices (ParameterError otherwise).
+    @staticmethod
+    def _readonly(a: np.ndarray) -> np.ndarray:
+        a.setflags(write=False)
+        return a
+
+    @cached_property
+    def face_areas(self) -> np.ndarray:
+        """``(F,)`` face areas (sum of fan-triangle areas)."""
+        from . import geometry
+
+        return self._readonly(geometry.face_areas(self))
+
+    @cached_property
+    def area(self) -> float:
+        """Total surface area."""
+        from . import geometry
+
+        return geometry.total_area(self)
+
+    @cached_property
+    def face_normals(self) -> np.ndarray:
+        """``(F, 3)`` unit face normals (normalized vector area; zero for zero-area faces)."""
+        from . import geometry
+
+        return self._readonly(geometry.face_normals(self))
+
+    @cached_property
+    def vertex_normals(self) -> np.ndarray:
+        """``(V, 3)`` angle-weighted unit vertex normals (zero at isolated vertices)."""
+        from . import geometry
+
+        geometry.check_dimension(self, "vertex normals", need_3d=True)
+        return self._readonly(geometry.vertex_normals(self, face_normals=self.face_normals))
+
+    @cached_property
+    def cotangent_laplacian(self):
+        """``(V, V)`` CSR cotangent Laplacian, positive semi-definite convention (read-only arrays)."""
+        from . import geometry
+
+        L = geometry.cotangent_laplacian(self)
+        for a in (L.data, L.indices, L.indptr):
+            a.setflags(write=False)
+        return L
+
+    @cached_property
+    def mixed_areas(self) -> np.ndarray:
+        """``(V,)`` mixed Voronoi areas (Meyer et al. 2003)."""
+        from . import geometry
+
+        return self._readonly(geometry.mixed_areas(self))
+
+    @cached_property
+    def mean_curvature_normal(self) -> np.ndarray:
+        """``(V, dim)`` mean-curvature normal ``H n`` (zero on the boundary)."""
+        from . import geometry
+
+        geometry.check_dimension(self, "the mean-curvature normal")
+        return self._readonly(geometry.mean_curvature_normal(self, laplacian=self.cotangent_laplacian))
+
+    @cached_property
+    def mean_curvature(self) -> np.ndarray:
+        """``(V,)`` signed mean curvature, ``+1/R`` on a sphere with outward normals; 0 on the boundary."""
+        from . import geometry
+
+        geometry.check_dimension(self, "mean curvature", need_3d=True)
+        return self._readonly(
+            geometry.mean_curvature(self, laplacian=self.cotangent_laplacian, normals=self.vertex_normals)
+        )
+
+    @cached_property
+    def gaussian_curvature(self) -> np.ndarray:
+        """``(V,)`` angle-defect Gaussian curvature; 0 on the boundary."""
+        from . import geometry
+
+        return self._readonly(geometry.gaussian_curvature(self))
+
+    @cached_property
+    def volume(self) -> float:
+        """Signed enclosed volume of a closed mesh (MeshTopologyError if open)."""
+        from . import geometry
+
+        return geometry.volume(self)

@@ -36,9 +36,10 @@ def neighbor_matrix(topology: Topology, weight: np.ndarray) -> sp.csr_matrix:
     return csr(rows, cols, weight[rows], (V, V))
 
 
-def crease_matrix(topology: Topology, sharp: np.ndarray, rows_mask: np.ndarray) -> sp.csr_matrix:
-    """``(V, V)`` crease rule ``3/4 v + 1/8 (a + b)`` along the two sharp edges,
-    for the vertices in ``rows_mask`` (which must have exactly two sharp edges)."""
+def crease_matrix(topology: Topology, sharp: np.ndarray, rows_mask: np.ndarray, centre: float = 0.75) -> sp.csr_matrix:
+    """``(V, V)`` crease rule ``centre v + (1 - centre) / 2 (a + b)`` along the two
+    sharp edges, for the vertices in ``rows_mask`` (which must have exactly two
+    sharp edges). ``centre = 3/4`` subdivides, ``2/3`` gives the limit position."""
     V = topology.n_vertices
     ends = topology.edges[sharp]
     a, b = ends[:, 0], ends[:, 1]
@@ -49,7 +50,7 @@ def crease_matrix(topology: Topology, sharp: np.ndarray, rows_mask: np.ndarray) 
     return csr(
         np.concatenate([rows[keep], diag_rows]),
         np.concatenate([cols[keep], diag_rows]),
-        np.concatenate([np.full(keep.sum(), 0.125), np.full(diag_rows.size, 0.75)]),
+        np.concatenate([np.full(keep.sum(), 0.5 * (1.0 - centre)), np.full(diag_rows.size, centre)]),
         (V, V),
     )
 

@@ -25,6 +25,20 @@ __all__ = ["SCHEMES", "Refinement", "subdivide", "subdivision_matrix"]
 
 SCHEMES = {"catmull-clark": catmull_clark, "loop": loop, "doo-sabin": doo_sabin}
 MAX_LEVELS = 12
+MAX_FACES = 32_000_000
+"""Refinements that would produce more faces than this are refused (memory)."""
+
+
+def estimated_faces(topology: Topology, scheme: str, levels: int) -> int:
+    """Faces after ``levels`` refinements (exact for Catmull-Clark and Loop)."""
+    if levels == 0:
+        return topology.n_faces
+    if scheme == "catmull-clark":
+        return topology.n_halfedges * 4 ** (levels - 1)
+    if scheme == "loop":
+        return topology.n_faces * 4**levels
+    first = topology.n_faces + topology.n_edges + topology.n_vertices
+    return first * 4 ** (levels - 1)
 
 
 def _scheme(name):
@@ -66,6 +80,11 @@ class Refinement:
             raise ParameterError(f"expected a PolyMesh or Topology, got {type(mesh).__name__}")
         if topo.n_faces == 0:
             raise MeshTopologyError("the mesh has no faces to subdivide")
+        expected = estimated_faces(topo, self.scheme, levels)
+        if expected > MAX_FACES:
+            raise ParameterError(
+                f"{levels} levels of {self.scheme} would make about {expected:,} faces, more than {MAX_FACES:,}"
+            )
         module = SCHEMES[self.scheme]
         edge_s = edge_sharpness(topo, creases)
         vertex_s = vertex_sharpness(topo, corners, boundary)

@@ -1,0 +1,478 @@
+"""Limit surfaces of subdivision schemes.
+
+:class:`SubdivisionSurface` wraps a control mesh and a scheme. It refines
+(:meth:`refine`), gives exact limit positions and normals at the control
+vertices from limit and tangent masks (:meth:`limit_points`,
+:meth:`limit_normals`), evaluates the Catmull-Clark limit surface at
+``(face, u, v)`` (:meth:`evaluate`) and converts it to bicubic patches
+(:meth:`to_bsplines`).
+
+Catmull-Clark evaluation: a quad whose four corners are smooth, interior and
+of valence 4 is exactly the uniform bicubic B-spline patch of its 4 x 4
+neighbourhood. Other quads are refined (the query descends into the quadrant
+holding it) until it lands in such a patch; the irregular area shrinks 4x
+per level. A query still irregular after ``max_level`` levels (within
+``2**-max_level`` of an extraordinary vertex or a crease) is evaluated on the
+bilinear interpolant of the sub-face's corner limit points, an error of order
+the squared sub-face size (measured in the tests). The refinement is global
+(every face of the mesh), so ``max_level`` is capped to keep the finest level
+under 4 million faces; exact evaluation by Stam's eigen-analysis, which needs
+no refinement, is not implemented yet.
+"""
+
+from __future__ import annotations
+
+import math
+from functools import cached_property
+
+import numpy as np
+
+from .._validate import as_float_array, as_int
+from ..errors import DomainError, MeshTopologyError, ParameterError
+from ..mesh.polymesh import PolyMesh
+from ..mesh.topology import Topology
+from .creases import SMOOTH, vertex_rules
+from .limit import limit_matrix, tangent_matrices
+from .refiner import Refinement, _scheme
+
+__all__ = ["SubdivisionSurface", "regular_faces", "patch_indices", "BSPLINE_TO_BEZIER"]
+
+# uniform cubic B-spline segment -> cubic Bézier control points
+BSPLINE_TO_BEZIER = np.array([[1, 4, 1, 0], [0, 4, 2, 0], [0, 2, 4, 0], [0, 1, 4, 1]], dtype=np.float64) / 6.0
+
+# parent (u, v) -> child (s, t) = J (u, v) + c for the quadrant at corner i
+_QUAD_J = np.array([[[2, 0], [0, 2]], [[0, 2], [-2, 0]], [[-2, 0], [0, -2]], [[0, -2], [2, 0]]], dtype=np.float64)
+_QUAD_C = np.array([[0, 0], [0, 2], [2, 2], [2, 0]], dtype=np.float64)
+
+
+def regular_faces(t: Topology, edge_s: np.ndarray, vertex_s: np.ndarray) -> np.ndarray:
+    """Mask ``(F,)`` of quads whose limit patch is a uniform bicubic B-spline:
+    four interior, smooth (no sharp incident edge or vertex) corners of valence 4."""
+    rule = vertex_rules(t, edge_s, vertex_s)
+    good_vertex = (t.valence == 4) & (t.vertex_face_count == 4) & ~t.boundary_vertices & (rule == SMOOTH)
+    good_corner = good_vertex[t.face_indices]
+    ok = np.add.reduceat(good_corner.astype(np.int64), t.face_offsets[:-1]) if t.n_faces else np.zeros(0, int)
+    return (t.face_sizes == 4) & (ok == 4)
+
+
+def patch_indices(t: Topology, faces: np.ndarray) -> np.ndarray:
+    """``(m, 4, 4)`` vertex indices of the B-spline control net of regular quads.
+
+    Entry ``[a, b]``: ``a`` runs along the face's first edge (u), ``b`` along
+    its last edge reversed (v); the face's corners sit at ``[1, 1], [2, 1],
+    [2, 2], [1, 2]``.
+    """
+    src, nxt, prv, tw = t.face_indices, t.next_corner, t.prev_corner, t.twin
+    base = t.face_offsets[faces]
+    X, Y, D, Vc = [], [], [], []
+    for k in range(4):
+        h = base + k
+        g = tw[h]
+        X.append(src[nxt[nxt[g]]])
+        Y.append(src[prv[g]])
+        D.append(src[prv[tw[nxt[g]]]])
+        Vc.append(src[h])
+    P = np.empty((len(faces), 4, 4), dtype=np.int64)
+    P[:, 0, 0], P[:, 1, 0], P[:, 2, 0], P[:, 3, 0] = D[0], X[0], Y[0], D[1]
+    P[:, 0, 1], P[:, 1, 1], P[:, 2, 1], P[:, 3, 1] = Y[3], Vc[0], Vc[1], X[1]
+    P[:, 0, 2], P[:, 1, 2], P[:, 2, 2], P[:, 3, 2] = X[3], Vc[3], Vc[2], Y[1]
+    P[:, 0, 3], P[:, 1, 3], P[:, 2, 3], P[:, 3, 3] = D[3], Y[2], X[2], D[2]
+    return P
+
+
+def _cubic_bspline_basis(x: np.ndarray):
+    """Uniform cubic B-spline basis on one span and its derivative: two ``(m, 4)`` arrays."""
+    x2, x3 = x * x, x * x * x
+    B = np.stack([(1 - x) ** 3, 3 * x3 - 6 * x2 + 4, -3 * x3 + 3 * x2 + 3 * x + 1, x3], axis=-1) / 6.0
+    dB = np.stack([-3 * (1 - x) ** 2, 9 * x2 - 12 * x, -9 * x2 + 6 * x + 3, 3 * x2], axis=-1) / 6.0
+    return B, dB
+
+
+class SubdivisionSurface:
+    """The limit surface of a control mesh under a subdivision scheme.
+
+    Parameters
+    ----------
+    mesh : PolyMesh
+        The control mesh (3-D vertices for normals).
+    scheme : ``"catmull-clark"``, ``"loop"`` or ``"doo-sabin"``
+    creases, corners, boundary
+        As for :func:`splinekit.subdivide`.
+    """
+
+    def __init__(self, mesh: PolyMesh, scheme: str, creases=None, corners=None, boundary: str = "edge-and-corner"):
+        if not isinstance(mesh, PolyMesh):
+            raise ParameterError(f"SubdivisionSurface expects a PolyMesh, got {type(mesh).__name__}")
+        self.mesh = mesh
+        self.scheme = _scheme(scheme)
+        self._options = dict(creases=creases, corners=corners, boundary=boundary)
+        self._refinements: dict[int, Refinement] = {}
+        self.refinement(0)  # validates creases, corners, boundary and the scheme's face type
+        if self.scheme == "loop" and not mesh.is_triangle_mesh:
+            raise MeshTopologyError("Loop subdivision needs a triangle mesh")
+
+    def __repr__(self):
+        return f"SubdivisionSurface({self.scheme}, {self.mesh!r})"
+
+    # -- refinement -----------------------------------------------------------------------
+    def refinement(self, levels: int) -> Refinement:
+        """The (cached) :class:`Refinement` of the control mesh to ``levels``."""
+        levels = as_int(levels, "levels", minimum=0)
+        if levels not in self._refinements:
+            self._refinements[levels] = Refinement(self.mesh, self.scheme, levels, **self._options)
+        return self._refinements[levels]
+
+    def refine(self, levels: int = 1) -> PolyMesh:
+        """The control mesh subdivided ``levels`` times."""
+        return self.refinement(levels).mesh(self.mesh.vertices)
+
+    # -- limit masks ----------------------------------------------------------------------
+    @cached_property
+    def _mask_level(self) -> int:
+        """Levels to refine before the limit masks apply: every finite sharpness
+        must have expired, and Catmull-Clark masks need quads."""
+        base = self.refinement(0)
+        finite = np.concatenate([base.edge_sharpness[0], base.vertex_sharpness[0]])
+        finite = finite[np.isfinite(finite)]
+        levels = int(math.ceil(finite.max())) if finite.size else 0
+        if self.scheme == "catmull-clark" and not self.mesh.is_quad_mesh:
+            levels = max(levels, 1)
+        return levels
+
+    def _check_masks(self):
+        if self.scheme == "doo-sabin":
+            raise ParameterError("limit masks are implemented for catmull-clark and loop, not doo-sabin")
+
+    @cached_property
+    def limit_stencil(self):
+        """Sparse ``(V, V)`` map from control vertices to their limit positions."""
+        self._check_masks()
+        r = self.refinement(self._mask_level)
+        L = limit_matrix(r.topology, r.edge_sharpness[-1], r.vertex_sharpness[-1], self.scheme)
+        # the vertex points of the control vertices keep their indices at every level
+        return (L @ r.matrix)[: self.mesh.n_vertices]
+
+    def limit_points(self) -> np.ndarray:
+        """Limit positions of the control vertices ``(V, dim)``."""
+        return np.asarray(self.limit_stencil @ self.mesh.vertices)
+
+    def limit_normals(self, levels: int = 3) -> np.ndarray:
+        """Unit limit normals at the control vertices ``(V, 3)``.
+
+        Smooth and dart vertices: exact, from the tangent masks. Crease,
+        boundary and corner vertices (where the surface may have two normals
+        or tangent masks would need eigen-analysis): the area-weighted normal
+        of the limit-point fan around the vertex after ``levels`` further
+        refinements, an approximation whose error halves per level.
+        """
+        self._check_masks()
+        if self.mesh.vertices.shape[1] != 3:
+            raise ParameterError("limit normals need 3-D vertices")
+        V0 = self.mesh.n_vertices
+        r = self.refinement(self._mask_level)
+        X = r.apply(self.mesh.vertices)
+        T1, T2, ok = tangent_matrices(r.topology, r.edge_sharpness[-1], r.vertex_sharpness[-1], self.scheme)
+        n = np.cross(T1 @ X, T2 @ X)[:V0]
+        ok = ok[:V0].copy()
+        if not ok.all():
+            levels = as_int(levels, "levels", minimum=0)
+            fine = self.refinement(self._mask_level + levels)
+            t = fine.topology
+            L = limit_matrix(t, fine.edge_sharpness[-1], fine.vertex_sharpness[-1], self.scheme)
+            P = L @ fine.apply(self.mesh.vertices)
+            fan = _fan_normals(t, P)
+            n[~ok] = fan[:V0][~ok]
+        length = np.linalg.norm(n, axis=1, keepdims=True)
+        return np.divide(n, length, out=np.zeros_like(n), where=length > 0)
+
+    # -- Catmull-Clark evaluation ---------------------------------------------------------------
+    def _check_cc(self):
+        if self.scheme != "catmull-clark":
+            raise ParameterError(f"exact evaluation is implemented for catmull-clark, not {self.scheme}")
+
+    EVAL_FACE_BUDGET = 4_000_000
+
+    def _level_budget(self) -> int:
+        """Most levels below the evaluation base that stay within EVAL_FACE_BUDGET faces
+        (the whole mesh is refined; see the module docstring)."""
+        faces = self._level_data(self._eval_base_level)[0].n_faces
+        return max(int(math.floor(math.log(self.EVAL_FACE_BUDGET / max(faces, 1), 4))) - 1, 1)
+
+    @cached_property
+    def _eval_base_level(self) -> int:
+        return 0 if self.mesh.is_quad_mesh else 1
+
+    def _level_data(self, level: int):
+        """Topology, vertices, regularity and sharpness of one level (cached)."""
+        cache = self.__dict__.setdefault("_levels", {})
+        if level not in cache:
+            r = self.refinement(level)
+            t = r.topology
+            cache[level] = (t, r.apply(self.mesh.vertices), regular_faces(t, r.edge_sharpness[-1], r.vertex_sharpness[-1]), r)
+        return cache[level]
+
+    def evaluate(self, face, u, v, max_level: int = 8):
+        """Limit points, first derivatives and unit normals at ``(face, u, v)``.
+
+        ``face`` indexes the quads of the control mesh (of its first
+        refinement when it has other polygons: quad ``c`` is the one at corner
+        ``c`` of the flat face list); ``u, v`` in [0, 1] run along the face's
+        first edge and back along its last edge. Returns ``(points, du, dv,
+        normals)``, each ``(m, dim)`` (normals ``(m, 3)`` for 3-D meshes).
+        """
+        self._check_cc()
+        max_level = min(as_int(max_level, "max_level", minimum=0), self._level_budget())
+        base = self._eval_base_level
+        t0 = self._level_data(base)[0]
+        face = np.asarray(face)
+        if face.dtype.kind not in "iu":
+            raise ParameterError("face must hold integer face indices")
+        face = face.astype(np.int64).ravel()
+        u = as_float_array(u, "u", DomainError).ravel()
+        v = as_float_array(v, "v", DomainError).ravel()
+        try:
+            face, u, v = np.broadcast_arrays(face, u, v)
+        except ValueError:
+            raise ParameterError("face, u and v must have the same length") from None
+        if face.size and (face.min() < 0 or face.max() >= t0.n_faces):
+            raise ParameterError(f"face index {int(face[(face < 0) | (face >= t0.n_faces)][0])} outside 0..{t0.n_faces - 1}")
+        for name, x in (("u", u), ("v", v)):
+            bad = ~((x >= 0) & (x <= 1))
+            if bad.any():
+                raise DomainError(f"{name} = {float(x[bad][0])!r} lies outside [0, 1]")
+        m = face.size
+        dim = self.mesh.vertices.shape[1]
+        P = np.zeros((m, dim))
+        Du = np.zeros((m, dim))
+        Dv = np.zeros((m, dim))
+        f, s, w = face.copy(), u.astype(np.float64).copy(), v.astype(np.float64).copy()
+        J = np.broadcast_to(np.eye(2), (m, 2, 2)).copy()
+        todo = np.arange(m)
+        for level in range(base, base + max_level + 1):
+            t, X, regular, _ = self._level_data(level)
+            reg = regular[f]
+            if reg.any():
+                idx = todo[reg]
+                p, ds, dt = _eval_patches(t, X, f[reg], s[reg], w[reg])
+                P[idx] = p
+                Jr = J[reg]
+                Du[idx] = ds * Jr[:, 0, 0, None] + dt * Jr[:, 1, 0, None]
+                Dv[idx] = ds * Jr[:, 0, 1, None] + dt * Jr[:, 1, 1, None]
+            keep = ~reg
+            todo, f, s, w, J = todo[keep], f[keep], s[keep], w[keep], J[keep]
+            if todo.size == 0:
+                break
+            if level == base + max_level:
+                p, ds, dt = _eval_bilinear_limit(self, level, t, f, s, w)
+                P[todo] = p
+                Du[todo] = ds * J[:, 0, 0, None] + dt * J[:, 1, 0, None]
+                Dv[todo] = ds * J[:, 0, 1, None] + dt * J[:, 1, 1, None]
+                break
+            # descend into the quadrant's child quad (child face = parent corner)
+            q = np.where(s < 0.5, np.where(w < 0.5, 0, 3), np.where(w < 0.5, 1, 2))
+            f = t.face_offsets[f] + q
+            st = np.einsum("mij,mj->mi", _QUAD_J[q], np.column_stack([s, w])) + _QUAD_C[q]
+            s, w = np.clip(st[:, 0], 0, 1), np.clip(st[:, 1], 0, 1)
+            J = np.einsum("mij,mjk->mik", _QUAD_J[q], J)
+        normals = None
+        if dim == 3:
+            nrm = np.cross(Du, Dv)
+            length = np.linalg.norm(nrm, axis=1, keepdims=True)
+            normals = np.divide(nrm, length, out=np.zeros_like(nrm), where=length > 0)
+        return P, Du, Dv, normals
+
+    # -- conversion -------------------------------------------------------------------------
+    def to_bsplines(self, levels: int = 2):
+        """The Catmull-Clark limit surface as bicubic patches.
+
+        Regular quads (of the control mesh, or of its first refinement when it
+        has other polygons) become their exact bicubic patches. Irregular quads
+        are refined ``levels`` more times; their regular sub-quads become exact
+        patches too, and each sub-quad still irregular after that becomes a
+        bicubic Coons patch of its four boundary curves. A boundary shared with
+        an exact patch is that patch's exact edge, and any other boundary is the
+        cubic through the limit points of its ends and its midpoint, so
+        neighbouring patches always share their edges (C0; C2 between regular
+        patches).
+
+        Returns ``(patches, info)``: a list of clamped
+        :class:`~splinekit.BSplineSurface` (Bézier form) and a dict with
+        ``exact`` and ``approximate`` counts, per patch its ``kind``, ``level``,
+        root ``face`` and the affine map ``(u, v) = axes @ (s, t) + origin`` from
+        the patch's parameters to the root face's, and ``max_deviation``: the
+        largest distance of the approximate patches from :meth:`evaluate`.
+        """
+        from ..surfaces import BSplineSurface
+
+        self._check_cc()
+        levels = min(as_int(levels, "levels", minimum=0), self._level_budget() - 1)
+        base = self._eval_base_level
+        knots = np.array([0, 0, 0, 0, 1, 1, 1, 1], dtype=np.float64)
+        nets, kinds, level_of, roots, maps = [], [], [], [], []
+        active = np.arange(self._level_data(base)[0].n_faces)
+        root = active.copy()
+        A = np.broadcast_to(np.eye(2), (active.size, 2, 2)).copy()  # patch (s, t) -> root (u, v) = A (s, t) + b
+        b = np.zeros((active.size, 2))
+        for level in range(base, base + levels + 1):
+            t, X, regular, r = self._level_data(level)
+            reg = regular[active]
+            last = level == base + levels
+            take = np.ones_like(reg) if last else reg
+            if reg.any():
+                nets.append(_bezier_nets(t, X, active[reg]))
+            if last and (~reg).any():
+                nets.append(_coons_nets(self, level, t, X, regular, active[~reg]))
+            order = np.concatenate([np.flatnonzero(reg), np.flatnonzero(take & ~reg)])
+            kinds += ["exact"] * int(reg.sum()) + ["coons"] * int((take & ~reg).sum())
+            level_of += [level] * order.size
+            roots.append(root[order])
+            maps.append((A[order], b[order]))
+            rest = np.flatnonzero(~reg)
+            if rest.size == 0 or last:
+                break
+            # children of the irregular faces: one child quad per corner
+            q = np.tile(np.arange(4), rest.size)
+            parent = np.repeat(rest, 4)
+            active = t.face_offsets[active[parent]] + q
+            Jinv = np.linalg.inv(_QUAD_J[q])
+            A_parent = A[parent]
+            b = b[parent] - np.einsum("mij,mjk,mk->mi", A_parent, Jinv, _QUAD_C[q])
+            A = np.einsum("mij,mjk->mik", A_parent, Jinv)
+            root = root[parent]
+        nets = np.concatenate(nets) if nets else np.zeros((0, 4, 4, self.mesh.vertices.shape[1]))
+        patches = [BSplineSurface._trusted(3, 3, knots, knots, net, False) for net in nets]
+        info = {
+            "exact": kinds.count("exact"),
+            "approximate": kinds.count("coons"),
+            "kind": np.array(kinds),
+            "level": np.array(level_of),
+            "face": np.concatenate(roots),
+            "axes": np.concatenate([m[0] for m in maps]),
+            "origin": np.concatenate([m[1] for m in maps]),
+        }
+        info["max_deviation"] = self._patch_deviation(patches, info)
+        return patches, info
+
+    def _patch_deviation(self, patches, info, samples: int = 9) -> float:
+        """Largest distance between the approximate patches and :meth:`evaluate`
+        on a ``samples x samples`` grid of each (0 when all patches are exact)."""
+        approx = np.flatnonzero(info["kind"] == "coons")
+        if approx.size == 0:
+            return 0.0
+        g = np.linspace(0, 1, samples)
+        S, T = np.meshgrid(g, g, indexing="ij")
+        st = np.column_stack([S.ravel(), T.ravel()])
+        pts = np.stack([patches[k].evaluate(st[:, 0], st[:, 1]) for k in approx])  # (a, s*s, dim)
+        uv = np.einsum("aij,sj->asi", info["axes"][approx], st) + info["origin"][approx][:, None, :]
+        uv = np.clip(uv, 0.0, 1.0)
+        face = np.repeat(info["face"][approx], st.shape[0])
+        exact = self.evaluate(face, uv[..., 0].ravel(), uv[..., 1].ravel())[0]
+        return float(np.linalg.norm(pts.reshape(exact.shape) - exact, axis=1).max())
+
+
+def _fan_normals(t: Topology, P: np.ndarray) -> np.ndarray:
+    """Sum over the faces at each vertex of the face's vector area (Newell), ``(V, 3)``."""
+    a = P[t.face_indices]
+    b = P[t.halfedge_dst]
+    cross = np.cross(a, b)
+    face_area = np.zeros((t.n_faces, 3))
+    np.add.at(face_area, t.corner_face, cross)
+    out = np.zeros((t.n_vertices, 3))
+    np.add.at(out, t.face_indices, face_area[t.corner_face])
+    return out
+
+
+def _eval_patches(t, X, faces, u, v):
+    """Points and (u, v) partials of regular patches at local parameters."""
+    idx = patch_indices(t, faces)  # (m, 4, 4)
+    net = X[idx]  # (m, 4, 4, dim)
+    Bu, dBu = _cubic_bspline_basis(u)
+    Bv, dBv = _cubic_bspline_basis(v)
+    p = np.einsum("ma,mb,mabd->md", Bu, Bv, net)
+    du = np.einsum("ma,mb,mabd->md", dBu, Bv, net)
+    dv = np.einsum("ma,mb,mabd->md", Bu, dBv, net)
+    return p, du, dv
+
+
+def _corner_limits(surface, level):
+    cache = surface.__dict__.setdefault("_corner_limit_cache", {})
+    if level not in cache:
+        r = surface.refinement(level)
+        # masks need expired semi-sharp features; refine that far, read back level rows
+        extra = max(surface._mask_level - level, 0)
+        fine = surface.refinement(level + extra)
+        L = limit_matrix(fine.topology, fine.edge_sharpness[-1], fine.vertex_sharpness[-1], surface.scheme)
+        pts = L @ fine.apply(surface.mesh.vertices)
+        cache[level] = np.asarray(pts[: r.topology.n_vertices])
+    return cache[level]
+
+
+def _eval_bilinear_limit(surface, level, t, faces, u, v):
+    """Bilinear interpolation of the corner limit points of quads (the fallback)."""
+    L = _corner_limits(surface, level)
+    c = t.face_offsets[faces][:, None] + np.arange(4)[None, :]
+    q = L[t.face_indices[c]]  # (m, 4, dim) corners at (0,0), (1,0), (1,1), (0,1)
+    uu, vv = u[:, None], v[:, None]
+    p = (1 - uu) * (1 - vv) * q[:, 0] + uu * (1 - vv) * q[:, 1] + uu * vv * q[:, 2] + (1 - uu) * vv * q[:, 3]
+    du = (1 - vv) * (q[:, 1] - q[:, 0]) + vv * (q[:, 2] - q[:, 3])
+    dv = (1 - uu) * (q[:, 3] - q[:, 0]) + uu * (q[:, 2] - q[:, 1])
+    return p, du, dv
+
+
+def _bezier_nets(t, X, faces):
+    """Bicubic Bézier control nets ``(m, 4, 4, dim)`` of regular quads."""
+    net = X[patch_indices(t, faces)]
+    return np.einsum("ia,mabd,jb->mijd", BSPLINE_TO_BEZIER, net, BSPLINE_TO_BEZIER)
+
+
+def _side_curve(net, side):
+    """Bézier control points ``(m, 4, dim)`` of side ``side`` (in face order) of nets ``(m, 4, 4, dim)``."""
+    if side == 0:
+        return net[:, :, 0]
+    if side == 1:
+        return net[:, 3, :]
+    if side == 2:
+        return net[:, ::-1, 3]
+    return net[:, 0, ::-1]
+
+
+def _coons_nets(surface, level, t, X, regular, faces):
+    """Bicubic Coons nets ``(m, 4, 4, dim)`` for irregular quads (see ``to_bsplines``)."""
+    m = faces.size
+    dim = X.shape[1]
+    L = _corner_limits(surface, level)
+    # limit positions of the edge points of the next level give each edge's midpoint
+    L_next = _corner_limits(surface, level + 1)
+    V = t.n_vertices
+    curves = np.empty((4, m, 4, dim))
+    for k in range(4):
+        h = t.face_offsets[faces] + k
+        a = L[t.face_indices[h]]
+        b = L[t.halfedge_dst[h]]
+        mid = L_next[V + t.halfedge_edge[h]]
+        # cubic through a, mid (at 1/2), b: the quadratic with those values, raised to degree 3
+        q1 = 2 * mid - 0.5 * (a + b)
+        curves[k] = np.stack([a, (a + 2 * q1) / 3, (2 * q1 + b) / 3, b], axis=1)
+        g = t.twin[h]
+        shared = (g >= 0) & regular[t.corner_face[np.maximum(g, 0)]]
+        if shared.any():
+            gf = t.corner_face[g[shared]]
+            gside = g[shared] - t.face_offsets[gf]
+            nets = _bezier_nets(t, X, gf)
+            exact = np.empty((shared.sum(), 4, dim))
+            for sd in range(4):
+                sel = gside == sd
+                if sel.any():
+                    exact[sel] = _side_curve(nets[sel], sd)[:, ::-1]
+            curves[k][shared] = exact
+    # sides in face order: 0 bottom (u), 1 right (v), 2 top (reversed u), 3 left (reversed v)
+    bottom, right, top, left = curves[0], curves[1], curves[2][:, ::-1], curves[3][:, ::-1]
+    i = np.arange(4)[:, None, None] / 3.0
+    j = np.arange(4)[None, :, None] / 3.0
+    P00, P30, P33, P03 = bottom[:, 0], bottom[:, 3], top[:, 3], top[:, 0]
+    return (
+        (1 - i) * left[:, None, :, :] + i * right[:, None, :, :]
+        + (1 - j) * bottom[:, :, None, :] + j * top[:, :, None, :]
+        - ((1 - i) * (1 - j) * P00[:, None, None] + i * (1 - j) * P30[:, None, None]
+           + (1 - i) * j * P03[:, None, None] + i * j * P33[:, None, None])
+    )
