@@ -34,12 +34,17 @@ class Topology:
         edges, orientation); :class:`MeshTopologyError` names the culprit.
     """
 
-    def __init__(self, n_vertices: int, face_indices, face_offsets, check: bool = True):
+    def __init__(self, n_vertices: int, face_indices, face_offsets, check: bool = True, edge_table=None):
         self.n_vertices = int(n_vertices)
         self.face_indices = np.ascontiguousarray(face_indices, dtype=np.int64)
         self.face_offsets = np.ascontiguousarray(face_offsets, dtype=np.int64)
         self.face_indices.setflags(write=False)
         self.face_offsets.setflags(write=False)
+        if edge_table is not None:
+            # a refinement knows its child edges: skip the sort that finds them
+            edges, halfedge_edge, edge_halfedges = edge_table
+            self.__dict__["_edge_table"] = (np.asarray(edges, dtype=np.int64), np.asarray(halfedge_edge, dtype=np.int64))
+            self.__dict__["_edge_halfedge_pairs"] = (edge_halfedges[:, 0].copy(), edge_halfedges[:, 1].copy())
         if check:
             self._check_faces()
             self._check_edges()
@@ -154,8 +159,27 @@ class Topology:
 
     @property
     def edges(self) -> np.ndarray:
-        """Undirected edges ``(E, 2)``, each as ``(low, high)`` vertex index, sorted."""
+        """Undirected edges ``(E, 2)``, each as ``(low, high)`` vertex index; sorted
+        for a mesh built from faces, in refinement order for a refined one."""
         return self._edge_table[0]
+
+    @cached_property
+    def _edge_search(self):
+        n = max(self.n_vertices, 1)
+        keys = self.edges[:, 0] * n + self.edges[:, 1]
+        order = np.argsort(keys, kind="stable")
+        return keys[order], order
+
+    def find_edges(self, pairs) -> np.ndarray:
+        """Edge indices of vertex pairs ``(k, 2)`` (either order); -1 where there is no such edge."""
+        pairs = np.asarray(pairs, dtype=np.int64).reshape(-1, 2)
+        keys, order = self._edge_search
+        if keys.size == 0:
+            return np.full(len(pairs), -1)
+        n = max(self.n_vertices, 1)
+        q = np.minimum(pairs[:, 0], pairs[:, 1]) * n + np.maximum(pairs[:, 0], pairs[:, 1])
+        pos = np.clip(np.searchsorted(keys, q), 0, keys.size - 1)
+        return np.where(keys[pos] == q, order[pos], -1)
 
     @property
     def halfedge_edge(self) -> np.ndarray:

@@ -12,6 +12,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from ..mesh.topology import Topology
+from .split import child_topology
 from .masks import csr, diag, edge_blend, midpoint_matrix, neighbor_matrix, vertex_point_matrix
 
 
@@ -49,7 +50,12 @@ def refine(t: Topology, edge_s: np.ndarray, vertex_s: np.ndarray):
     quads = np.column_stack(
         [t.face_indices, V + t.halfedge_edge, V + E + t.corner_face, V + t.halfedge_edge[t.prev_corner]]
     )
-    child = Topology(V + E + F, quads.ravel(), np.arange(c.size + 1) * 4, check=False)
+    # child half-edges: 4c (v -> edge point), 4c+1 (edge point -> face point),
+    # 4c+2 (face point -> previous edge point), 4c+3 (previous edge point -> v)
+    inner_edges = np.column_stack([V + t.halfedge_edge, V + E + t.corner_face])  # the spoke of corner c
+    inner_pairs = np.column_stack([4 * c + 1, 4 * t.next_corner + 2])
+    child = child_topology(t, V + E + F, quads.ravel(), np.arange(c.size + 1) * 4,
+                           out_he=4 * c, in_he=4 * t.next_corner + 3, inner_edges=inner_edges, inner_pairs=inner_pairs)
 
     sharp = np.flatnonzero(edge_s > 0)
     pairs = np.concatenate(

@@ -33,17 +33,6 @@ SMOOTH, DART, CREASE, CORNER = 0, 1, 2, 3
 BOUNDARY_MODES = ("edge-and-corner", "edge-only")
 
 
-def edge_lookup(topology: Topology, pairs: np.ndarray) -> np.ndarray:
-    """Indices in ``topology.edges`` of vertex pairs ``(k, 2)``; -1 where there is no such edge."""
-    n = max(topology.n_vertices, 1)
-    keys = topology.edges[:, 0] * n + topology.edges[:, 1]
-    lo, hi = np.minimum(pairs[:, 0], pairs[:, 1]), np.maximum(pairs[:, 0], pairs[:, 1])
-    q = lo * n + hi
-    pos = np.clip(np.searchsorted(keys, q), 0, max(len(keys) - 1, 0))
-    found = (len(keys) > 0) & (keys[pos] == q) if len(keys) else np.zeros(len(q), bool)
-    return np.where(found, pos, -1)
-
-
 def edge_sharpness(topology: Topology, creases) -> np.ndarray:
     """Per-edge sharpness ``(E,)`` from ``creases``.
 
@@ -80,7 +69,7 @@ def edge_sharpness(topology: Topology, creases) -> np.ndarray:
         bad = np.flatnonzero(~(values >= 0))
         if bad.size:
             raise ParameterError(f"crease sharpness must be >= 0 (inf allowed), got {float(values[bad[0]])!r} for edge {pairs[bad[0]].tolist()}")
-        idx = edge_lookup(topology, pairs)
+        idx = topology.find_edges(pairs)
         missing = np.flatnonzero(idx < 0)
         if missing.size:
             raise MeshTopologyError(f"crease edge {pairs[missing[0]].tolist()} is not an edge of the mesh")

@@ -13,6 +13,7 @@ import scipy.sparse as sp
 
 from ..errors import MeshTopologyError
 from ..mesh.topology import Topology
+from .split import child_topology
 from .masks import csr, diag, edge_blend, midpoint_matrix, neighbor_matrix, vertex_point_matrix
 
 
@@ -57,7 +58,22 @@ def refine(t: Topology, edge_s: np.ndarray, vertex_s: np.ndarray):
         ],
         axis=1,
     ).reshape(-1)
-    child = Topology(V + E, faces, np.arange(4 * t.n_faces + 1) * 3, check=False)
+    # child half-edges per triangle T (12 T + k): corner triangles at a, b, c then the middle one
+    T = 12 * np.arange(t.n_faces)
+    local_out, local_in = np.array([0, 4, 8]), np.array([3, 7, 2])
+    i = t.corner_index
+    out_he = T[t.corner_face] + local_out[i]
+    in_he = T[t.corner_face] + local_in[i]
+    inner_edges = np.stack(
+        [np.sort(np.column_stack([e[:, 0], e[:, 2]]), axis=1),
+         np.sort(np.column_stack([e[:, 0], e[:, 1]]), axis=1),
+         np.sort(np.column_stack([e[:, 2], e[:, 1]]), axis=1)],
+        axis=1,
+    ).reshape(-1, 2)
+    inner_pairs = np.stack(
+        [np.column_stack([T + 1, T + 11]), np.column_stack([T + 5, T + 9]), np.column_stack([T + 6, T + 10])], axis=1
+    ).reshape(-1, 2)
+    child = child_topology(t, V + E, faces, np.arange(4 * t.n_faces + 1) * 3, out_he, in_he, inner_edges, inner_pairs)
 
     sharp = np.flatnonzero(edge_s > 0)
     pairs = np.concatenate(

@@ -19,7 +19,7 @@ from ..errors import MeshTopologyError, ParameterError
 from ..mesh.polymesh import PolyMesh
 from ..mesh.topology import Topology
 from . import catmull_clark, doo_sabin, loop
-from .creases import child_sharpness, edge_lookup, edge_sharpness, vertex_sharpness
+from .creases import child_sharpness, edge_sharpness, vertex_sharpness
 
 __all__ = ["SCHEMES", "Refinement", "subdivide", "subdivision_matrix"]
 
@@ -97,7 +97,7 @@ class Refinement:
             child, S, pairs, parent_s, child_vertex_s = module.refine(topo, edge_s, vertex_s)
             child_edge_s = np.zeros(child.n_edges)
             if len(pairs):
-                child_edge_s[edge_lookup(child, pairs)] = child_sharpness(parent_s)
+                child_edge_s[child.find_edges(pairs)] = child_sharpness(parent_s)
             child_edge_s[child.boundary_edges] = np.inf
             topo, edge_s, vertex_s = child, child_edge_s, child_vertex_s
             self.topologies.append(topo)
