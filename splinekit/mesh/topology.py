@@ -179,7 +179,8 @@ class Topology:
         n = max(self.n_vertices, 1)
         q = np.minimum(pairs[:, 0], pairs[:, 1]) * n + np.maximum(pairs[:, 0], pairs[:, 1])
         pos = np.clip(np.searchsorted(keys, q), 0, keys.size - 1)
-        return np.where(keys[pos] == q, order[pos], -1)
+        valid = ((pairs >= 0) & (pairs < self.n_vertices)).all(axis=1)
+        return np.where(valid & (keys[pos] == q), order[pos], -1)
 
     @property
     def halfedge_edge(self) -> np.ndarray:

@@ -12,6 +12,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from ..mesh.topology import Topology
+from .creases import child_sharpness
 from .split import child_topology
 from .masks import csr, diag, edge_blend, midpoint_matrix, neighbor_matrix, vertex_point_matrix
 
@@ -61,5 +62,5 @@ def refine(t: Topology, edge_s: np.ndarray, vertex_s: np.ndarray):
     pairs = np.concatenate(
         [np.column_stack([t.edges[sharp, 0], V + sharp]), np.column_stack([V + sharp, t.edges[sharp, 1]])]
     )
-    child_vertex_s = np.concatenate([vertex_s, np.zeros(child.n_vertices - V)])
+    child_vertex_s = np.concatenate([child_sharpness(vertex_s), np.zeros(child.n_vertices - V)])
     return child, S, pairs, np.tile(edge_s[sharp], 2), child_vertex_s

@@ -61,7 +61,8 @@ class Refinement:
     creases : edge sharpness, see :func:`splinekit.subdiv.creases.edge_sharpness`
     corners : vertex sharpness, ``{vertex: sharpness}`` or ``(V,)``
     boundary : ``"edge-and-corner"`` (default; boundary corners with one face
-        are interpolated) or ``"edge-only"``
+        are interpolated) or ``"edge-only"`` (Catmull-Clark and Loop; Doo-Sabin
+        always keeps a corner between two boundary edges in place)
 
     Attributes
     ----------
@@ -85,6 +86,9 @@ class Refinement:
             raise ParameterError(
                 f"{levels} levels of {self.scheme} would make about {expected:,} faces, more than {MAX_FACES:,}"
             )
+        if self.scheme == "loop" and not (topo.face_sizes == 3).all():
+            f = int(np.flatnonzero(topo.face_sizes != 3)[0])
+            raise MeshTopologyError(f"Loop subdivision needs triangles; face {f} has {int(topo.face_sizes[f])} vertices")
         module = SCHEMES[self.scheme]
         edge_s = edge_sharpness(topo, creases)
         vertex_s = vertex_sharpness(topo, corners, boundary)

@@ -166,6 +166,7 @@ class SubdivisionSurface:
         refinements, an approximation whose error halves per level.
         """
         self._check_masks()
+        levels = as_int(levels, "levels", minimum=0)
         if self.mesh.vertices.shape[1] != 3:
             raise ParameterError("limit normals need 3-D vertices")
         V0 = self.mesh.n_vertices
@@ -175,7 +176,6 @@ class SubdivisionSurface:
         n = np.cross(T1 @ X, T2 @ X)[:V0]
         ok = ok[:V0].copy()
         if not ok.all():
-            levels = as_int(levels, "levels", minimum=0)
             fine = self.refinement(self._mask_level + levels)
             t = fine.topology
             L = limit_matrix(t, fine.edge_sharpness[-1], fine.vertex_sharpness[-1], self.scheme)
@@ -225,6 +225,8 @@ class SubdivisionSurface:
         base = self._eval_base_level
         t0 = self._level_data(base)[0]
         face = np.asarray(face)
+        if face.size == 0:
+            face = face.astype(np.int64)
         if face.dtype.kind not in "iu":
             raise ParameterError("face must hold integer face indices")
         face = face.astype(np.int64).ravel()
