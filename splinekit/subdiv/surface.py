@@ -32,7 +32,7 @@ from ..errors import DomainError, MeshTopologyError, ParameterError
 from ..mesh.polymesh import PolyMesh
 from ..mesh.topology import Topology
 from .creases import SMOOTH, vertex_rules
-from .limit import limit_matrix, tangent_matrices
+from .limit import crease_normals, limit_matrix, tangent_matrices
 from .refiner import Refinement, _scheme
 
 __all__ = ["SubdivisionSurface", "regular_faces", "patch_indices", "BSPLINE_TO_BEZIER"]
@@ -160,10 +160,13 @@ class SubdivisionSurface:
         """Unit limit normals at the control vertices ``(V, 3)``.
 
         Smooth and dart vertices: exact, from the tangent masks. Crease,
-        boundary and corner vertices (where the surface may have two normals
-        or tangent masks would need eigen-analysis): the area-weighted normal
-        of the limit-point fan around the vertex after ``levels`` further
-        refinements, an approximation whose error halves per level.
+        boundary and corner vertices: exact per sector between sharp edges
+        (crease tangent and the across-tangent eigenvector of the sector's
+        subdivision map, see :func:`splinekit.subdiv.limit.crease_normals`);
+        where the surface has several sectors (an interior crease, a corner)
+        the normalized sum of the sector normals. Any vertex neither covers
+        (none in a manifold mesh) gets the area-weighted normal of its
+        limit-point fan after ``levels`` further refinements.
         """
         self._check_masks()
         levels = as_int(levels, "levels", minimum=0)
@@ -172,9 +175,15 @@ class SubdivisionSurface:
         V0 = self.mesh.n_vertices
         r = self.refinement(self._mask_level)
         X = r.apply(self.mesh.vertices)
-        T1, T2, ok = tangent_matrices(r.topology, r.edge_sharpness[-1], r.vertex_sharpness[-1], self.scheme)
+        t, es, vs = r.topology, r.edge_sharpness[-1], r.vertex_sharpness[-1]
+        T1, T2, ok = tangent_matrices(t, es, vs, self.scheme)
         n = np.cross(T1 @ X, T2 @ X)[:V0]
         ok = ok[:V0].copy()
+        if not ok.all():
+            cn, covered = crease_normals(t, X, es, vs, self.scheme)
+            use = ~ok & covered[:V0]
+            n[use] = cn[:V0][use]
+            ok |= covered[:V0]
         if not ok.all():
             fine = self.refinement(self._mask_level + levels)
             t = fine.topology
