@@ -13,8 +13,11 @@ neighbourhood. Other quads are refined (the query descends into the quadrant
 holding it) until it lands in such a patch; the irregular area shrinks 4x
 per level. A query still irregular after ``max_level`` levels (within
 ``2**-max_level`` of an extraordinary vertex or a crease) is evaluated on the
-bilinear interpolant of the sub-face's corner limit points, an error of order
-the squared sub-face size (measured in the tests). The refinement is global
+sub-face's bicubic Coons patch, the same patch :meth:`to_bsplines` makes: it
+interpolates the exact limit points at the sub-face's corners and edge
+midpoints and shares its edges with the exact neighbouring patches, so the
+evaluated surface is continuous; its error shrinks with the sub-face size
+(measured in the tests). The refinement is global
 (every face of the mesh), so ``max_level`` is capped to keep the finest level
 under 4 million faces; exact evaluation by Stam's eigen-analysis, which needs
 no refinement, is not implemented yet.
@@ -28,6 +31,7 @@ from functools import cached_property
 import numpy as np
 
 from .._validate import as_float_array, as_int
+from ..basis.bernstein import all_bernstein
 from ..errors import DomainError, MeshTopologyError, ParameterError
 from ..mesh.polymesh import PolyMesh
 from ..mesh.topology import Topology
@@ -274,7 +278,7 @@ class SubdivisionSurface:
             if todo.size == 0:
                 break
             if level == base + max_level:
-                p, ds, dt = _eval_bilinear_limit(self, level, t, f, s, w)
+                p, ds, dt = _eval_coons(self, level, t, X, regular, f, s, w)
                 P[todo] = p
                 Du[todo] = ds * J[:, 0, 0, None] + dt * J[:, 1, 0, None]
                 Dv[todo] = ds * J[:, 0, 1, None] + dt * J[:, 1, 1, None]
@@ -418,15 +422,15 @@ def _corner_limits(surface, level):
     return cache[level]
 
 
-def _eval_bilinear_limit(surface, level, t, faces, u, v):
-    """Bilinear interpolation of the corner limit points of quads (the fallback)."""
-    L = _corner_limits(surface, level)
-    c = t.face_offsets[faces][:, None] + np.arange(4)[None, :]
-    q = L[t.face_indices[c]]  # (m, 4, dim) corners at (0,0), (1,0), (1,1), (0,1)
-    uu, vv = u[:, None], v[:, None]
-    p = (1 - uu) * (1 - vv) * q[:, 0] + uu * (1 - vv) * q[:, 1] + uu * vv * q[:, 2] + (1 - uu) * vv * q[:, 3]
-    du = (1 - vv) * (q[:, 1] - q[:, 0]) + vv * (q[:, 2] - q[:, 3])
-    dv = (1 - uu) * (q[:, 3] - q[:, 0]) + uu * (q[:, 2] - q[:, 1])
+def _eval_coons(surface, level, t, X, regular, faces, u, v):
+    """Points and partials of the Coons patches of irregular quads (the fallback
+    of :meth:`SubdivisionSurface.evaluate`, the same patches as ``to_bsplines``)."""
+    nets = _coons_nets(surface, level, t, X, regular, faces)  # (m, 4, 4, dim)
+    Bu = all_bernstein(3, u, order=1)  # (2, 4, m)
+    Bv = all_bernstein(3, v, order=1)
+    p = np.einsum("am,bm,mabd->md", Bu[0], Bv[0], nets)
+    du = np.einsum("am,bm,mabd->md", Bu[1], Bv[0], nets)
+    dv = np.einsum("am,bm,mabd->md", Bu[0], Bv[1], nets)
     return p, du, dv
 
 
