@@ -107,6 +107,17 @@ class PolyMesh:
         obj._init(vertices, topology)
         return obj
 
+    @classmethod
+    def _adopt(cls, vertices: np.ndarray, topology: Topology):
+        """Like :meth:`from_topology`, but takes ownership of ``vertices`` (a fresh float64 array
+        nobody else holds) instead of copying it; the array becomes read-only."""
+        V = np.ascontiguousarray(vertices, dtype=np.float64)
+        V.setflags(write=False)
+        obj = object.__new__(cls)
+        object.__setattr__(obj, "_vertices", V)
+        object.__setattr__(obj, "topology", topology)
+        return obj
+
     def with_vertices(self, vertices):
         """The same connectivity with new coordinates ``(n, dim)`` (checked)."""
         V = as_float_array(vertices, "vertices", MeshTopologyError)
@@ -160,7 +171,7 @@ class PolyMesh:
         """``(F, k)`` int array when all faces have k sides, else a list of index arrays."""
         t = self.topology
         if t.is_uniform:
-            k = int(t.face_sizes[0]) if t.n_faces else 3
+            k = int(t.face_offsets[1] - t.face_offsets[0]) if t.n_faces else 3
             out = t.face_indices.reshape(t.n_faces, k)
             out.setflags(write=False)
             return out

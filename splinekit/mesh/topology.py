@@ -40,14 +40,34 @@ class Topology:
         self.face_offsets = np.ascontiguousarray(face_offsets, dtype=np.int64)
         self.face_indices.setflags(write=False)
         self.face_offsets.setflags(write=False)
-        if edge_table is not None:
-            # a refinement knows its child edges: skip the sort that finds them
-            edges, halfedge_edge, edge_halfedges = edge_table
-            self.__dict__["_edge_table"] = (np.asarray(edges, dtype=np.int64), np.asarray(halfedge_edge, dtype=np.int64))
-            self.__dict__["_edge_halfedge_pairs"] = (edge_halfedges[:, 0].copy(), edge_halfedges[:, 1].copy())
+        self._edge_builder = None
+        if callable(edge_table):
+            # built on first use (a refinement's finest level: most callers never ask for edges)
+            self._edge_builder = edge_table
+        elif edge_table is not None:
+            self._set_edge_table(*edge_table)
         if check:
             self._check_faces()
             self._check_edges()
+
+    def _set_edge_table(self, edges, halfedge_edge, edge_halfedges):
+        # a refinement knows its child edges: skip the sort that finds them
+        self.__dict__["_edge_table"] = (np.asarray(edges, dtype=np.int64), np.asarray(halfedge_edge, dtype=np.int64))
+        if isinstance(edge_halfedges, tuple):
+            h0, h1 = edge_halfedges
+            pairs = (np.asarray(h0, dtype=np.int64), np.asarray(h1, dtype=np.int64))
+        else:
+            pairs = (edge_halfedges[:, 0].copy(), edge_halfedges[:, 1].copy())
+        self.__dict__["_edge_halfedge_pairs"] = pairs
+
+    def _build_edges(self) -> bool:
+        """Run the deferred edge-table builder, if any; True when it did."""
+        builder = self.__dict__.get("_edge_builder")
+        if builder is None:
+            return False
+        self._set_edge_table(*builder(self))
+        self._edge_builder = None
+        return True
 
     # -- validation ---------------------------------------------------------------------
     def _check_faces(self):
@@ -144,11 +164,15 @@ class Topology:
     @property
     def is_uniform(self) -> bool:
         """All faces have the same number of vertices."""
+        if self.__dict__.get("_uniform_size"):  # known triangles or quads (a refined level)
+            return True
         return self.n_faces == 0 or bool((self.face_sizes == self.face_sizes[0]).all())
 
     # -- edges ----------------------------------------------------------------------------
     @cached_property
     def _edge_table(self):
+        if self._build_edges():
+            return self.__dict__["_edge_table"]
         a, b = self.halfedge_src, self.halfedge_dst
         lo, hi = np.minimum(a, b), np.maximum(a, b)
         key = lo * max(self.n_vertices, 1) + hi
@@ -194,6 +218,8 @@ class Topology:
     @cached_property
     def _edge_halfedge_pairs(self):
         """``(h0, h1)`` ``(E,)`` each: the half-edges of every edge, ``h1 = -1`` on the boundary."""
+        if self._build_edges():
+            return self.__dict__["_edge_halfedge_pairs"]
         E = self.n_edges
         order = np.argsort(self.halfedge_edge, kind="stable")
         first = np.searchsorted(self.halfedge_edge[order], np.arange(E), side="left")

@@ -11,6 +11,7 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
+from ..basis.jit import subdiv_kernels
 from ..mesh.topology import Topology
 from .creases import child_sharpness
 from .split import child_topology
@@ -23,6 +24,18 @@ def face_point_matrix(t: Topology) -> sp.csr_matrix:
 
 
 def refine(t: Topology, edge_s: np.ndarray, vertex_s: np.ndarray):
+    """Returns ``(child topology, S (V + E + F, V) csr, child crease pairs (k, 2), their parent
+    sharpness (k,), child vertex sharpness)``; large meshes use the compiled kernels
+    (:mod:`splinekit.subdiv._compiled`), which give the same outputs as :func:`refine_numpy`."""
+    K = subdiv_kernels(t.n_halfedges)
+    if K is not None:
+        from . import _compiled
+
+        return _compiled.refine(K, "catmull-clark", t, edge_s, vertex_s)
+    return refine_numpy(t, edge_s, vertex_s)
+
+
+def refine_numpy(t: Topology, edge_s: np.ndarray, vertex_s: np.ndarray):
     """Returns ``(child topology, S (V + E + F, V) csr, child crease pairs (k, 2), their parent
     sharpness (k,), child vertex sharpness)``."""
     V, E, F = t.n_vertices, t.n_edges, t.n_faces

@@ -12,6 +12,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from ..errors import MeshTopologyError
+from ..basis.jit import subdiv_kernels
 from ..mesh.topology import Topology
 from .creases import child_sharpness
 from .split import child_topology
@@ -27,6 +28,25 @@ def loop_beta(n: np.ndarray) -> np.ndarray:
 
 
 def refine(t: Topology, edge_s: np.ndarray, vertex_s: np.ndarray):
+    """Returns ``(child topology, S (V + E, V) csr, child crease pairs (k, 2), their parent
+    sharpness (k,), child vertex sharpness)``; large meshes use the compiled kernels
+    (:mod:`splinekit.subdiv._compiled`), which give the same outputs as :func:`refine_numpy`."""
+    _require_triangles(t)
+    K = subdiv_kernels(4 * t.n_faces)
+    if K is not None:
+        from . import _compiled
+
+        return _compiled.refine(K, "loop", t, edge_s, vertex_s)
+    return refine_numpy(t, edge_s, vertex_s)
+
+
+def _require_triangles(t: Topology):
+    if not (t.face_sizes == 3).all():
+        f = int(np.flatnonzero(t.face_sizes != 3)[0])
+        raise MeshTopologyError(f"Loop subdivision needs triangles; face {f} has {int(t.face_sizes[f])} vertices")
+
+
+def refine_numpy(t: Topology, edge_s: np.ndarray, vertex_s: np.ndarray):
     """Returns ``(child topology, S (V + E, V) csr, child crease pairs (k, 2), their parent
     sharpness (k,), child vertex sharpness)``."""
     if not (t.face_sizes == 3).all():

@@ -18,7 +18,8 @@ from .._validate import as_float_array, as_int
 from ..errors import MeshTopologyError, ParameterError
 from ..mesh.polymesh import PolyMesh
 from ..mesh.topology import Topology
-from . import catmull_clark, doo_sabin, loop
+from ..basis.jit import subdiv_kernels
+from . import _compiled, catmull_clark, doo_sabin, loop
 from .creases import child_sharpness, edge_sharpness, vertex_sharpness
 
 __all__ = ["SCHEMES", "Refinement", "subdivide", "subdivision_matrix"]
@@ -63,15 +64,32 @@ class Refinement:
     boundary : ``"edge-and-corner"`` (default; boundary corners with one face
         are interpolated) or ``"edge-only"`` (Catmull-Clark and Loop; Doo-Sabin
         always keeps a corner between two boundary edges in place)
+    keep_levels : bool
+        Keep every level's topology, stencil and sharpness (default). With
+        ``False`` only the input and the finest level are kept, no stencil
+        is stored (:meth:`apply` and :attr:`matrix` are unavailable) and,
+        when ``mesh`` is a PolyMesh, its vertices are refined level by level
+        into :attr:`vertices`; this is what :func:`subdivide` uses, and it
+        needs far less memory.
 
     Attributes
     ----------
-    topologies : list of Topology, ``levels + 1`` entries (the input first)
+    topologies : list of Topology, ``levels + 1`` entries (the input first);
+        ``[input, finest]`` with ``keep_levels=False``
     stencils : list of CSR matrices; ``stencils[k]`` maps level k to level k + 1
-    edge_sharpness : list of per-edge sharpness arrays, one per level
+        (empty with ``keep_levels=False``)
+    edge_sharpness : list of per-edge sharpness arrays, one per level (input and
+        finest with ``keep_levels=False``; likewise ``vertex_sharpness``)
+    vertices : refined vertices of a PolyMesh input with ``keep_levels=False``, else None
+
+    Large Catmull-Clark and Loop levels are built by compiled kernels
+    (:mod:`splinekit.subdiv._compiled`): the same topologies and sharpness,
+    stencils equal to rounding (1e-15); ``SPLINEKIT_NUMBA=0`` forces the numpy
+    path.
     """
 
-    def __init__(self, mesh, scheme: str, levels: int = 1, creases=None, corners=None, boundary: str = "edge-and-corner"):
+    def __init__(self, mesh, scheme: str, levels: int = 1, creases=None, corners=None, boundary: str = "edge-and-corner",
+                 keep_levels: bool = True):
         self.scheme = _scheme(scheme)
         levels = as_int(levels, "levels", minimum=0)
         if levels > MAX_LEVELS:
@@ -93,25 +111,66 @@ class Refinement:
         edge_s = edge_sharpness(topo, creases)
         vertex_s = vertex_sharpness(topo, corners, boundary)
         self.boundary = boundary
+        self.keep_levels = keep = bool(keep_levels)
         self.topologies = [topo]
         self.stencils = []
         self.edge_sharpness = [edge_s]
         self.vertex_sharpness = [vertex_s]
-        for _ in range(levels):
-            child, S, pairs, parent_s, child_vertex_s = module.refine(topo, edge_s, vertex_s)
-            child_edge_s = np.zeros(child.n_edges)
-            if len(pairs):
-                child_edge_s[child.find_edges(pairs)] = child_sharpness(parent_s)
-            child_edge_s[child.boundary_edges] = np.inf
-            topo, edge_s, vertex_s = child, child_edge_s, child_vertex_s
-            self.topologies.append(topo)
-            self.stencils.append(S)
-            self.edge_sharpness.append(edge_s)
-            self.vertex_sharpness.append(vertex_s)
+        self._levels = levels
+        self.vertices = None
+        X = None
+        if not keep and isinstance(mesh, PolyMesh):
+            X = mesh.vertices.reshape(topo.n_vertices, -1)
+        for level in range(levels):
+            K = None
+            if self.scheme in ("catmull-clark", "loop"):
+                K = subdiv_kernels(_compiled.child_face_count(self.scheme, topo))
+            if K is not None:
+                # compiled: S only when kept, S @ X without S, the finest level's edges on first use
+                step = _compiled.Level(K, self.scheme, topo, edge_s, vertex_s)
+                topo = None  # unless kept, the parent goes as soon as the step has what it needs
+                S = step.stencil() if keep else None
+                if X is not None:
+                    X = step.apply(X)
+                step.release_rows()
+                topo = step.child(lazy=level == levels - 1)
+                n_inner = step.n_inner_edges
+                del step
+                # rebinding lets the parent's sharpness go (unless kept) before the next array
+                edge_s = child_edge_s = _compiled.child_edge_sharpness(edge_s, n_inner)
+                vertex_s = child_vertex_s = _compiled.child_vertex_sharpness(vertex_s, topo.n_vertices)
+            else:
+                refine = getattr(module, "refine_numpy", module.refine)
+                child, S, pairs, parent_s, child_vertex_s = refine(topo, edge_s, vertex_s)
+                child_edge_s = np.zeros(child.n_edges)
+                if len(pairs):
+                    child_edge_s[child.find_edges(pairs)] = child_sharpness(parent_s)
+                child_edge_s[child.boundary_edges] = np.inf
+                if X is not None:
+                    X = S @ X
+                topo = child
+            edge_s, vertex_s = child_edge_s, child_vertex_s
+            if keep:
+                self.topologies.append(topo)
+                self.stencils.append(S)
+                self.edge_sharpness.append(edge_s)
+                self.vertex_sharpness.append(vertex_s)
+            S = None
+        if not keep:
+            if levels:
+                self.topologies.append(topo)
+                self.edge_sharpness.append(edge_s)
+                self.vertex_sharpness.append(vertex_s)
+            if X is not None:
+                self.vertices = X.reshape((X.shape[0],) + mesh.vertices.shape[1:])
 
     @property
     def levels(self) -> int:
-        return len(self.stencils)
+        return self._levels
+
+    def _require_stencils(self):
+        if not self.keep_levels and self._levels:
+            raise ParameterError("this Refinement was made with keep_levels=False: its stencils were not kept")
 
     @property
     def topology(self) -> Topology:
@@ -121,6 +180,7 @@ class Refinement:
     @cached_property
     def matrix(self) -> sp.csr_matrix:
         """Composed ``(V_L, V_0)`` stencil ``S_L @ ... @ S_1``."""
+        self._require_stencils()
         M = sp.identity(self.topologies[0].n_vertices, format="csr")
         for S in self.stencils:
             M = S @ M
@@ -133,6 +193,7 @@ class Refinement:
         when ``composed`` (cheapest when the same refinement serves many
         frames once :attr:`matrix` is built).
         """
+        self._require_stencils()
         X = as_float_array(data, "data")
         n0 = self.topologies[0].n_vertices
         if X.ndim == 0 or X.shape[0] != n0:
@@ -155,7 +216,11 @@ def subdivide(mesh: PolyMesh, scheme: str, levels: int = 1, creases=None, corner
     """Subdivide ``mesh`` ``levels`` times; see :class:`Refinement` for the arguments."""
     if not isinstance(mesh, PolyMesh):
         raise ParameterError(f"subdivide expects a PolyMesh, got {type(mesh).__name__}")
-    return Refinement(mesh, scheme, levels, creases, corners, boundary).mesh(mesh.vertices)
+    if levels == 0:
+        return Refinement(mesh, scheme, levels, creases, corners, boundary).mesh(mesh.vertices)
+    # refine the vertices level by level and keep only the finest level: far less memory
+    r = Refinement(mesh, scheme, levels, creases, corners, boundary, keep_levels=False)
+    return PolyMesh._adopt(r.vertices, r.topology)
 
 
 def subdivision_matrix(mesh, scheme: str, levels: int = 1, creases=None, corners=None, boundary: str = "edge-and-corner"):
