@@ -5,7 +5,9 @@ layer does:
 
 - an edge of sharpness ``s >= 1`` is subdivided with the sharp (midpoint)
   rule, ``0 < s < 1`` blends sharp and smooth rules with weight ``s``; each
-  level its child edges get ``max(s - 1, 0)`` (uniform decrement);
+  level its child edges get ``max(s - 1, 0)`` (uniform decrement) or, with
+  ``crease_method="chaikin"``, the decrement of the sharpness averaged with
+  the neighbouring crease edges (:func:`chaikin_half_sharpness`);
 - a vertex's rule comes from its own sharpness and the number of incident
   sharp edges: smooth (0), dart (1, smooth mask), crease (2), corner (3 or more,
   or a sharp vertex);
@@ -27,7 +29,18 @@ from .._validate import as_float_array
 from ..errors import MeshTopologyError, ParameterError
 from ..mesh.topology import Topology
 
-__all__ = ["SMOOTH", "DART", "CREASE", "CORNER", "edge_sharpness", "vertex_sharpness", "vertex_rules", "BOUNDARY_MODES"]
+__all__ = [
+    "SMOOTH",
+    "DART",
+    "CREASE",
+    "CORNER",
+    "BOUNDARY_MODES",
+    "CREASE_METHODS",
+    "edge_sharpness",
+    "vertex_sharpness",
+    "vertex_rules",
+    "chaikin_half_sharpness",
+]
 
 SMOOTH, DART, CREASE, CORNER = 0, 1, 2, 3
 BOUNDARY_MODES = ("edge-and-corner", "edge-only")
@@ -137,6 +150,37 @@ def transition_weights(topology: Topology, edge_s: np.ndarray, vertex_s: np.ndar
     with np.errstate(invalid="ignore", divide="ignore"):
         w = np.where(count > 0, total / np.maximum(count, 1), 0.0)
     return np.minimum(w, 1.0)
+
+
+CREASE_METHODS = ("uniform", "chaikin")
+
+
+def chaikin_half_sharpness(topology: Topology, edge_s: np.ndarray) -> np.ndarray:
+    """Sharpness of the two child halves of every edge under the Chaikin rule
+    (OpenSubdiv's ``CREASE_CHAIKIN``): ``(2E,)``, entry ``2e + k`` for the half
+    at ``edges[e, k]``.
+
+    A semi-sharp edge ``s`` meeting other semi-sharp edges at a vertex is first
+    averaged there, ``3/4 s + 1/4 (mean of the others)``, then decremented, so
+    sharpness varies smoothly along a crease instead of stepping; smooth and
+    infinitely sharp edges, and semi-sharp edges alone at a vertex, decrement
+    as in the uniform rule.
+    """
+    semi = (edge_s > 0) & np.isfinite(edge_s)
+    V = topology.n_vertices
+    ends = topology.edges
+    value = np.where(semi, edge_s, 0.0)
+    total = np.bincount(ends.ravel(), weights=np.repeat(value, 2), minlength=V)
+    count = np.bincount(ends.ravel(), weights=np.repeat(semi.astype(np.float64), 2), minlength=V)
+    out = np.empty(2 * len(edge_s))
+    for k in range(2):
+        x = ends[:, k]
+        others = count[x] - 1
+        averaged = np.where(
+            semi & (others > 0), 0.75 * edge_s + 0.25 * (total[x] - value) / np.maximum(others, 1), edge_s
+        )
+        out[k::2] = child_sharpness(averaged)
+    return out
 
 
 def child_sharpness(s: np.ndarray) -> np.ndarray:

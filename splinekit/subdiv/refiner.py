@@ -20,7 +20,7 @@ from ..mesh.polymesh import PolyMesh
 from ..mesh.topology import Topology
 from ..basis.jit import subdiv_kernels
 from . import _compiled, catmull_clark, doo_sabin, loop
-from .creases import child_sharpness, edge_sharpness, vertex_sharpness
+from .creases import CREASE_METHODS, chaikin_half_sharpness, child_sharpness, edge_sharpness, vertex_sharpness
 
 __all__ = ["SCHEMES", "Refinement", "subdivide", "subdivision_matrix"]
 
@@ -64,6 +64,9 @@ class Refinement:
     boundary : ``"edge-and-corner"`` (default; boundary corners with one face
         are interpolated) or ``"edge-only"`` (Catmull-Clark and Loop; Doo-Sabin
         always keeps a corner between two boundary edges in place)
+    crease_method : ``"uniform"`` (default: sharpness decreases by one per level)
+        or ``"chaikin"`` (semi-sharp sharpness is averaged along the crease first,
+        OpenSubdiv's ``CREASE_CHAIKIN``; Catmull-Clark and Loop)
     keep_levels : bool
         Keep every level's topology, stencil and sharpness (default). With
         ``False`` only the input and the finest level are kept, no stencil
@@ -89,8 +92,13 @@ class Refinement:
     """
 
     def __init__(self, mesh, scheme: str, levels: int = 1, creases=None, corners=None, boundary: str = "edge-and-corner",
-                 keep_levels: bool = True):
+                 keep_levels: bool = True, crease_method: str = "uniform"):
         self.scheme = _scheme(scheme)
+        if crease_method not in CREASE_METHODS:
+            raise ParameterError(f"crease_method must be one of {CREASE_METHODS}, got {crease_method!r}")
+        if crease_method == "chaikin" and self.scheme == "doo-sabin":
+            raise ParameterError("crease_method='chaikin' applies to catmull-clark and loop (edges split in halves)")
+        self.crease_method = crease_method
         levels = as_int(levels, "levels", minimum=0)
         if levels > MAX_LEVELS:
             raise ParameterError(f"levels = {levels} is more than {MAX_LEVELS} (faces grow 4x per level)")
@@ -122,6 +130,11 @@ class Refinement:
         if not keep and isinstance(mesh, PolyMesh):
             X = mesh.vertices.reshape(topo.n_vertices, -1)
         for level in range(levels):
+            halves = None
+            if crease_method == "chaikin":
+                semi = (edge_s > 0) & np.isfinite(edge_s)
+                if semi.any():
+                    halves = chaikin_half_sharpness(topo, edge_s)
             K = None
             if self.scheme in ("catmull-clark", "loop"):
                 K = subdiv_kernels(_compiled.child_face_count(self.scheme, topo))
@@ -149,6 +162,10 @@ class Refinement:
                 if X is not None:
                     X = S @ X
                 topo = child
+            if halves is not None:
+                # both paths number the child halves of parent edge e as 2e, 2e + 1
+                child_edge_s = child_edge_s.copy()
+                child_edge_s[: halves.size] = halves
             edge_s, vertex_s = child_edge_s, child_vertex_s
             if keep:
                 self.topologies.append(topo)
@@ -212,18 +229,20 @@ class Refinement:
         return PolyMesh.from_topology(self.apply(vertices), self.topology)
 
 
-def subdivide(mesh: PolyMesh, scheme: str, levels: int = 1, creases=None, corners=None, boundary: str = "edge-and-corner") -> PolyMesh:
+def subdivide(mesh: PolyMesh, scheme: str, levels: int = 1, creases=None, corners=None, boundary: str = "edge-and-corner",
+              crease_method: str = "uniform") -> PolyMesh:
     """Subdivide ``mesh`` ``levels`` times; see :class:`Refinement` for the arguments."""
     if not isinstance(mesh, PolyMesh):
         raise ParameterError(f"subdivide expects a PolyMesh, got {type(mesh).__name__}")
     if levels == 0:
-        return Refinement(mesh, scheme, levels, creases, corners, boundary).mesh(mesh.vertices)
+        return Refinement(mesh, scheme, levels, creases, corners, boundary, crease_method=crease_method).mesh(mesh.vertices)
     # refine the vertices level by level and keep only the finest level: far less memory
-    r = Refinement(mesh, scheme, levels, creases, corners, boundary, keep_levels=False)
+    r = Refinement(mesh, scheme, levels, creases, corners, boundary, keep_levels=False, crease_method=crease_method)
     return PolyMesh._adopt(r.vertices, r.topology)
 
 
-def subdivision_matrix(mesh, scheme: str, levels: int = 1, creases=None, corners=None, boundary: str = "edge-and-corner"):
+def subdivision_matrix(mesh, scheme: str, levels: int = 1, creases=None, corners=None, boundary: str = "edge-and-corner",
+                       crease_method: str = "uniform"):
     """``(topology, S)``: the finest connectivity and the composed sparse stencil."""
-    r = Refinement(mesh, scheme, levels, creases, corners, boundary)
+    r = Refinement(mesh, scheme, levels, creases, corners, boundary, crease_method=crease_method)
     return r.topology, r.matrix

@@ -100,16 +100,17 @@ class SubdivisionSurface:
     mesh : PolyMesh
         The control mesh (3-D vertices for normals).
     scheme : ``"catmull-clark"``, ``"loop"`` or ``"doo-sabin"``
-    creases, corners, boundary
+    creases, corners, boundary, crease_method
         As for :func:`splinekit.subdivide`.
     """
 
-    def __init__(self, mesh: PolyMesh, scheme: str, creases=None, corners=None, boundary: str = "edge-and-corner"):
+    def __init__(self, mesh: PolyMesh, scheme: str, creases=None, corners=None, boundary: str = "edge-and-corner",
+                 crease_method: str = "uniform"):
         if not isinstance(mesh, PolyMesh):
             raise ParameterError(f"SubdivisionSurface expects a PolyMesh, got {type(mesh).__name__}")
         self.mesh = mesh
         self.scheme = _scheme(scheme)
-        self._options = dict(creases=creases, corners=corners, boundary=boundary)
+        self._options = dict(creases=creases, corners=corners, boundary=boundary, crease_method=crease_method)
         self._refinements: dict[int, Refinement] = {}
         self.refinement(0)  # validates creases, corners, boundary and the scheme's face type
         if self.scheme == "loop" and not mesh.is_triangle_mesh:
