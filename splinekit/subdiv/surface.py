@@ -17,10 +17,12 @@ sub-face's bicubic Coons patch, the same patch :meth:`to_bsplines` makes: it
 interpolates the exact limit points at the sub-face's corners and edge
 midpoints and shares its edges with the exact neighbouring patches, so the
 evaluated surface is continuous; its error shrinks with the sub-face size
-(measured in the tests). The refinement is global
-(every face of the mesh), so ``max_level`` is capped to keep the finest level
-under 4 million faces; exact evaluation by Stam's eigen-analysis, which needs
-no refinement, is not implemented yet.
+(measured in the tests). Only the one-ring neighbourhoods of the irregular
+faces queried are refined (their disjoint union; the limit surface over a face
+depends on nothing else), or the whole mesh when that is smaller, and
+``max_level`` is capped so that the refined union stays under 4 million faces;
+exact evaluation by Stam's eigen-analysis, which needs no refinement, is not
+implemented.
 """
 
 from __future__ import annotations
@@ -256,12 +258,42 @@ class SubdivisionSurface:
             bad = ~((x >= 0) & (x <= 1))
             if bad.any():
                 raise DomainError(f"{name} = {float(x[bad][0])!r} lies outside [0, 1]")
+        P, Du, Dv = self._evaluate(face, u.astype(np.float64), v.astype(np.float64), max_level, base)
+        normals = None
+        if P.shape[1] == 3:
+            nrm = np.cross(Du, Dv)
+            length = np.linalg.norm(nrm, axis=1, keepdims=True)
+            normals = np.divide(nrm, length, out=np.zeros_like(nrm), where=length > 0)
+        return P, Du, Dv, normals
+
+    def _evaluate(self, face, u, v, max_level, base, local=True):
+        """Points and partials; irregular faces of a large mesh are evaluated on
+        the union of their one-ring neighbourhoods (see :func:`_neighbourhoods`)."""
+        t0, X0, regular0, r0 = self._level_data(base)
+        irregular = np.unique(face[~regular0[face]])
+        if local and irregular.size:
+            union = _neighbourhoods(t0, X0, r0, irregular)
+            if union is not None and union[0].n_faces < t0.n_faces:
+                mesh, creases, corners, where = union
+                inner = SubdivisionSurface(mesh, "catmull-clark", creases=creases, corners=corners, boundary="edge-only")
+                dim = self.mesh.vertices.shape[1]
+                P, Du, Dv = np.zeros((face.size, dim)), np.zeros((face.size, dim)), np.zeros((face.size, dim))
+                reg = regular0[face]
+                if reg.any():
+                    p, du, dv = _eval_patches(t0, X0, face[reg], u[reg], v[reg])
+                    P[reg], Du[reg], Dv[reg] = p, du, dv
+                if (~reg).any():
+                    sub = where[np.searchsorted(irregular, face[~reg])]
+                    inner_level = min(max_level, inner._level_budget())
+                    p, du, dv = inner._evaluate(sub, u[~reg], v[~reg], inner_level, 0, local=False)
+                    P[~reg], Du[~reg], Dv[~reg] = p, du, dv
+                return P, Du, Dv
         m = face.size
         dim = self.mesh.vertices.shape[1]
         P = np.zeros((m, dim))
         Du = np.zeros((m, dim))
         Dv = np.zeros((m, dim))
-        f, s, w = face.copy(), u.astype(np.float64).copy(), v.astype(np.float64).copy()
+        f, s, w = face.copy(), u.copy(), v.copy()
         J = np.broadcast_to(np.eye(2), (m, 2, 2)).copy()
         todo = np.arange(m)
         for level in range(base, base + max_level + 1):
@@ -290,12 +322,7 @@ class SubdivisionSurface:
             st = np.einsum("mij,mj->mi", _QUAD_J[q], np.column_stack([s, w])) + _QUAD_C[q]
             s, w = np.clip(st[:, 0], 0, 1), np.clip(st[:, 1], 0, 1)
             J = np.einsum("mij,mjk->mik", _QUAD_J[q], J)
-        normals = None
-        if dim == 3:
-            nrm = np.cross(Du, Dv)
-            length = np.linalg.norm(nrm, axis=1, keepdims=True)
-            normals = np.divide(nrm, length, out=np.zeros_like(nrm), where=length > 0)
-        return P, Du, Dv, normals
+        return P, Du, Dv
 
     # -- conversion -------------------------------------------------------------------------
     def to_bsplines(self, levels: int = 2):
@@ -384,6 +411,42 @@ class SubdivisionSurface:
         face = np.repeat(info["face"][approx], st.shape[0])
         exact = self.evaluate(face, uv[..., 0].ravel(), uv[..., 1].ravel())[0]
         return float(np.linalg.norm(pts.reshape(exact.shape) - exact, axis=1).max())
+
+
+def _neighbourhoods(t: Topology, X: np.ndarray, r: Refinement, faces: np.ndarray):
+    """The disjoint union of the one-ring neighbourhoods (all faces sharing a
+    vertex) of ``faces``, as ``(mesh, edge sharpness, vertex sharpness,
+    face_in_union)``.
+
+    Under Catmull-Clark refinement the limit surface over a face depends only
+    on this neighbourhood, at every level: so refining the (small) union
+    instead of the whole mesh evaluates those faces exactly, to depths the
+    whole mesh could not afford. The union's own borders are outside every
+    queried face's neighbourhood, so their (boundary) rules do not matter.
+    """
+    offsets, vface = t.vertex_faces
+    sizes = t.face_sizes[faces]
+    owner = np.repeat(np.arange(faces.size), sizes)
+    corners = np.repeat(t.face_offsets[faces], sizes) + (np.arange(sizes.sum()) - np.repeat(np.cumsum(sizes) - sizes, sizes))
+    verts = t.face_indices[corners]
+    counts = offsets[verts + 1] - offsets[verts]
+    own = np.repeat(owner, counts)
+    pos = np.repeat(offsets[verts], counts) + (np.arange(counts.sum()) - np.repeat(np.cumsum(counts) - counts, counts))
+    pair = np.unique(own * t.n_faces + vface[pos])
+    own, g = pair // t.n_faces, pair % t.n_faces
+    gs = t.face_sizes[g]
+    cown = np.repeat(own, gs)
+    cpos = np.repeat(t.face_offsets[g], gs) + (np.arange(gs.sum()) - np.repeat(np.cumsum(gs) - gs, gs))
+    keys, new_index = np.unique(cown * t.n_vertices + t.face_indices[cpos], return_inverse=True)
+    vertex = keys % t.n_vertices
+    union_offsets = np.concatenate([[0], np.cumsum(gs)])
+    topo = Topology(keys.size, new_index.ravel(), union_offsets, check=False)
+    mesh = PolyMesh.from_topology(X[vertex], topo)
+    base_edges = t.find_edges(vertex[topo.edges])
+    creases = np.where(base_edges >= 0, r.edge_sharpness[-1][np.maximum(base_edges, 0)], 0.0)
+    corners = r.vertex_sharpness[-1][vertex]
+    where = np.flatnonzero(g == faces[own])
+    return mesh, creases, corners, where
 
 
 def _fan_normals(t: Topology, P: np.ndarray) -> np.ndarray:
