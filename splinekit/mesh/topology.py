@@ -15,7 +15,14 @@ import numpy as np
 
 from ..errors import MeshTopologyError
 
-__all__ = ["Topology"]
+__all__ = ["Topology", "ranges"]
+
+
+def ranges(starts: np.ndarray, counts: np.ndarray) -> np.ndarray:
+    """``concatenate([arange(s, s + c) for s, c in zip(starts, counts)])`` without the loop."""
+    counts = np.asarray(counts, dtype=np.int64)
+    within = np.arange(counts.sum()) - np.repeat(np.cumsum(counts) - counts, counts)
+    return np.repeat(np.asarray(starts, dtype=np.int64), counts) + within
 
 
 class Topology:

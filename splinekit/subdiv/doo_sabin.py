@@ -22,7 +22,7 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
-from ..mesh.topology import Topology
+from ..mesh.topology import Topology, ranges
 from .masks import csr
 
 
@@ -67,7 +67,7 @@ def refine(t: Topology, edge_s: np.ndarray, vertex_s: np.ndarray):
 
     # smooth Doo-Sabin weights: corner c against every corner of its face
     rows = np.repeat(c, k)
-    pos = np.arange(rows.size) - np.repeat(np.cumsum(k) - k, k)
+    pos = ranges(np.zeros(H, dtype=np.int64), k)  # position of each partner corner in its face
     n = k[rows].astype(np.float64)
     d = (pos - t.corner_index[rows]) % k[rows]
     w = np.where(d == 0, (n + 5) / (4 * n), (3 + 2 * np.cos(2 * np.pi * d / n)) / (4 * n))

@@ -36,7 +36,7 @@ from .._validate import as_float_array, as_int
 from ..basis.bernstein import all_bernstein
 from ..errors import DomainError, MeshTopologyError, ParameterError
 from ..mesh.polymesh import PolyMesh
-from ..mesh.topology import Topology
+from ..mesh.topology import Topology, ranges
 from .creases import SMOOTH, vertex_rules
 from .limit import crease_normals, limit_matrix, tangent_matrices
 from .refiner import Refinement, _scheme
@@ -427,16 +427,16 @@ def _neighbourhoods(t: Topology, X: np.ndarray, r: Refinement, faces: np.ndarray
     offsets, vface = t.vertex_faces
     sizes = t.face_sizes[faces]
     owner = np.repeat(np.arange(faces.size), sizes)
-    corners = np.repeat(t.face_offsets[faces], sizes) + (np.arange(sizes.sum()) - np.repeat(np.cumsum(sizes) - sizes, sizes))
+    corners = ranges(t.face_offsets[faces], sizes)
     verts = t.face_indices[corners]
     counts = offsets[verts + 1] - offsets[verts]
     own = np.repeat(owner, counts)
-    pos = np.repeat(offsets[verts], counts) + (np.arange(counts.sum()) - np.repeat(np.cumsum(counts) - counts, counts))
+    pos = ranges(offsets[verts], counts)
     pair = np.unique(own * t.n_faces + vface[pos])
     own, g = pair // t.n_faces, pair % t.n_faces
     gs = t.face_sizes[g]
     cown = np.repeat(own, gs)
-    cpos = np.repeat(t.face_offsets[g], gs) + (np.arange(gs.sum()) - np.repeat(np.cumsum(gs) - gs, gs))
+    cpos = ranges(t.face_offsets[g], gs)
     keys, new_index = np.unique(cown * t.n_vertices + t.face_indices[cpos], return_inverse=True)
     vertex = keys % t.n_vertices
     union_offsets = np.concatenate([[0], np.cumsum(gs)])
