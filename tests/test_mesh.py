@@ -603,3 +603,14 @@ class TestRobustness:
             grid(0, 3)
         assert np.isclose(box(size=2.0).volume, 8.0)
         np.testing.assert_allclose(np.linalg.norm(icosphere(3, 2.5).vertices, axis=1), 2.5, rtol=1e-15)
+
+
+def test_polymesh_pickles_and_copies():
+    import copy
+    import pickle
+
+    from splinekit.mesh import primitives
+
+    m = primitives.torus(5, 4)
+    assert pickle.loads(pickle.dumps(m)) == m
+    assert copy.deepcopy(m) == m

@@ -131,6 +131,10 @@ class PolyMesh:
     def __setattr__(self, name, value):
         raise AttributeError("PolyMesh is immutable; operations return new meshes")
 
+    def __reduce__(self):  # pickling and copy rebuild (and re-check) from the flat arrays
+        t = self.topology
+        return (_from_flat, (np.array(self._vertices), np.array(t.face_indices), np.array(t.face_offsets)))
+
     def __repr__(self):
         t = self.topology
         kind = "empty" if not t.n_faces else f"{int(t.face_sizes[0])}-gons" if t.is_uniform else "mixed faces"
@@ -306,3 +310,7 @@ class PolyMesh:
         from . import geometry
 
         return geometry.volume(self)
+
+
+def _from_flat(vertices, face_indices, face_offsets) -> PolyMesh:
+    return PolyMesh.from_topology(vertices, Topology(len(vertices), face_indices, face_offsets, check=True))
