@@ -28,20 +28,22 @@ def require_ocp():
     return Geom, TColgp, TColStd, gp
 
 
-def _array1_real(values):
+def _array1(values, kind: str):
+    """A 1-based OCC ``TColStd_Array1Of{Real,Integer}`` holding ``values``."""
     _, _, TColStd, _ = require_ocp()
-    arr = TColStd.TColStd_Array1OfReal(1, len(values))
+    cls, cast = (TColStd.TColStd_Array1OfReal, float) if kind == "real" else (TColStd.TColStd_Array1OfInteger, int)
+    arr = cls(1, len(values))
     for i, x in enumerate(values):
-        arr.SetValue(i + 1, float(x))
+        arr.SetValue(i + 1, cast(x))
     return arr
+
+
+def _array1_real(values):
+    return _array1(values, "real")
 
 
 def _array1_int(values):
-    _, _, TColStd, _ = require_ocp()
-    arr = TColStd.TColStd_Array1OfInteger(1, len(values))
-    for i, x in enumerate(values):
-        arr.SetValue(i + 1, int(x))
-    return arr
+    return _array1(values, "int")
 
 
 def _pnt(xyz):
