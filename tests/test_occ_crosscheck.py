@@ -239,6 +239,15 @@ def assert_close(actual, expected, atol, what, case=""):
         f"splinekit {actual[worst]!r}, OCC {expected[worst]!r}\n{case}"
     )
 
+def assert_round_trip_points(back, P, W, net, case):
+    """Control points (and weights, or their absence) survived a trip through OCC."""
+    assert_close(back.control_points, P, ROUND_TRIP_TOL * net, "round-trip control points", case)
+    if W is not None:
+        assert_close(back.weights, W, ROUND_TRIP_TOL * W.max(), "round-trip weights", case)
+    else:
+        assert back.weights is None, case
+
+
 
 def assert_curve_matches(ours, occ: dict, net: float, case: str, what: str):
     """Same degree, knot vector, control points and weights as read back from OCC."""
@@ -376,11 +385,7 @@ def test_curve_round_trip(seed, rational):
         assert back.degree == p, case
         assert back.knots.shape == U.shape, case
         assert_close(back.knots, U, ROUND_TRIP_TOL * (U[-1] - U[0]), "round-trip knots", case)
-        assert_close(back.control_points, P, ROUND_TRIP_TOL * net, "round-trip control points", case)
-        if rational:
-            assert_close(back.weights, W, ROUND_TRIP_TOL * W.max(), "round-trip weights", case)
-        else:
-            assert back.weights is None, case
+        assert_round_trip_points(back, P, W, net, case)
         assert back.almost_equal(curve, ROUND_TRIP_TOL * net), case
 
 
@@ -556,11 +561,7 @@ def test_surface_round_trip(seed, rational):
         assert back.knots_u.shape == ku.shape and back.knots_v.shape == kv.shape, case
         assert_close(back.knots_u, ku, ROUND_TRIP_TOL * (ku[-1] - ku[0]), "round-trip knots_u", case)
         assert_close(back.knots_v, kv, ROUND_TRIP_TOL * (kv[-1] - kv[0]), "round-trip knots_v", case)
-        assert_close(back.control_points, P, ROUND_TRIP_TOL * net, "round-trip control points", case)
-        if rational:
-            assert_close(back.weights, W, ROUND_TRIP_TOL * W.max(), "round-trip weights", case)
-        else:
-            assert back.weights is None, case
+        assert_round_trip_points(back, P, W, net, case)
 
 
 @RATIONAL
@@ -756,11 +757,7 @@ def test_bezier_curve(seed, rational):
     assert own["rational"] == theirs["rational"] == rational, case
     for back in (sk.occ.from_occ(handle), sk.occ.from_occ(h)):
         assert isinstance(back, sk.BezierCurve) and back.degree == p, case
-        assert_close(back.control_points, P, ROUND_TRIP_TOL * net, "round-trip control points", case)
-        if rational:
-            assert_close(back.weights, W, ROUND_TRIP_TOL * W.max(), "round-trip weights", case)
-        else:
-            assert back.weights is None, case
+        assert_round_trip_points(back, P, W, net, case)
 
     # points and derivatives on [0, 1]
     ts = np.concatenate([[0.0, 1.0], rng.uniform(0.0, 1.0, 12)])
@@ -804,11 +801,7 @@ def test_bezier_surface(seed, rational):
     assert own["rational"] == theirs["rational"] == rational, case
     for back in (sk.occ.from_occ(handle), sk.occ.from_occ(h)):
         assert isinstance(back, sk.BezierSurface) and (back.degree_u, back.degree_v) == (pu, pv), case
-        assert_close(back.control_points, P, ROUND_TRIP_TOL * net, "round-trip control points", case)
-        if rational:
-            assert_close(back.weights, W, ROUND_TRIP_TOL * W.max(), "round-trip weights", case)
-        else:
-            assert back.weights is None, case
+        assert_round_trip_points(back, P, W, net, case)
 
     us = np.concatenate([[0.0, 0.0, 1.0, 1.0], rng.uniform(0.0, 1.0, 10)])
     vs = np.concatenate([[0.0, 1.0, 0.0, 1.0], rng.uniform(0.0, 1.0, 10)])
