@@ -860,3 +860,11 @@ def test_messages_are_plain_text():
         with pytest.raises(SplineKitError) as info:
             build()
         assert not re.search(r"np\.\w+\(", str(info.value)), str(info.value)
+
+
+def test_bernstein_far_outside_unit_interval_is_refused():
+    # found by the fuzzer: at t = -2**53 the triangle's denominator (1 - t) + t rounds to 0
+    with raises(DomainError, "too far outside"):
+        bernstein(1, 0, -(2.0**53))
+    # within the limit the extrapolated polynomial is exact: B_0^128(3) = (1 - 3)^128
+    assert bernstein(128, 0, 3.0) == 2.0**128

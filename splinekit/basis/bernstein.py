@@ -22,10 +22,21 @@ def bezier_knots(degree: int) -> np.ndarray:
     return np.concatenate([np.zeros(degree + 1), np.ones(degree + 1)])
 
 
-def _finite(t: np.ndarray) -> np.ndarray:
+def _finite(t: np.ndarray, n: int) -> np.ndarray:
+    """``t`` checked: finite, and close enough to [0, 1] for degree ``n``.
+
+    Outside [0, 1] the triangle extrapolates; its denominators ``(b - t) + (t - a)``
+    lose every digit once ``|t|`` nears 2**53, and the values ``~ (2 |t|)**n``
+    overflow beyond ``0.5 * 10**(300 / n)``, so ``|t|`` is limited to the smaller.
+    """
     if not np.isfinite(t).all():
         bad = float(t[~np.isfinite(t)].ravel()[0])
         raise DomainError(f"t = {bad!r} is not finite")
+    limit = min(1e15, 0.5 * 10 ** (300 / max(n, 1)))
+    far = np.abs(t) > limit
+    if far.any():
+        bad = float(t[far].ravel()[0])
+        raise DomainError(f"t = {bad!r} is too far outside [0, 1] for degree {n} (|t| <= {limit:.3g})")
     return t
 
 
@@ -40,7 +51,7 @@ def all_bernstein(n: int, t, order: int = 0) -> np.ndarray:
     if n > MAX_DEGREE:
         raise DegreeError(f"n = {n} exceeds the largest supported degree {MAX_DEGREE}")
     order = as_order(order)
-    t = _finite(as_float_array(t, "t"))
+    t = _finite(as_float_array(t, "t"), n)
     shape = t.shape
     flat = t.ravel()
     if n == 0:
@@ -64,7 +75,7 @@ def bernstein(n: int, i: int, t) -> np.ndarray:
     if n > MAX_DEGREE:
         raise DegreeError(f"n = {n} exceeds the largest supported degree {MAX_DEGREE}")
     i = as_int(i, "i")
-    t = _finite(as_float_array(t, "t"))
+    t = _finite(as_float_array(t, "t"), n)
     if i < 0 or i > n:
         return np.zeros(t.shape)
     return all_bernstein(n, t)[i]
