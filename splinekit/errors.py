@@ -19,6 +19,11 @@ __all__ = [
     "MeshTopologyError",
     "BackendError",
     "MissingDependencyError",
+    "FittingError",
+    "ConvergenceError",
+    "NotManifoldError",
+    "FileFormatError",
+    "ExportError",
 ]
 
 
@@ -69,3 +74,31 @@ class BackendError(SplineKitError, RuntimeError):
 
 class MissingDependencyError(SplineKitError, ImportError):
     """An optional backend is not installed; the message names the package."""
+
+
+class FittingError(SplineKitError):
+    """Data to interpolate or approximate cannot define the requested fit:
+    coincident consecutive points, too few points for the degree, a singular
+    system. The message names the offending point index."""
+
+
+class ConvergenceError(SplineKitError, RuntimeError):
+    """An iterative method (Newton, an ODE shooting, a knot-adding loop) did
+    not reach its tolerance within its iteration budget; the message gives
+    the residual reached."""
+
+
+class NotManifoldError(MeshTopologyError):
+    """A mesh that must bound a solid (booleans, watertight export) is not a
+    closed, consistently oriented 2-manifold; the message names the first bad
+    edge (its two vertex indices) or vertex."""
+
+
+class FileFormatError(SplineKitError):
+    """A file format is unsupported, or a file being read is malformed; the
+    message names the format or the offending line/byte offset."""
+
+
+class ExportError(SplineKitError, OSError):
+    """A file cannot be written (unwritable folder, a writer failure); the
+    target is left untouched."""
