@@ -46,3 +46,11 @@ def subdiv_kernels(n_faces: int):
     if n_faces < MIN_FACES or not _enabled():
         return None
     return _load("splinekit.subdiv._kernels")
+
+
+def compiled(module: str, n_points: int):
+    """The compiled-kernel module ``module`` (dotted name) when ``n_points``
+    points should use compiled kernels, else None."""
+    if n_points < MIN_POINTS or not _enabled():
+        return None
+    return _load(module)
