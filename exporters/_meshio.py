@@ -1,0 +1,396 @@
+"""Helpers shared by the mesh writers and readers (STL, OBJ, PLY, 3MF, glTF binary).
+
+- formats: the suffix table, :func:`format_of`, and the checks on the mesh handed to a writer;
+- writing: :func:`save` (atomic: a temporary file beside the target, renamed into place; an
+  unwritable folder or a failing write raises :class:`~splinekit.errors.ExportError` and leaves the
+  target untouched), :func:`write_part` (every byte a writer produces goes through it) and the
+  vectorized text formatting (:func:`format_rows`, :func:`format_polygons`);
+- reading: :func:`read_bytes`, :func:`merge_vertices`, :func:`build_mesh`;
+- :func:`export_mesh` / :func:`import_mesh`, which dispatch on the file suffix.
+
+Floats written as text use Python's shortest round-trip ``repr``, so a float64 coordinate read back
+with ``float()`` is bit-for-bit the value that was written.
+"""
+
+from __future__ import annotations
+
+import os
+
+import numpy as np
+
+from splinekit._atomic import atomic_write
+from splinekit.errors import (
+    ExportError,
+    FileFormatError,
+    MeshTopologyError,
+    ParameterError,
+)
+from splinekit.mesh import PolyMesh
+from splinekit.mesh.geometry import triangulate
+from splinekit.mesh.topology import Topology
+
+__all__ = [
+    "SUFFIXES",
+    "build_mesh",
+    "check_mesh",
+    "export_mesh",
+    "finite_or_raise",
+    "format_of",
+    "format_polygons",
+    "format_rows",
+    "import_mesh",
+    "merge_vertices",
+    "read_bytes",
+    "save",
+    "triangles",
+    "write_part",
+]
+
+SUFFIXES = {".stl": "stl", ".obj": "obj", ".ply": "ply", ".3mf": "3mf", ".glb": "glb"}
+"""Suffix -> format name, for :func:`exporters.export_mesh` / :func:`exporters.import_mesh`."""
+
+ROWS_PER_CHUNK = 65_536
+"""Text is formatted and written this many rows at a time: the Python floats of one chunk
+stay small (a 1M-triangle ASCII STL would otherwise hold 12M of them at once)."""
+
+
+# -- formats and meshes -----------------------------------------------------------------------
+def _supported() -> str:
+    return ", ".join(SUFFIXES)
+
+
+def format_of(path, format=None) -> str:
+    """The format name (``"stl"``, ``"obj"``, ``"ply"``, ``"3mf"``, ``"glb"``) of ``path``.
+
+    ``format`` overrides the suffix (with or without the dot, any case). An unknown format raises
+    :class:`~splinekit.errors.FileFormatError` naming it and listing the supported ones.
+    """
+    if format is None:
+        path = _fspath(path)
+        suffix = os.path.splitext(path)[1].lower()
+        if suffix not in SUFFIXES:
+            shown = repr(suffix) if suffix else "no suffix"
+            raise FileFormatError(
+                f"unsupported mesh format {shown} for {os.path.basename(path)!r}; supported: {_supported()}"
+            )
+        return SUFFIXES[suffix]
+    if not isinstance(format, str):
+        raise FileFormatError(f"format must be a string such as 'stl', got {format!r}; supported: {_supported()}")
+    key = "." + format.lower().lstrip(".")
+    if key not in SUFFIXES:
+        raise FileFormatError(f"unsupported mesh format {format!r}; supported: {_supported()}")
+    return SUFFIXES[key]
+
+
+def _fspath(path) -> str:
+    try:
+        path = os.fspath(path)
+    except TypeError:
+        raise ParameterError(f"path must be a str or os.PathLike, got {type(path).__name__}") from None
+    if isinstance(path, bytes):
+        path = os.fsdecode(path)
+    if not path:
+        raise ParameterError("path is empty")
+    return path
+
+
+def check_mesh(mesh, what: str):
+    """``mesh`` if it is a PolyMesh with 3-D vertices, else :class:`ParameterError`."""
+    if not isinstance(mesh, PolyMesh):
+        raise ParameterError(f"{what} needs a splinekit.PolyMesh, got {type(mesh).__name__}")
+    if mesh.vertices.ndim != 2 or mesh.vertices.shape[1] != 3:
+        raise ParameterError(f"{what} needs 3-D vertices, got vertices of shape {mesh.vertices.shape}")
+    return mesh
+
+
+def triangles(mesh) -> np.ndarray:
+    """``(T, 3)`` int64 vertex indices: the faces fan-triangulated from their first corner
+    (:func:`splinekit.mesh.geometry.triangulate`); a triangle mesh's own faces, uncopied."""
+    if mesh.topology.n_faces and mesh.is_triangle_mesh:
+        return mesh.face_indices.reshape(-1, 3)
+    return triangulate(mesh)[0]
+
+
+def triangle_normals(P: np.ndarray, scale: bool = True) -> np.ndarray:
+    """Unit normals ``(T, 3)`` float64 of the triangles ``P`` ``(T, 3, 3)`` (counter-clockwise,
+    right-hand rule); zero for a zero-area triangle (never NaN).
+
+    With ``scale``, each triangle is first scaled by a power of two that brings its largest
+    coordinate near 1 (exact, so the result is the same), and coordinates up to the float64
+    limits neither overflow nor underflow in the cross product; float32 coordinates cannot, so
+    they may skip it.
+    """
+    P = np.asarray(P, dtype=np.float64)
+    if scale:
+        big = np.abs(P).reshape(len(P), -1).max(axis=1) if len(P) else np.zeros(0)
+        P = np.ldexp(P, -np.frexp(big)[1][:, None, None])
+    a = P[:, 1] - P[:, 0]
+    b = P[:, 2] - P[:, 0]
+    n = np.empty((len(P), 3))
+    np.multiply(a[:, 1], b[:, 2], out=n[:, 0])
+    n[:, 0] -= a[:, 2] * b[:, 1]
+    np.multiply(a[:, 2], b[:, 0], out=n[:, 1])
+    n[:, 1] -= a[:, 0] * b[:, 2]
+    np.multiply(a[:, 0], b[:, 1], out=n[:, 2])
+    n[:, 2] -= a[:, 1] * b[:, 0]
+    length = np.sqrt(np.einsum("ij,ij->i", n, n))
+    ok = length > 0  # zero area: a zero vector, never NaN
+    n /= np.where(ok, length, 1.0)[:, None]
+    n[~ok] = 0.0
+    return n
+
+
+MIN_COMPILED_TRIANGLES = 20_000
+"""Binary STL records of at least this many triangles are filled by a numba kernel (one pass, no
+temporaries) when numba is importable and ``SPLINEKIT_NUMBA`` is not ``0``; smaller meshes, and
+every mesh without numba, take the numpy path. Both give the same bytes (the tests compare them):
+the numpy path computes the same float64 normal of the float32 triangle."""
+
+_compiled: dict = {}
+
+
+def stl_fill_kernel(n_triangles: int):
+    """The compiled ``fill(V, tris, out)`` that writes binary STL records, or None (use numpy).
+
+    ``V`` ``(n, 3)`` float64, ``tris`` ``(T, 3)`` int64, ``out`` ``(T, 12)`` float32 (a view of the
+    records: normal then the three corners, all rounded to float32 before the normal is computed,
+    as the numpy path does).
+    """
+    if n_triangles < MIN_COMPILED_TRIANGLES or os.environ.get("SPLINEKIT_NUMBA", "1") == "0":
+        return None
+    if "stl" not in _compiled:
+        try:
+            _compiled["stl"] = _build_stl_kernel()
+        except ImportError:  # numba absent or broken: numpy serves
+            _compiled["stl"] = None
+    return _compiled["stl"]
+
+
+def _build_stl_kernel():
+    from numba import njit
+
+    @njit(cache=True, nogil=True)
+    def fill(V, tris, out):  # pragma: no cover - compiled
+        f0 = np.float32(0.0)
+        for t in range(tris.shape[0]):
+            a, b, c = tris[t, 0], tris[t, 1], tris[t, 2]
+            ax, ay, az = np.float32(V[a, 0]), np.float32(V[a, 1]), np.float32(V[a, 2])
+            bx, by, bz = np.float32(V[b, 0]), np.float32(V[b, 1]), np.float32(V[b, 2])
+            cx, cy, cz = np.float32(V[c, 0]), np.float32(V[c, 1]), np.float32(V[c, 2])
+            # the normal of the float32 triangle, in float64 (float32 coordinates cannot overflow it)
+            ux, uy, uz = np.float64(bx) - ax, np.float64(by) - ay, np.float64(bz) - az
+            vx, vy, vz = np.float64(cx) - ax, np.float64(cy) - ay, np.float64(cz) - az
+            nx = uy * vz - uz * vy
+            ny = uz * vx - ux * vz
+            nz = ux * vy - uy * vx
+            length = np.sqrt(nx * nx + ny * ny + nz * nz)
+            r = out[t]
+            if length > 0 and np.isfinite(length):
+                r[0], r[1], r[2] = nx / length, ny / length, nz / length
+            else:
+                r[0], r[1], r[2] = f0, f0, f0
+            r[3], r[4], r[5] = ax, ay, az
+            r[6], r[7], r[8] = bx, by, bz
+            r[9], r[10], r[11] = cx, cy, cz
+
+    return fill
+
+
+# -- writing ----------------------------------------------------------------------------------
+def write_part(fh, data) -> None:
+    """Write ``data`` (bytes, str encoded as ASCII, or a numpy array's raw bytes) to ``fh``.
+
+    Every writer sends its output through this one function (the tests replace it to fail
+    midway and check that the target survives)."""
+    if isinstance(data, str):
+        data = data.encode("ascii")
+    if isinstance(data, np.ndarray):
+        if data.flags.c_contiguous:
+            data.tofile(fh)  # no copy of a large array
+            return
+        data = data.tobytes()
+    fh.write(data)
+
+
+def save(path, write, what: str) -> str:
+    """Write a file atomically: ``write(fh)`` fills a temporary binary file beside ``path``, which is
+    then renamed onto ``path``. Returns ``path`` as a string.
+
+    A missing or unwritable folder, a ``path`` that is a folder, or an OSError while writing raises
+    :class:`~splinekit.errors.ExportError` (naming ``what`` and the path); in every failure the
+    temporary file is removed and an existing target is left byte-for-byte as it was.
+    """
+    path = _fspath(path)
+    folder = os.path.dirname(os.path.abspath(path))
+    if not os.path.isdir(folder):
+        raise ExportError(f"cannot write {what} {path!r}: the folder {folder!r} does not exist")
+    if os.path.isdir(path):
+        raise ExportError(f"cannot write {what} {path!r}: it is a folder")
+
+    def fill(tmp):
+        with open(tmp, "wb") as fh:
+            write(fh)
+
+    try:
+        return atomic_write(path, fill)
+    except OSError as exc:
+        if isinstance(exc, ExportError):
+            raise
+        reason = exc.strerror or str(exc) or type(exc).__name__
+        raise ExportError(f"cannot write {what} {path!r}: {reason}") from exc
+
+
+def format_rows(template: str, values: np.ndarray, fh) -> None:
+    """Write one ``template % row`` per row of ``values`` ``(n, k)`` to ``fh``.
+
+    The rows are formatted a chunk at a time with one ``%`` over a repeated template (the loop
+    runs in C); ``%r`` in the template gives the shortest round-trip text of a float64.
+    """
+    values = np.asarray(values)
+    n = len(values)
+    for start in range(0, n, ROWS_PER_CHUNK):
+        block = values[start:start + ROWS_PER_CHUNK]
+        write_part(fh, (template * len(block)) % tuple(block.ravel().tolist()))
+
+
+def format_polygons(prefix: str, corner: str, values: np.ndarray, offsets: np.ndarray, fh,
+                    face_values: np.ndarray | None = None) -> None:
+    """Write one line per face: ``prefix`` then the face's corners, each formatted with ``corner``.
+
+    ``values`` ``(H, c)`` holds the ``c`` numbers of each corner (``corner`` has ``c`` ``%``
+    fields), face ``f`` owning rows ``offsets[f]:offsets[f + 1]``; corners are separated by spaces.
+    ``face_values`` ``(F, p)`` fills ``p`` ``%`` fields of ``prefix`` (such as a PLY face's corner
+    count). Faces of any sizes are written in order without a Python loop per face: a per-corner
+    template (prefix on first corners, newline after last ones) is joined in C and applied with
+    one ``%`` per chunk of faces.
+    """
+    offsets = np.asarray(offsets, dtype=np.int64)
+    values = np.asarray(values)
+    if values.ndim == 1:
+        values = values[:, None]
+    c = values.shape[1]
+    n_faces = offsets.size - 1
+    fv = None if face_values is None else np.asarray(face_values).reshape(n_faces, -1 if n_faces else 1)
+    p = 0 if fv is None else fv.shape[1]
+    pieces = np.array([corner + " ", prefix + corner + " ", corner + "\n", prefix + corner + "\n"], dtype=object)
+    for f0 in range(0, n_faces, ROWS_PER_CHUNK):
+        f1 = min(f0 + ROWS_PER_CHUNK, n_faces)
+        h0, h1 = int(offsets[f0]), int(offsets[f1])
+        starts = offsets[f0:f1] - h0
+        first = np.zeros(h1 - h0, dtype=np.int64)
+        first[starts] = 1
+        last = np.zeros(h1 - h0, dtype=np.int64)
+        last[offsets[f0 + 1:f1 + 1] - h0 - 1] = 2
+        template = "".join(pieces[first + last].tolist())
+        block = values[h0:h1]
+        if p:
+            # interleave: the p face values go just before the values of the face's first corner
+            flat = np.empty((h1 - h0) * c + (f1 - f0) * p, dtype=np.result_type(block, fv))
+            face = np.repeat(np.arange(f1 - f0), np.diff(offsets[f0:f1 + 1]))
+            at = (np.arange(h1 - h0) * c + (face + 1) * p)[:, None] + np.arange(c)
+            flat[at] = block
+            flat[(starts * c + np.arange(f1 - f0) * p)[:, None] + np.arange(p)] = fv[f0:f1]
+            block = flat
+        write_part(fh, template % tuple(block.ravel().tolist()))
+
+
+# -- reading ----------------------------------------------------------------------------------
+def read_bytes(path, what: str) -> bytes:
+    """The whole file; a missing or unreadable file raises :class:`FileFormatError` naming it."""
+    path = _fspath(path)
+    try:
+        with open(path, "rb") as fh:
+            return fh.read()
+    except OSError as exc:
+        reason = exc.strerror or str(exc) or type(exc).__name__
+        raise FileFormatError(f"cannot read {what} {path!r}: {reason}") from exc
+
+
+def finite_or_raise(V: np.ndarray, what: str, item: str = "vertex") -> None:
+    """Raise :class:`FileFormatError` naming the first row of ``V`` with a NaN or infinite value."""
+    bad = ~np.isfinite(V).all(axis=1)
+    if bad.any():
+        i = int(np.flatnonzero(bad)[0])
+        raise FileFormatError(f"{what}: {item} {i} has non-finite coordinates {V[i].tolist()}")
+
+
+def row_hash(U: np.ndarray) -> np.ndarray:
+    """A 64-bit hash ``(m,)`` of each row of the ``(m, 3)`` uint64 array ``U`` (multiply-xorshift;
+    integer overflow wraps, as intended)."""
+    h = U[:, 0] * np.uint64(0x9E3779B97F4A7C15)
+    h ^= U[:, 1] * np.uint64(0xC2B2AE3D27D4EB4F)
+    h ^= h >> np.uint64(31)
+    h ^= U[:, 2] * np.uint64(0x165667B19E3779F9)
+    h ^= h >> np.uint64(29)
+    return h
+
+
+def merge_vertices(points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Merge exactly equal rows of ``points`` ``(m, 3)`` float64.
+
+    Returns ``(vertices (n, 3), index (m,))`` with ``points == vertices[index]``; vertices keep
+    the order of their first occurrence. ``-0.0`` and ``0.0`` count as equal.
+
+    Rows are grouped by sorting a 64-bit hash of their bits (one integer sort instead of a
+    row-wise sort, several times faster); every row is then compared with its group's
+    representative, and should two different rows ever share a hash, an exact row sort is used.
+    """
+    P = np.ascontiguousarray(points, dtype=np.float64) + 0.0  # + 0.0 turns -0.0 into 0.0
+    m = len(P)
+    if not m:
+        return P.reshape(0, 3), np.zeros(0, dtype=np.int64)
+    U = P.view(np.uint64)
+    h = row_hash(U)
+    order = np.argsort(h)
+    sorted_h = h[order]
+    new = np.empty(m, dtype=bool)
+    new[0] = True
+    np.not_equal(sorted_h[1:], sorted_h[:-1], out=new[1:])
+    starts = np.flatnonzero(new)
+    group = np.empty(m, dtype=np.int64)
+    group[order] = np.cumsum(new) - 1
+    first = np.minimum.reduceat(order, starts)  # first occurrence of each group
+    if not (U[first][group] == U).all():  # a hash collision: fall back to an exact row sort
+        rows = P.view(np.dtype((np.void, 8 * P.shape[1]))).ravel()
+        _, first, group = np.unique(rows, return_index=True, return_inverse=True)
+        group = group.ravel()
+    by_first = np.argsort(first, kind="stable")  # groups in first-occurrence order
+    rank = np.empty_like(by_first)
+    rank[by_first] = np.arange(by_first.size)
+    return P[first[by_first]], rank[group]
+
+
+def build_mesh(vertices: np.ndarray, face_indices: np.ndarray, face_offsets: np.ndarray, what: str):
+    """A :class:`~splinekit.PolyMesh`; topology problems are re-raised with ``what`` (the file) named."""
+    V = np.ascontiguousarray(vertices, dtype=np.float64)
+    try:
+        topology = Topology(len(V), face_indices, face_offsets, check=True)
+    except MeshTopologyError as exc:
+        raise type(exc)(f"{what}: {exc}") from exc
+    return PolyMesh.from_topology(V, topology)
+
+
+# -- dispatch ---------------------------------------------------------------------------------
+def export_mesh(path, mesh, format=None, **options) -> str:
+    """Write ``mesh`` in the format named by ``path``'s suffix (or by ``format``); returns the path.
+
+    Suffixes: ``.stl`` (binary), ``.obj``, ``.ply`` (binary), ``.3mf``, ``.glb``; ``options`` go to
+    the format's writer (``binary=False`` for ASCII STL or PLY, ``normals=False``, ``name=``,
+    ``unit=``). An unsupported format raises :class:`~splinekit.errors.FileFormatError` naming it and
+    listing the supported ones.
+    """
+    from . import gltf, obj, ply, stl, threemf
+
+    writers = {"stl": stl.export_stl, "obj": obj.export_obj, "ply": ply.export_ply,
+               "3mf": threemf.export_3mf, "glb": gltf.export_glb}
+    return writers[format_of(path, format)](path, mesh, **options)
+
+
+def import_mesh(path, format=None):
+    """Read a mesh file (``.stl``, ``.obj``, ``.ply``, ``.3mf``, ``.glb``, by suffix unless
+    ``format`` is given) into a :class:`~splinekit.PolyMesh`."""
+    from . import gltf, obj, ply, stl, threemf
+
+    readers = {"stl": stl.import_stl, "obj": obj.import_obj, "ply": ply.import_ply,
+               "3mf": threemf.import_3mf, "glb": gltf.import_glb}
+    return readers[format_of(path, format)](path)
