@@ -1,0 +1,152 @@
+#!/usr/bin/env python
+"""STEP export benchmark: splinekit's ``export_step`` against build123d's, in one run.
+
+Run from the repository root::
+
+    python benchmarks/bench_step.py            # 100 faces, several repeats (about 10-20 s)
+    python benchmarks/bench_step.py --quick    # 20 faces
+
+Case: 100 bicubic B-spline faces of 8 x 8 random poles (clamped uniform knots),
+written as separate faces to one AP214 file.
+
+* splinekit: ``exporters.export_step(path, surfaces)``: the timing includes the
+  conversion of every surface to an OCC face, the XCAF document and the
+  full-precision (16-digit) write;
+* splinekit, shapes prebuilt: the same call given the OCC faces, so that only
+  the document and the write are timed;
+* build123d: ``build123d.export_step(Compound(faces), path)`` on the same faces,
+  built once before timing (it writes OCC's default 12 significant digits).
+
+The writers are called in turn, round after round, after one warm-up call each
+(the first STEP write in a process loads OCC's translator, which takes
+seconds); times are medians over the rounds and the ratio is the median of the
+per-round ratios splinekit time / build123d time, so that both writers see the
+same machine load. The target is a ratio of at most 1.5. The script also
+reads both files back with ``import_step`` and reports the largest control
+point difference from the exported surfaces, and prints the import times.
+"""
+
+from __future__ import annotations
+
+import argparse
+import gc
+import os
+import platform
+import statistics
+import sys
+import tempfile
+import time
+
+import numpy as np
+
+sys.path.insert(0, os.path.abspath(os.path.join(os.path.dirname(__file__), os.pardir)))
+
+import splinekit as sk
+from exporters.step import export_step, import_step
+from splinekit.basis.knots import clamped_uniform
+
+TARGET_RATIO = 1.5
+
+
+def interleaved_times(fns: dict, repeats: int) -> dict:
+    """Per-call wall times of each function in ``fns``, called in turn ``repeats`` times.
+
+    One untimed warm-up call each first. Interleaving the calls exposes every
+    writer to the same machine load, so per-round ratios are steadier than
+    ratios of separately measured medians.
+    """
+    for fn in fns.values():
+        fn()
+    times = {name: [] for name in fns}
+    for _ in range(repeats):
+        for name, fn in fns.items():
+            gc.collect()
+            t0 = time.perf_counter()
+            fn()
+            times[name].append(time.perf_counter() - t0)
+    return times
+
+
+def make_faces(count: int, seed: int = 0) -> list:
+    """``count`` bicubic 8 x 8 B-spline surfaces tiled on a grid, with random heights."""
+    rng = np.random.default_rng(seed)
+    U = clamped_uniform(3, 8)
+    side = int(np.ceil(np.sqrt(count)))
+    out = []
+    g = np.linspace(0.0, 10.0, 8)
+    for k in range(count):
+        x0, y0 = 12.0 * (k % side), 12.0 * (k // side)
+        P = np.empty((8, 8, 3))
+        P[..., 0] = x0 + g[:, None]
+        P[..., 1] = y0 + g[None, :]
+        P[..., 2] = rng.uniform(-1.0, 1.0, (8, 8))
+        out.append(sk.BSplineSurface(3, 3, U, U, P))
+    return out
+
+
+def max_pole_difference(surfaces, items) -> float:
+    return max(float(np.abs(s.control_points - it.geometry.control_points).max()) for s, it in zip(surfaces, items))
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--quick", action="store_true", help="20 faces instead of 100")
+    parser.add_argument("--repeats", type=int, default=9)
+    args = parser.parse_args(argv)
+    count = 20 if args.quick else 100
+
+    import build123d as bd
+
+    surfaces = make_faces(count)
+    occ_faces = [sk.occ.to_shape(s) for s in surfaces]
+    b3d_compound = bd.Compound([bd.Face(f) for f in occ_faces])
+
+    print(f"# STEP export: {count} bicubic B-spline faces, 8 x 8 poles each")
+    print(f"python {platform.python_version()}, {platform.machine()}, load average {os.getloadavg()[0]:.2f}")
+    with tempfile.TemporaryDirectory() as tmp:
+        ours_path = os.path.join(tmp, "splinekit.step")
+        shapes_path = os.path.join(tmp, "splinekit_shapes.step")
+        theirs_path = os.path.join(tmp, "build123d.step")
+        export_times = interleaved_times(
+            {
+                "ours": lambda: export_step(ours_path, surfaces),
+                "shapes": lambda: export_step(shapes_path, occ_faces),
+                "b3d": lambda: bd.export_step(b3d_compound, theirs_path),
+            },
+            args.repeats,
+        )
+        import_times = interleaved_times(
+            {"ours": lambda: import_step(ours_path), "b3d": lambda: bd.import_step(theirs_path)},
+            max(1, args.repeats // 2),
+        )
+        diff_ours = max_pole_difference(surfaces, import_step(ours_path))
+        diff_b3d = max_pole_difference(surfaces, import_step(theirs_path))
+        size_ours, size_b3d = os.path.getsize(ours_path), os.path.getsize(theirs_path)
+
+    t_ours, t_shapes, t_b3d = (statistics.median(export_times[k]) for k in ("ours", "shapes", "b3d"))
+    t_imp_ours, t_imp_b3d = (statistics.median(import_times[k]) for k in ("ours", "b3d"))
+    ratio = statistics.median(o / b for o, b in zip(export_times["ours"], export_times["b3d"]))
+    ratio_shapes = statistics.median(o / b for o, b in zip(export_times["shapes"], export_times["b3d"]))
+    rows = [
+        ("splinekit export_step (surfaces)", t_ours, size_ours, diff_ours),
+        ("splinekit export_step (OCC faces prebuilt)", t_shapes, size_ours, diff_ours),
+        ("build123d export_step (faces prebuilt)", t_b3d, size_b3d, diff_b3d),
+    ]
+    print()
+    print("| writer | time | per face | file size | max pole error after import |")
+    print("|---|---:|---:|---:|---:|")
+    for name, t, size, diff in rows:
+        print(f"| {name} | {t * 1e3:.1f} ms | {t / count * 1e6:.0f} us | {size / 1024:.0f} KiB | {diff:.1e} |")
+    print()
+    verdict = "met" if ratio <= TARGET_RATIO else "NOT met"
+    print(
+        f"ratio splinekit / build123d (median over {args.repeats} interleaved rounds): {ratio:.2f} "
+        f"(target <= {TARGET_RATIO}: {verdict}); with prebuilt shapes: {ratio_shapes:.2f}"
+    )
+    print(f"import: splinekit import_step {t_imp_ours * 1e3:.1f} ms (to splinekit surfaces), "
+          f"build123d import_step {t_imp_b3d * 1e3:.1f} ms (to an OCC shape)")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,386 @@
+"""Exact STEP (AP214) export and import through OpenCascade's XCAF translator.
+
+Curves are written as B-spline edges, surfaces as B-spline faces and patch
+sets as sewn shells (solids when they close up): the control points, weights
+and knots go into the file as they are, with no tessellation or refitting.
+Each object is a STEP product carrying its name.
+
+Reals are written with 16 significant digits (OCC's default is 12), so a
+round trip changes a number by at most one rounding to 16 digits.
+
+The file is written atomically: a temporary file in the target folder is
+written, then renamed onto the target; a failed export leaves no temporary
+file behind and any existing target untouched.
+
+OCP is imported inside the functions.
+"""
+
+from __future__ import annotations
+
+import os
+import unicodedata
+from contextlib import contextmanager
+from typing import Any, NamedTuple
+
+from splinekit._atomic import atomic_write
+from splinekit.errors import ExportError, FileFormatError, ParameterError
+from splinekit.interop.occ import from_occ, require_ocp, to_shape
+
+__all__ = ["export_step", "import_step", "StepItem", "STEP_UNITS"]
+
+#: Length units a STEP file can declare: name -> (OCC's ``write.step.unit`` value, metres per unit).
+STEP_UNITS = {
+    "mm": ("MM", 1e-3),
+    "cm": ("CM", 1e-2),
+    "m": ("M", 1.0),
+    "km": ("KM", 1e3),
+    "um": ("UM", 1e-6),
+    "inch": ("INCH", 0.0254),
+    "ft": ("FT", 0.3048),
+}
+
+
+class StepItem(NamedTuple):
+    """One geometry read from a STEP file, with the name of the object it belongs to.
+
+    ``name`` is the STEP product name (``None`` if the file gives none);
+    ``geometry`` is a splinekit surface (one face) or curve (one edge).
+    """
+
+    name: str | None
+    geometry: Any
+
+
+def _unit(unit) -> tuple[str, float]:
+    key = str(unit).strip().lower() if isinstance(unit, str) else None
+    if key not in STEP_UNITS:
+        raise ParameterError(f"unit must be one of {sorted(STEP_UNITS)}, got {unit!r}")
+    return STEP_UNITS[key]
+
+
+def _ocp_step():
+    """The OCP modules this file uses (MissingDependencyError if OCP is absent)."""
+    require_ocp()
+    from OCP import (
+        TDF,
+        IFSelect,
+        Interface,
+        Message,
+        STEPCAFControl,
+        STEPControl,
+        TCollection,
+        TDataStd,
+        TDocStd,
+        XCAFDoc,
+    )
+
+    return IFSelect, Interface, Message, STEPCAFControl, STEPControl, TCollection, TDataStd, TDF, TDocStd, XCAFDoc
+
+
+@contextmanager
+def _occ_settings(step_unit: str | None = None):
+    """Silence OCC's translator chatter and set ``write.step.unit``, restoring both after.
+
+    OCC prints transfer statistics and parse errors on stdout through its default
+    messenger; its printers are detached for the duration (errors reach the
+    caller as exceptions instead).
+    """
+    _, Interface, Message, *_ = _ocp_step()
+    messenger = Message.Message.DefaultMessenger_s()
+    printers = list(messenger.Printers())
+    static = Interface.Interface_Static
+    saved = {key: static.CVal_s(key) for key in ("write.step.unit", "write.step.schema")}
+    try:
+        for p in printers:
+            messenger.RemovePrinter(p)
+        if step_unit is not None:
+            static.SetCVal_s("write.step.unit", step_unit)
+            static.SetCVal_s("write.step.schema", "AP214IS")
+        yield
+    finally:
+        for p in printers:
+            messenger.AddPrinter(p)
+        for key, value in saved.items():
+            static.SetCVal_s(key, value)
+
+
+def _step_string(text: str) -> str:
+    """``text`` with every character outside printable ASCII (and the backslash and apostrophe) as an
+    ISO 10303-21 ``\\X2\\`` / ``\\X4\\`` escape, which OCC's reader decodes back to Unicode.
+
+    OCC's writer would store the UTF-8 bytes unescaped, which its own reader then misreads;
+    the apostrophe is escaped too, as OCC's reader cuts a name at a doubled ``''`` followed by
+    a comma, and so are leading and trailing spaces, which the reader strips.
+    """
+    out, run = [], []  # run: consecutive escaped code points, written as one \\X2\\ group
+
+    def flush():
+        if run:
+            wide = any(c > 0xFFFF for c in run)
+            out.append("\\X4\\" + "".join("%08X" % c for c in run) if wide else "\\X2\\" + "".join("%04X" % c for c in run))
+            out.append("\\X0\\")
+            run.clear()
+
+    last = len(text) - 1
+    for i, ch in enumerate(text):
+        code = ord(ch)
+        if 32 <= code < 127 and ch not in "\\'" and not (ch == " " and i in (0, last)):
+            flush()
+            out.append(ch)
+        else:
+            run.append(code)
+    flush()
+    return "".join(out)
+
+
+def _new_document(metres_per_unit: float):
+    """An empty XCAF document whose length unit is ``metres_per_unit`` (so OCC never rescales)."""
+    *_, TCollection, _, _, TDocStd, XCAFDoc = _ocp_step()
+    doc = TDocStd.TDocStd_Document(TCollection.TCollection_ExtendedString("XmlOcaf"))
+    XCAFDoc.XCAFDoc_DocumentTool.SetLengthUnit_s(doc, metres_per_unit)
+    return doc
+
+
+# OCC's default STEP real format keeps 12 significant digits. "%.15E" keeps 16 (a relative
+# error of at most 5e-16) and is the longest that fits the writer's 24-byte buffer even with a
+# three-digit exponent; it must go without OCC's zero suppression, which looks for the exponent
+# in the first 16 characters only.
+_REAL_FORMAT = "%.15E"
+
+
+def _write_step_file(writer, path: str):
+    """Write the transferred document to ``path`` with full-precision reals.
+
+    Returns OCC's ``IFSelect_ReturnStatus`` (``IFSelect_RetDone`` on success).
+    This is ``STEPControl_Writer.Write`` with the real format replaced:
+    the same model is sent through a ``StepData_StepWriter`` of our own.
+    """
+    import io
+
+    from OCP.IFSelect import IFSelect_ReturnStatus
+    from OCP.StepData import StepData_StepWriter
+
+    model = writer.Writer().Model()
+    step_writer = StepData_StepWriter(model)
+    step_writer.FloatWriter().SetFormat(_REAL_FORMAT)  # a reference to the writer's own
+    step_writer.SendModel(model.Protocol())
+    buffer = io.BytesIO()
+    if not step_writer.Print(buffer):
+        return IFSelect_ReturnStatus.IFSelect_RetFail
+    with open(path, "wb") as f:
+        f.write(buffer.getbuffer())
+    return IFSelect_ReturnStatus.IFSelect_RetDone
+
+
+# OCC's writer breaks strings at column 72 and its reader cannot decode an escape sequence
+# broken over two lines; an escaped name this short always fits on one line.
+_MAX_ESCAPED_NAME = 64
+
+
+def _objects(objects) -> list:
+    if isinstance(objects, (list, tuple)):
+        if len(objects) == 0:
+            raise ParameterError("export_step: nothing to export (objects is empty)")
+        return list(objects)
+    return [objects]
+
+
+def _names(names, count: int) -> list:
+    if names is None:
+        return [None] * count
+    if isinstance(names, str):
+        names = [names]
+    names = list(names)
+    if len(names) != count:
+        raise ParameterError(f"names has {len(names)} entries but there are {count} objects to export")
+    for i, n in enumerate(names):
+        if n is not None and not (isinstance(n, str) and n):
+            raise ParameterError(f"names[{i}] must be a non-empty string or None, got {n!r}")
+        if n is None:
+            continue
+        bad = next((k for k, ch in enumerate(n) if unicodedata.category(ch) in ("Cc", "Cs")), None)
+        if bad is not None:  # STEP strings cannot carry control characters (OCC garbles them)
+            raise ParameterError(
+                f"names[{i}] = {n!r} has the control character U+{ord(n[bad]):04X} at position {bad}; "
+                "names must be printable text"
+            )
+        encoded = _step_string(n)
+        if encoded != n and len(encoded) > _MAX_ESCAPED_NAME:
+            raise ParameterError(
+                f"names[{i}] = {n!r} is {len(encoded)} characters long once its non-ASCII characters, "
+                f"apostrophes and end spaces are escaped for STEP; at most {_MAX_ESCAPED_NAME} are kept "
+                "intact (OpenCascade's reader garbles an escape broken across the file's 72-column lines)"
+            )
+    return names
+
+
+def _products(shapes, names):
+    """``(shape, name)`` per STEP product: each named object alone, and each run of
+    consecutive unnamed objects as one compound (a STEP product costs OCC about half a
+    millisecond to translate, and unnamed objects need no product of their own)."""
+    from splinekit.interop.occ import _compound
+
+    out, run = [], []
+    for shape, name in zip(shapes, names):
+        if name is None:
+            run.append(shape)
+            continue
+        if run:
+            out.append((run[0] if len(run) == 1 else _compound(run), None))
+            run = []
+        out.append((shape, name))
+    if run:
+        out.append((run[0] if len(run) == 1 else _compound(run), None))
+    return out
+
+
+def _check_target(path: str) -> None:
+    folder = os.path.dirname(os.path.abspath(path))
+    if not os.path.isdir(folder):
+        raise ExportError(f"cannot write {path!r}: the folder {folder!r} does not exist or is not a folder")
+    if os.path.isdir(path):
+        raise ExportError(f"cannot write {path!r}: it is a folder")
+    if not os.access(folder, os.W_OK):
+        raise ExportError(f"cannot write {path!r}: the folder {folder!r} is not writable")
+
+
+def export_step(path, objects, *, names=None, unit: str = "mm", tolerance: float = 1e-7) -> str:
+    """Write ``objects`` to the STEP (AP214) file ``path``, exactly; returns ``path``.
+
+    ``objects`` is one object or a list (or tuple) of objects; each object is
+
+    * a curve: a B-spline edge (Bézier and NURBS curves likewise);
+    * a surface: a B-spline face bounded by its domain;
+    * a list or tuple of surfaces: the patches sewn into a shell, written as a
+      solid when the shell is closed (see :func:`splinekit.occ.to_shape`);
+    * an OCC shape or a build123d / cadquery object: written as it is.
+
+    So ``export_step(p, [s0, s1])`` writes two faces and ``export_step(p, [[s0, s1]])``
+    one shell. ``names`` (one non-empty printable string or ``None`` per object)
+    become the STEP product names. Each named object is a product of its own;
+    consecutive unnamed objects share one product (a compound), which gets OCC's
+    default name (its shape type, such as ``"COMPOUND"``, ``"FACE"`` or ``"SOLID"``).
+    The geometry and its order are the same either way. Coordinates are written unchanged and the file declares them
+    in ``unit`` (``"mm"`` by default; see ``STEP_UNITS``). ``tolerance`` is the
+    face and sewing tolerance in that unit.
+
+    Raises ExportError if the folder is missing or unwritable or OCC fails to
+    write (any existing file at ``path`` is left unchanged), ParameterError on
+    bad arguments and BackendError if OCC rejects the geometry.
+    """
+    path = os.fspath(path)
+    step_unit, metres = _unit(unit)
+    items = _objects(objects)
+    labels = _names(names, len(items))
+    _check_target(path)
+    IFSelect, _, _, STEPCAFControl, STEPControl, TCollection, TDataStd, _, _, XCAFDoc = _ocp_step()
+    shapes = [to_shape(obj, tolerance=tolerance) for obj in items]
+    doc = _new_document(metres)
+    tool = XCAFDoc.XCAFDoc_DocumentTool.ShapeTool_s(doc.Main())
+    for shape, name in _products(shapes, labels):
+        label = tool.AddShape(shape, False)  # a product of its own, not an assembly
+        if name is not None:
+            TDataStd.TDataStd_Name.Set_s(label, TCollection.TCollection_ExtendedString(_step_string(name)))
+
+    def write(tmp: str) -> None:
+        with _occ_settings(step_unit):
+            writer = STEPCAFControl.STEPCAFControl_Writer()
+            writer.SetNameMode(True)
+            if not writer.Transfer(doc, STEPControl.STEPControl_StepModelType.STEPControl_AsIs):
+                raise ExportError(f"OpenCascade could not translate the objects to STEP for {path!r}")
+            try:
+                status = _write_step_file(writer, tmp)
+            except OSError:
+                raise
+            except Exception as exc:  # an OCC failure while writing: the target stays untouched
+                raise ExportError(f"OpenCascade failed to write {path!r}: {type(exc).__name__}: {exc}") from None
+        if status != IFSelect.IFSelect_ReturnStatus.IFSelect_RetDone:
+            raise ExportError(f"OpenCascade failed to write {path!r}: {getattr(status, 'name', status)}")
+
+    try:
+        return atomic_write(path, write)
+    except ExportError:
+        raise
+    except OSError as exc:
+        raise ExportError(f"cannot write {path!r}: {exc}") from None
+
+
+def _label_name(label, TDataStd) -> str | None:
+    """The label's name, or None; OCC's made-up component names ``=>[0:1:1:6]`` count as none."""
+    attr = TDataStd.TDataStd_Name()
+    if label.FindAttribute(TDataStd.TDataStd_Name.GetID_s(), attr):
+        name = attr.Get().ToExtString()
+        return None if name.startswith("=>[") else name
+    return None
+
+
+def _named_shapes(tool, label, inherited, parent_loc, mods):
+    """``(name, shape)`` for every part under ``label``, walking assemblies into their components.
+
+    ``parent_loc`` is the placement accumulated from the enclosing assemblies;
+    a part's name is its component's name, else its own, else the assembly's.
+    """
+    TDataStd, TDF = mods
+    name = _label_name(label, TDataStd) or inherited
+    if tool.IsReference_s(label):  # a component: a placed instance of another label
+        referred = TDF.TDF_Label()
+        tool.GetReferredShape_s(label, referred)
+        if tool.IsAssembly_s(referred):
+            loc = parent_loc.Multiplied(tool.GetLocation_s(label))
+            return _named_shapes(tool, referred, name, loc, mods)
+        name = name or _label_name(referred, TDataStd)
+        return [(name, tool.GetShape_s(label).Moved(parent_loc))]
+    if tool.IsAssembly_s(label):
+        comps = TDF.TDF_LabelSequence()
+        tool.GetComponents_s(label, comps)
+        out = []
+        for i in range(1, comps.Length() + 1):
+            out.extend(_named_shapes(tool, comps.Value(i), name, parent_loc, mods))
+        return out
+    return [(name, tool.GetShape_s(label).Moved(parent_loc))]
+
+
+def import_step(path, *, unit: str = "mm") -> list[StepItem]:
+    """The faces (as surfaces) and free edges (as curves) of the STEP file ``path``, in file order.
+
+    Returns a list of :class:`StepItem` ``(name, geometry)``: one item per face,
+    named after the STEP product (object) it belongs to, so a solid named
+    ``"box"`` gives six items named ``"box"``; edges that bound no face (exported
+    curves, wires) give one item each (a curve), after the product's faces. Surfaces are exact B-spline forms of the faces
+    over their UV bounding box (see :func:`splinekit.occ.from_occ`: analytic
+    faces are converted, trimming loops are not kept). Coordinates come in
+    ``unit`` (millimetres by default), converted from the unit the file declares.
+
+    Raises FileFormatError if ``path`` is missing, unreadable or not STEP, or
+    holds no geometry.
+    """
+    path = os.fspath(path)
+    _, metres = _unit(unit)
+    if not os.path.isfile(path):
+        raise FileFormatError(f"STEP file {path!r} does not exist or is not a file")
+    IFSelect, _, _, STEPCAFControl, _, _, TDataStd, TDF, _, XCAFDoc = _ocp_step()
+    doc = _new_document(metres)
+    with _occ_settings():
+        reader = STEPCAFControl.STEPCAFControl_Reader()
+        reader.SetNameMode(True)
+        status = reader.ReadFile(path)
+        if status != IFSelect.IFSelect_ReturnStatus.IFSelect_RetDone:
+            raise FileFormatError(f"{path!r} is not a readable STEP file (OpenCascade: {status.name})")
+        if not reader.Transfer(doc):
+            raise FileFormatError(f"OpenCascade could not translate the STEP file {path!r}")
+    from OCP import TopLoc
+
+    tool = XCAFDoc.XCAFDoc_DocumentTool.ShapeTool_s(doc.Main())
+    free = TDF.TDF_LabelSequence()
+    tool.GetFreeShapes(free)
+    items = []
+    for i in range(1, free.Length() + 1):
+        for name, shape in _named_shapes(tool, free.Value(i), None, TopLoc.TopLoc_Location(), (TDataStd, TDF)):
+            if shape.IsNull():
+                continue
+            geometry = from_occ(shape)
+            for g in geometry if isinstance(geometry, list) else [geometry]:
+                items.append(StepItem(name, g))
+    if not items:
+        raise FileFormatError(f"the STEP file {path!r} holds no faces or edges")
+    return items
