@@ -1,0 +1,315 @@
+"""Tessellation benchmark: splinekit.tessellate against OpenCascade's BRepMesh, in one run.
+
+Run from the repository root::
+
+    python benchmarks/bench_tessellate.py           # full sizes (a few minutes)
+    python benchmarks/bench_tessellate.py --quick   # smaller models, fewer repeats
+
+Models (the tolerance is an absolute chordal deviation, given as a fraction of
+the model size = the diagonal of the bounding box of all control points):
+
+a. the unit sphere as 8 rational biquadratic Bézier patches (a sphere of
+   revolution cut at its knots); the poles are collapsed patch edges;
+b. a random bicubic NURBS surface: a smooth random height field on a 12 x 12
+   net (weights in [0.5, 2], uniform clamped knots);
+c. a Catmull-Clark limit surface as a bicubic patch set: the cube cage
+   (``to_bsplines``; exact patches plus Coons patches at the corners), in
+   ``--quick`` a torus cage (all patches exact).
+
+Peers: ``BRepMesh_IncrementalMesh`` on the same geometry (faces built with
+``splinekit.occ.to_occ`` + ``BRepBuilderAPI_MakeFace``, one compound, linear
+deflection = the same absolute tolerance, angular deflection 0.5 rad = the
+splinekit default), serial and parallel. Both meshes are measured with the
+same yardsticks: the distance between the exact surface point at each
+triangle's parametric centre and each edge's parametric midpoint (from the
+triangle corners' (u, v)) and the flat triangle's/edge's point (all
+triangles), and the distance of those flat points from the surface (OCC point
+projection, a random sample of triangles). The table shows triangles, median
+time, triangles per second, both deviations, and the speed ratio. Tessellation time excludes building the input (and, for OCC,
+building the faces).
+"""
+
+from __future__ import annotations
+
+import argparse
+import gc
+import os
+import platform
+import statistics
+import sys
+import time
+
+import numpy as np
+
+import splinekit as sk
+from splinekit.basis.knots import clamped_uniform
+from splinekit.tessellate import tessellate
+
+S2 = np.sqrt(0.5)
+
+
+# --------------------------------------------------------------------------------------
+# models
+
+
+def sphere_patches():
+    circle = np.array([[1, 0], [1, 1], [0, 1], [-1, 1], [-1, 0], [-1, -1], [0, -1], [1, -1], [1, 0]], float)
+    cw = np.array([1, S2, 1, S2, 1, S2, 1, S2, 1])
+    half = np.array([[0, -1], [1, -1], [1, 0], [1, 1], [0, 1]], float)
+    hw = np.array([1, S2, 1, S2, 1])
+    P = np.empty((9, 5, 3))
+    P[..., 0] = circle[:, None, 0] * half[None, :, 0]
+    P[..., 1] = circle[:, None, 1] * half[None, :, 0]
+    P[..., 2] = np.broadcast_to(half[None, :, 1], (9, 5))
+    W = cw[:, None] * hw[None, :]
+    ku = [0, 0, 0, 0.25, 0.25, 0.5, 0.5, 0.75, 0.75, 1, 1, 1]
+    kv = [0, 0, 0, 0.5, 0.5, 1, 1, 1]
+    S = sk.NurbsSurface(2, 2, ku, kv, P, W)
+    return [b.to_bspline() for row in S.to_bezier() for b in row]
+
+
+def random_nurbs(seed=7, n=12):
+    rng = np.random.default_rng(seed)
+    g = np.linspace(0.0, 1.0, n)
+    X, Y = np.meshgrid(g, g, indexing="ij")
+    Z = 0.15 * rng.standard_normal((n, n))
+    P = np.stack([X, Y, Z], axis=-1)
+    W = rng.uniform(0.5, 2.0, (n, n))
+    k = clamped_uniform(3, n)
+    return [sk.NurbsSurface(3, 3, k, k, P, W)]
+
+
+def cc_patches(quick):
+    from splinekit.mesh.primitives import box, torus
+
+    cage = torus(12, 8, R=1.0, r=0.35) if quick else box()
+    patches, _ = sk.SubdivisionSurface(cage, "catmull-clark").to_bsplines()
+    return patches, ("torus cage 12 x 8" if quick else "cube cage") + f", {len(patches)} patches"
+
+
+def model_size(patches):
+    P = np.concatenate([np.asarray(s.control_points).reshape(-1, 3) for s in patches])
+    return float(np.linalg.norm(P.max(axis=0) - P.min(axis=0)))
+
+
+# --------------------------------------------------------------------------------------
+# deviation: the same yardstick for both meshes
+
+
+def deviation(patches, corners_uv, corners_xyz, face_patch, chunk=200_000):
+    """Largest distance between the exact surface at each triangle's parametric centre and
+    edge midpoints and the flat triangle's points. ``corners_uv`` ``(F, 3, 2)``,
+    ``corners_xyz`` ``(F, 3, 3)``, ``face_patch`` ``(F,)``."""
+    worst = 0.0
+    bary = np.array([[1 / 3, 1 / 3, 1 / 3], [0.5, 0.5, 0.0], [0.0, 0.5, 0.5], [0.5, 0.0, 0.5]])
+    for p in np.unique(face_patch):
+        sel = np.flatnonzero(face_patch == p)
+        for s in range(0, sel.size, chunk):
+            f = sel[s : s + chunk]
+            uv = np.einsum("bj,fjd->fbd", bary, corners_uv[f]).reshape(-1, 2)
+            flat = np.einsum("bj,fjd->fbd", bary, corners_xyz[f]).reshape(-1, 3)
+            exact = patches[p].evaluate(uv[:, 0], uv[:, 1])
+            worst = max(worst, float(np.linalg.norm(exact - flat, axis=1).max()))
+    return worst
+
+
+def geometric_deviation(patches, corners_uv, corners_xyz, face_patch, count, rng):
+    """Largest distance from the surface of the centroid and edge midpoints of ``count``
+    random triangles: the chordal error as OCC defines its deflection, sampled (an
+    underestimate of the true maximum). The distance is the smaller of OCC's point
+    projection (which can miss the closest point) and the distance to the surface point
+    at the interpolated (u, v) (an upper bound)."""
+    from OCP.GeomAPI import GeomAPI_ProjectPointOnSurf
+    from OCP.gp import gp_Pnt
+
+    handles = {}
+    f = rng.integers(0, len(face_patch), count)
+    bary = np.array([[1 / 3, 1 / 3, 1 / 3], [0.5, 0.5, 0.0], [0.0, 0.5, 0.5], [0.5, 0.0, 0.5]])
+    pts = np.einsum("bj,fjd->fbd", bary, corners_xyz[f])
+    uvs = np.einsum("bj,fjd->fbd", bary, corners_uv[f])
+    worst = 0.0
+    for k in range(count):
+        p = int(face_patch[f[k]])
+        if p not in handles:
+            handles[p] = sk.occ.to_occ(patches[p])
+        bound = np.linalg.norm(patches[p].evaluate(uvs[k, :, 0], uvs[k, :, 1]) - pts[k], axis=1)
+        for x, b in zip(pts[k], bound):
+            proj = GeomAPI_ProjectPointOnSurf(gp_Pnt(*x), handles[p])
+            d = min(b, proj.LowerDistance()) if proj.NbPoints() else b
+            worst = max(worst, d)
+    return worst
+
+
+# --------------------------------------------------------------------------------------
+# OpenCascade
+
+
+def occ_shape(patches):
+    from OCP.BRep import BRep_Builder
+    from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeFace
+    from OCP.TopoDS import TopoDS_Compound
+
+    builder = BRep_Builder()
+    comp = TopoDS_Compound()
+    builder.MakeCompound(comp)
+    for s in patches:
+        face = BRepBuilderAPI_MakeFace(sk.occ.to_occ(s), 1e-7).Face()
+        builder.Add(comp, face)
+    return comp
+
+
+def occ_mesh(patches, tol, parallel):
+    """Mesh a fresh compound (BRepMesh caches triangulations on the shape)."""
+    from OCP.BRepMesh import BRepMesh_IncrementalMesh
+
+    shape = occ_shape(patches)
+
+    def run():
+        BRepMesh_IncrementalMesh(shape, tol, False, 0.5, parallel)
+        return shape
+
+    return shape, run
+
+
+def occ_triangles(shape):
+    """``(corners_uv (F, 3, 2), corners_xyz (F, 3, 3), face_patch (F,))`` of a meshed compound
+    (faces in the order they were added)."""
+    from OCP.BRep import BRep_Tool
+    from OCP.TopAbs import TopAbs_FACE
+    from OCP.TopExp import TopExp_Explorer
+    from OCP.TopLoc import TopLoc_Location
+    from OCP.TopoDS import TopoDS
+
+    uvs, xyzs, fps = [], [], []
+    exp = TopExp_Explorer(shape, TopAbs_FACE)
+    k = 0
+    while exp.More():
+        face = TopoDS.Face_s(exp.Current())
+        loc = TopLoc_Location()
+        tri = BRep_Tool.Triangulation_s(face, loc)
+        n, m = tri.NbNodes(), tri.NbTriangles()
+        xyz = np.array([[tri.Node(i).X(), tri.Node(i).Y(), tri.Node(i).Z()] for i in range(1, n + 1)])
+        uv = np.array([[tri.UVNode(i).X(), tri.UVNode(i).Y()] for i in range(1, n + 1)])
+        T = np.array([tri.Triangle(i).Get() for i in range(1, m + 1)]) - 1
+        uvs.append(uv[T])
+        xyzs.append(xyz[T])
+        fps.append(np.full(m, k))
+        k += 1
+        exp.Next()
+    return np.concatenate(uvs), np.concatenate(xyzs), np.concatenate(fps)
+
+
+# --------------------------------------------------------------------------------------
+
+
+def measure(fn, repeats):
+    """Median wall time of ``fn()`` after one warm-up call; returns ``(seconds, result)``."""
+    result = fn()
+    times = []
+    for _ in range(repeats):
+        gc.collect()
+        t0 = time.perf_counter()
+        result = fn()
+        times.append(time.perf_counter() - t0)
+        if times[0] > 2.0:
+            break
+    return statistics.median(times), result
+
+
+def fmt_int(n):
+    return f"{n:,}"
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--quick", action="store_true", help="smaller models and fewer repeats")
+    args = ap.parse_args()
+    repeats = 2 if args.quick else 5
+    samples = 150 if args.quick else 500  # triangles per mesh for the projected (geometric) deviation
+    rels = (1e-3, 1e-4)
+    print(f"# splinekit.tessellate vs OCC BRepMesh ({platform.machine()}, {os.cpu_count()} cores, "
+          f"python {sys.version.split()[0]}, numpy {np.__version__})\n")
+    try:
+        import OCP  # noqa: F401
+
+        have_occ = True
+    except ImportError:
+        have_occ = False
+        print("OCP not installed: OCC columns skipped\n")
+
+    t0 = time.perf_counter()
+    cc, cc_name = cc_patches(args.quick)
+    build_cc = time.perf_counter() - t0
+    models = [
+        ("a. NURBS sphere, 8 rational patches", sphere_patches()),
+        ("b. random bicubic NURBS, 12 x 12", random_nurbs()),
+        (f"c. Catmull-Clark limit, {cc_name}", cc),
+    ]
+    print(f"(building the Catmull-Clark patch set took {build_cc:.2f} s; not included below)\n")
+    header = (
+        "| model | tol / size | splinekit triangles | time | tri/s | max dev / tol | closed | "
+        "OCC triangles | OCC time (serial) | OCC tri/s | OCC max dev / tol | OCC time (parallel) | speed ratio (tri/s) |"
+    )
+    print(header)
+    print("|" + "|".join(["---"] * (header.count("|") - 1)) + "|")
+    for name, patches in models:
+        size = model_size(patches)
+        for rel in rels:
+            tol = rel * size
+            t_sk, mesh = measure(lambda patches=patches, tol=tol: tessellate(patches, tol), repeats)
+            F = np.asarray(mesh.faces)
+            dev_sk = deviation(patches, mesh.corner_uv, mesh.vertices[F], mesh.face_patch)
+            rate_sk = mesh.n_faces / t_sk
+            geo = ""
+            if have_occ:
+                g = geometric_deviation(patches, mesh.corner_uv, mesh.vertices[F], mesh.face_patch, samples, np.random.default_rng(1))
+                geo = f", geom {g / tol:.2f}"
+            row = [
+                name,
+                f"{rel:g}",
+                fmt_int(mesh.n_faces),
+                f"{t_sk * 1e3:.1f} ms",
+                f"{rate_sk / 1e6:.2f} M",
+                f"{dev_sk / tol:.2f} (own {mesh.max_deviation / tol:.2f}{geo})",
+                "yes" if mesh.is_closed else "no (open)",
+            ]
+            if have_occ:
+                times = []
+                for parallel in (False, True):
+                    reps = []
+                    for _ in range(1 if t_sk * 20 > 2.0 or args.quick else 3):
+                        shape, run = occ_mesh(patches, tol, parallel)
+                        gc.collect()
+                        t0 = time.perf_counter()
+                        run()
+                        reps.append(time.perf_counter() - t0)
+                    times.append(statistics.median(reps))
+                uv, xyz, fp = occ_triangles(shape)
+                dev_occ = deviation(patches, uv, xyz, fp)
+                geo_occ = geometric_deviation(patches, uv, xyz, fp, samples, np.random.default_rng(1))
+                rate_occ = len(fp) / times[0]
+                row += [
+                    fmt_int(len(fp)),
+                    f"{times[0] * 1e3:.1f} ms",
+                    f"{rate_occ / 1e6:.3f} M",
+                    f"{dev_occ / tol:.2f} (geom {geo_occ / tol:.2f})",
+                    f"{times[1] * 1e3:.1f} ms",
+                    f"{rate_sk / rate_occ:.1f}x",
+                ]
+            else:
+                row += ["-"] * 6
+            print("| " + " | ".join(row) + " |", flush=True)
+    print(
+        "\nmax dev / tol: the deviation at triangle centres and edge midpoints, parametric (the exact "
+        "point at the (u, v) interpolated from the corners against the flat point; includes the "
+        "tangential part), measured the same way for both meshes over all triangles; 'own' is "
+        "splinekit's Tessellation.max_deviation; 'geom' is the distance of those points from the "
+        f"surface (the smaller of OCC's projection and the parametric distance; {samples} random "
+        "triangles: sampled; the way OCC defines "
+        "its deflection). OCC meshes each face separately (faces not sewn), so its mesh is not one "
+        "closed body."
+    )
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,142 @@
+"""The public entry point :func:`tessellate`: input checks and dispatch."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .._validate import as_int, as_real
+from ..errors import ParameterError
+
+__all__ = ["DEFAULT_ANGLE_TOLERANCE", "DEFAULT_RELATIVE_TOLERANCE", "tessellate"]
+
+DEFAULT_RELATIVE_TOLERANCE = 1e-3
+"""Default chordal tolerance as a fraction of the model's bounding-box diagonal."""
+DEFAULT_ANGLE_TOLERANCE = 0.5
+"""Default largest angle (radians) between the exact normals at the two ends of a
+triangle edge (tangents of a polyline segment); OpenCascade's BRepMesh default."""
+
+
+def _patches(obj, levels):
+    """``(kind, items)``: ``("curve", curve)`` or ``("surfaces", [SplineSurface, ...])``."""
+    from ..curves import BezierCurve, SplineCurve
+    from ..subdiv.surface import SubdivisionSurface
+    from ..surfaces import BezierSurface, SplineSurface
+
+    if isinstance(obj, BezierCurve):
+        return "curve", obj.to_bspline()
+    if isinstance(obj, SplineCurve):
+        return "curve", obj
+    if isinstance(obj, (BezierSurface, SplineSurface)):
+        obj = [obj]
+    elif isinstance(obj, SubdivisionSurface):
+        obj = obj.to_bsplines(levels)[0]
+    elif isinstance(obj, (str, bytes)) or not hasattr(obj, "__iter__"):
+        raise ParameterError(
+            "tessellate takes a curve, a surface, a list of surfaces or a SubdivisionSurface, "
+            f"got {type(obj).__name__}"
+        )
+    items = []
+    for i, s in enumerate(obj):
+        if isinstance(s, BezierSurface):
+            s = s.to_bspline()
+        if not isinstance(s, SplineSurface):
+            raise ParameterError(f"patch {i} is a {type(s).__name__}; expected a BezierSurface, BSplineSurface or NurbsSurface")
+        if s.dim != 3:
+            raise ParameterError(f"patch {i} lies in {s.dim}-D space; tessellation needs 3-D surfaces")
+        items.append(s)
+    if not items:
+        raise ParameterError("tessellate got an empty list of surfaces")
+    return "surfaces", items
+
+
+def _diagonal(points) -> float:
+    lo, hi = points.min(axis=0), points.max(axis=0)
+    return float(np.linalg.norm(hi - lo))
+
+
+def tessellate(obj, tolerance=None, *, angle_tolerance=DEFAULT_ANGLE_TOLERANCE, relative: bool = False, levels: int = 2):
+    """Adaptive tessellation of a curve, a surface, a patch set or a subdivision surface.
+
+    Parameters
+    ----------
+    obj
+        A curve (:class:`~splinekit.BezierCurve`, :class:`~splinekit.BSplineCurve`,
+        :class:`~splinekit.NurbsCurve`) -> :class:`Polyline`; a surface
+        (:class:`~splinekit.BezierSurface`, :class:`~splinekit.BSplineSurface`,
+        :class:`~splinekit.NurbsSurface`), a list of them (a body: patches
+        that share edges are stitched), or a Catmull-Clark
+        :class:`~splinekit.SubdivisionSurface` (through ``to_bsplines(levels)``)
+        -> :class:`Tessellation`. Surfaces must be 3-D.
+    tolerance : float, optional
+        Chordal tolerance, an absolute distance in model units (or, with
+        ``relative=True``, a fraction of the model size). The model size is
+        the diagonal of the bounding box of all control points. Default:
+        ``1e-3`` of the model size.
+    angle_tolerance : float or None
+        Largest angle in radians between the exact normals at the two ends of
+        a triangle edge (or the tangents at the ends of a polyline segment);
+        ``None`` disables the criterion. Default 0.5.
+    relative : bool
+        Read ``tolerance`` as a fraction of the model size.
+    levels : int
+        Refinement levels of ``SubdivisionSurface.to_bsplines`` (irregular faces only).
+
+    Returns
+    -------
+    Tessellation or Polyline
+        Whose ``max_deviation`` is at most ``tolerance`` unless refinement hit
+        its limits (4096 segments per Bézier cell and direction, 8 rounds).
+        ``max_deviation`` is measured at every triangle's parametric centre
+        and every edge's parametric midpoint: the distance between the exact
+        surface point there and the corresponding point of the flat triangle
+        (so it includes the tangential part of the error, and bounds the
+        distance of those points from the surface).
+
+    Notes
+    -----
+    Patches are stitched where whole Bézier cell edges coincide (same points
+    at 0, 1/4, 1/2, 3/4 and 1 of the edge, either direction), as in Bézier
+    patch sets, Catmull-Clark patch sets and NURBS bodies cut at common knots.
+    An edge shared with a different parametrization, or a T-junction (one
+    patch edge against two), is not stitched and leaves a crack. Edges that
+    collapse to a point (poles) become one vertex. The angle criterion
+    ignores edges shorter than the tolerance and normals more than 90 degrees
+    apart (folds), and stops refining a cell direction at 64 steps.
+    Raises :class:`~splinekit.errors.ParameterError` for a bad tolerance, an
+    unsupported object, or a tolerance needing more than 50 million triangles.
+    """
+    if tolerance is not None:
+        tolerance = as_real(tolerance, "tolerance")
+        if not tolerance > 0:
+            raise ParameterError(f"tolerance must be > 0, got {tolerance!r}")
+    if angle_tolerance is not None:
+        angle_tolerance = as_real(angle_tolerance, "angle_tolerance")
+        if not 0 < angle_tolerance <= math.pi:
+            raise ParameterError(f"angle_tolerance must lie in (0, pi] radians or be None, got {angle_tolerance!r}")
+    if not isinstance(relative, (bool, np.bool_)):
+        raise ParameterError(f"relative must be True or False, got {relative!r}")
+    levels = as_int(levels, "levels", minimum=0)
+    kind, item = _patches(obj, levels)
+    if kind == "curve":
+        size = _diagonal(np.asarray(item.control_points))
+    else:
+        size = _diagonal(np.concatenate([np.asarray(s.control_points).reshape(-1, 3) for s in item]))
+    if not np.isfinite(size):
+        raise ParameterError("the model's bounding box overflows the float range")
+    if size == 0.0:
+        size = 1.0  # a single point: any positive tolerance is met
+    if tolerance is None:
+        tol = DEFAULT_RELATIVE_TOLERANCE * size
+    else:
+        tol = tolerance * size if relative else tolerance
+    if not (np.isfinite(tol) and tol > 0):
+        raise ParameterError(f"the tolerance {tol!r} (model units) is not a positive finite distance")
+    if kind == "curve":
+        from .curves import tessellate_curve
+
+        return tessellate_curve(item, tol, angle_tolerance)
+    from .surfaces import tessellate_patches
+
+    return tessellate_patches(item, tol, angle_tolerance, size)

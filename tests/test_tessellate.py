@@ -1,0 +1,418 @@
+"""Adaptive watertight tessellation (splinekit.tessellate).
+
+Deviations are measured independently of the tessellator's own measure: random
+points inside triangles are mapped to (u, v) by barycentric interpolation of
+the corners' parameters and the exact surface point there is compared with the
+point of the flat triangle. Closed bodies are checked with PolyMesh.is_closed,
+the Euler characteristic and manifold3d; volumes against closed forms.
+"""
+
+from __future__ import annotations
+
+import itertools
+import pickle
+
+import numpy as np
+import pytest
+from _geometry import random_curve_data, random_surface_data
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+import splinekit as sk
+from splinekit.errors import SplineKitError
+from splinekit.mesh.primitives import torus
+from splinekit.tessellate import Polyline, Tessellation, tessellate
+
+S2 = np.sqrt(0.5)
+
+
+# -- geometry built by hand -------------------------------------------------------------------
+def sphere_surface(radius=1.0, center=(0.0, 0.0, 0.0)):
+    """The unit sphere as one rational biquadratic NURBS (9 x 5 net): a full circle of
+    quarter arcs swept along a half circle; its v = 0 and v = 1 edges collapse to the poles."""
+    circle = np.array([[1, 0], [1, 1], [0, 1], [-1, 1], [-1, 0], [-1, -1], [0, -1], [1, -1], [1, 0]], float)
+    cw = np.array([1, S2, 1, S2, 1, S2, 1, S2, 1])
+    half = np.array([[0, -1], [1, -1], [1, 0], [1, 1], [0, 1]], float)  # (radius, z)
+    hw = np.array([1, S2, 1, S2, 1])
+    P = np.empty((9, 5, 3))
+    P[..., 0] = circle[:, None, 0] * half[None, :, 0]
+    P[..., 1] = circle[:, None, 1] * half[None, :, 0]
+    P[..., 2] = np.broadcast_to(half[None, :, 1], (9, 5))
+    W = cw[:, None] * hw[None, :]
+    ku = [0, 0, 0, 0.25, 0.25, 0.5, 0.5, 0.75, 0.75, 1, 1, 1]
+    kv = [0, 0, 0, 0.5, 0.5, 1, 1, 1]
+    return sk.NurbsSurface(2, 2, ku, kv, radius * P + np.asarray(center), W)
+
+
+def sphere_patches(mixed_orientation=False):
+    """The sphere as 8 rational Bézier patches; optionally half of them re-parametrized
+    (u reversed and u, v swapped: same surface and normal, other edge directions)."""
+    patches = [b.to_bspline() for row in sphere_surface().to_bezier() for b in row]
+    if mixed_orientation:
+        patches = [s.transpose().reverse("v") if i % 2 else s for i, s in enumerate(patches)]
+    return patches
+
+
+def flat_box_patches(size=(1.0, 2.0, 3.0)):
+    """Six bilinear patches bounding a box, normals outward."""
+    a, b, c = size
+    X = np.array([[x, y, z] for x in (0, a) for y in (0, b) for z in (0, c)]).reshape(2, 2, 2, 3)
+    faces = [
+        X[0, :, :].transpose(1, 0, 2),  # x = 0: (z, y) so that the normal points to -x
+        X[1, :, :],
+        X[:, 0, :],
+        X[:, 1, :].transpose(1, 0, 2),
+        X[:, :, 0].transpose(1, 0, 2),
+        X[:, :, 1],
+    ]
+    return [sk.BezierSurface(np.ascontiguousarray(f)) for f in faces]
+
+
+def random_surface(seed, rational, max_degree=4):
+    rng = np.random.default_rng(seed)
+    pu, pv, ku, kv, P, W = random_surface_data(rng, rational, max_degree=max_degree, max_spans=3)
+    if rational:
+        return sk.NurbsSurface(pu, pv, ku, kv, P, W)
+    return sk.BSplineSurface(pu, pv, ku, kv, P)
+
+
+def sampled_deviation(mesh, patches, rng, count=4000):
+    """Largest distance between the exact surface and the flat triangles at random
+    barycentric points (uniform in each triangle, triangles drawn uniformly)."""
+    F = np.asarray(mesh.faces)
+    f = rng.integers(0, len(F), count)
+    b = rng.dirichlet([1.0, 1.0, 1.0], count)
+    uv = np.einsum("kj,kjd->kd", b, mesh.corner_uv[f])
+    flat = np.einsum("kj,kjd->kd", b, mesh.vertices[F[f]])
+    which = mesh.face_patch[f]
+    out = np.zeros(count)
+    for p in np.unique(which):
+        sel = which == p
+        out[sel] = np.linalg.norm(patches[p].evaluate(uv[sel, 0], uv[sel, 1]) - flat[sel], axis=1)
+    return float(out.max())
+
+
+def manifold_of(mesh):
+    manifold3d = pytest.importorskip("manifold3d")
+    m64 = manifold3d.Mesh64(
+        vert_properties=np.array(mesh.vertices, dtype=np.float64, order="C"),
+        tri_verts=np.array(mesh.faces, dtype=np.uint64, order="C"),
+    )
+    return manifold3d, manifold3d.Manifold(m64)
+
+
+def assert_closed_manifold(mesh, genus):
+    assert mesh.is_triangle_mesh
+    assert mesh.is_closed
+    assert mesh.euler_characteristic == 2 - 2 * genus
+    manifold3d, m = manifold_of(mesh)
+    assert m.status() == manifold3d.Error.NoError
+    assert m.genus() == genus
+    # no degenerate triangles
+    assert mesh.face_areas.min() > 0
+
+
+# -- deviation ----------------------------------------------------------------------------------
+@pytest.mark.parametrize("seed", range(6))
+@pytest.mark.parametrize("relative", [1e-2, 1e-3])
+def test_random_surface_deviation_within_tolerance(seed, relative):
+    S = random_surface(seed, rational=seed % 2 == 1)
+    mesh = tessellate(S, relative, relative=True, angle_tolerance=None)
+    diag = np.linalg.norm(np.ptp(S.control_points.reshape(-1, 3), axis=0))
+    assert mesh.tolerance == pytest.approx(relative * diag)
+    assert 0 < mesh.max_deviation <= mesh.tolerance
+    rng = np.random.default_rng(100 + seed)
+    assert sampled_deviation(mesh, [S], rng) <= mesh.tolerance
+    # vertices lie on the surface at their parameters
+    F = np.asarray(mesh.faces)
+    on = S.evaluate(mesh.corner_uv[..., 0].ravel(), mesh.corner_uv[..., 1].ravel())
+    assert np.abs(on - mesh.vertices[F].reshape(-1, 3)).max() <= 1e-9 * diag
+
+
+def test_absolute_and_relative_tolerance_agree():
+    S = random_surface(3, rational=True)
+    diag = np.linalg.norm(np.ptp(S.control_points.reshape(-1, 3), axis=0))
+    a = tessellate(S, 2e-3 * diag, angle_tolerance=None)
+    b = tessellate(S, 2e-3, relative=True, angle_tolerance=None)
+    c = tessellate(S, angle_tolerance=None)  # default: 1e-3 of the diagonal
+    assert a.n_faces == b.n_faces and np.allclose(a.vertices, b.vertices)
+    assert c.tolerance == pytest.approx(1e-3 * diag)
+    assert c.n_faces > a.n_faces
+
+
+def test_angle_tolerance_adds_triangles_on_a_coarse_tolerance():
+    S = sphere_surface()
+    coarse = tessellate(S, 0.05, angle_tolerance=None)
+    fine = tessellate(S, 0.05, angle_tolerance=0.1)
+    assert fine.n_faces > coarse.n_faces
+    # angle between the exact normals at the ends of every edge (poles are fans: skip them)
+    E = fine.edges
+    n0, n1 = fine.normals[E[:, 0]], fine.normals[E[:, 1]]
+    ang = np.arccos(np.clip(np.einsum("ij,ij->i", n0, n1), -1, 1))
+    assert ang.max() <= 0.1 + 1e-9
+
+
+# -- adaptivity ---------------------------------------------------------------------------------
+def test_triangle_count_grows_like_inverse_tolerance():
+    S = sphere_surface()
+    counts = [tessellate(S, tol, angle_tolerance=None).n_faces for tol in (1e-2, 1e-3, 1e-4)]
+    for coarse, fine in itertools.pairwise(counts):
+        assert 5 < fine / coarse < 20
+
+
+def test_flat_patches_get_few_triangles_curved_many():
+    flat = sk.BezierSurface([[[0, 0, 0], [0, 1, 0]], [[2, 0, 0], [2, 1, 0]]])
+    assert tessellate(flat, 1e-6).n_faces == 2
+    # a bicubic plane with a linear parametrization: second differences vanish
+    g = np.linspace(0, 1, 4)
+    P = np.stack([*np.meshgrid(3 * g, 2 * g, indexing="ij"), np.zeros((4, 4))], axis=-1)
+    plane = sk.BSplineSurface(3, 3, [0] * 4 + [1] * 4, [0] * 4 + [1] * 4, P)
+    assert tessellate(plane, 1e-6).n_faces == 2
+    curved = sphere_patches()[0]
+    assert tessellate(curved, 1e-4).n_faces > 500
+
+
+def test_refinement_concentrates_where_curvature_is():
+    # a long flat strip with one bump in the middle: control points at the Greville
+    # abscissae make x(u) = u exactly, so the flat end spans need no refinement at all
+    knots = np.concatenate([[0] * 4, np.arange(1, 10), [10] * 4]).astype(float)
+    greville = np.array([knots[i + 1 : i + 4].mean() for i in range(13)])
+    P = np.zeros((13, 2, 3))
+    P[:, :, 0] = greville[:, None]
+    P[:, 1, 1] = 1.0
+    P[6, :, 2] = 2.0  # influences spans 3..6 only
+    S = sk.BSplineSurface(3, 1, knots, [0, 0, 1, 1], P)
+    mesh = tessellate(S, 1e-3, angle_tolerance=None)
+    u = mesh.corner_uv[:, :, 0].mean(axis=1)
+    in_flat_spans = np.count_nonzero((u < 3) | (u > 7))
+    assert in_flat_spans == 2 * 6  # one quad (two triangles) per flat span
+    assert mesh.n_faces > 10 * in_flat_spans
+    assert sampled_deviation(mesh, [S], np.random.default_rng(1)) <= 1e-3
+
+
+# -- closed bodies ------------------------------------------------------------------------------
+def test_sphere_single_nurbs_is_closed_and_has_the_right_volume():
+    S = sphere_surface()
+    for tol in (3e-3, 3e-4):
+        mesh = tessellate(S, tol)
+        assert isinstance(mesh, Tessellation)
+        assert_closed_manifold(mesh, genus=0)
+        exact = 4.0 / 3.0 * np.pi
+        # vertices are on the sphere, so the polyhedron is inscribed: volume below the exact one
+        assert exact - mesh.area * tol <= mesh.volume < exact
+        assert np.abs(np.linalg.norm(mesh.vertices, axis=1) - 1.0).max() < 1e-12
+
+
+@pytest.mark.parametrize("mixed", [False, True])
+def test_sphere_patch_set_is_watertight(mixed):
+    patches = sphere_patches(mixed)
+    mesh = tessellate(patches, 2e-3)
+    assert_closed_manifold(mesh, genus=0)
+    exact = 4.0 / 3.0 * np.pi
+    assert abs(mesh.volume - exact) <= mesh.area * 2e-3
+    assert set(np.unique(mesh.face_patch)) == set(range(8))
+    assert sampled_deviation(mesh, patches, np.random.default_rng(7)) <= 2e-3
+
+
+def test_multi_span_patch_stitched_to_bezier_patches():
+    # bottom half: one multi-span NURBS (its own tensor grid); top half: four Bézier patches
+    bottom, top = sphere_surface().split(0.5, direction="v")
+    patches = [bottom] + [b.to_bspline() for row in top.to_bezier() for b in row]
+    mesh = tessellate(patches, 1e-3)
+    assert_closed_manifold(mesh, genus=0)
+    assert abs(mesh.volume - 4.0 / 3.0 * np.pi) <= mesh.area * 1e-3
+    assert sampled_deviation(mesh, patches, np.random.default_rng(5)) <= 1e-3
+
+
+def test_translated_scaled_sphere_volume():
+    S = sphere_surface(radius=250.0, center=(1e3, -2e3, 5e2))
+    mesh = tessellate(S, 1e-3, relative=True)
+    assert_closed_manifold(mesh, genus=0)
+    exact = 4.0 / 3.0 * np.pi * 250.0**3
+    assert abs(mesh.volume - exact) <= mesh.area * mesh.tolerance
+
+
+def test_flat_box_of_six_patches():
+    mesh = tessellate(flat_box_patches(), 1e-3)
+    assert mesh.n_faces == 12 and mesh.n_vertices == 8
+    assert_closed_manifold(mesh, genus=0)
+    assert mesh.volume == pytest.approx(6.0, rel=1e-12)
+
+
+def test_catmull_clark_torus_limit_surface():
+    cage = torus(8, 6, R=2.0, r=0.7)
+    surface = sk.SubdivisionSurface(cage, "catmull-clark")
+    patches, _ = surface.to_bsplines()
+    mesh = tessellate(surface, 1e-3, relative=True)
+    assert len(np.unique(mesh.face_patch)) == len(patches) == 48
+    assert_closed_manifold(mesh, genus=1)
+    assert mesh.max_deviation <= mesh.tolerance
+    assert sampled_deviation(mesh, patches, np.random.default_rng(3)) <= mesh.tolerance
+    # the limit surface lies inside the cage's hull: volume below the cage's
+    assert 0 < mesh.volume < cage.volume
+
+
+# -- normals ------------------------------------------------------------------------------------
+def test_normals_are_exact_on_the_sphere_including_poles():
+    mesh = tessellate(sphere_surface(), 1e-3)
+    assert np.allclose(np.linalg.norm(mesh.normals, axis=1), 1.0, atol=1e-12)
+    # outward normal of the unit sphere is the position itself
+    assert np.abs(mesh.normals - mesh.vertices).max() < 1e-9
+    # and the triangles face the same way
+    centroid_dirs = mesh.vertices[np.asarray(mesh.faces)].mean(axis=1)
+    assert (np.einsum("ij,ij->i", mesh.face_normals, centroid_dirs) > 0).all()
+
+
+def test_normals_match_surface_normal_on_random_surfaces():
+    for seed in (0, 1, 2):
+        S = random_surface(seed, rational=seed == 1)
+        mesh = tessellate(S, 1e-2, relative=True, angle_tolerance=None)
+        expected = S.normal(mesh.uv[:, 0], mesh.uv[:, 1])
+        # on an inner knot line the surface may be only C0 (two normals): skip those vertices
+        bu, bv = S.bezier_breakpoints()
+        on_knot = np.isin(mesh.uv[:, 0], bu[1:-1]) | np.isin(mesh.uv[:, 1], bv[1:-1])
+        good = (np.linalg.norm(expected, axis=1) > 0.5) & ~on_knot
+        assert good.mean() > 0.8
+        assert np.allclose(np.linalg.norm(mesh.normals, axis=1), 1.0, atol=1e-12)
+        assert np.abs(mesh.normals[good] - expected[good]).max() < 1e-8
+        assert np.abs(S.evaluate(mesh.uv[:, 0], mesh.uv[:, 1]) - mesh.vertices).max() < 1e-9 * np.abs(mesh.vertices).max()
+
+
+def test_numpy_path_matches_compiled_kernel(monkeypatch):
+    pytest.importorskip("numba")
+    cases = [(sphere_surface(), 1e-3), (sphere_patches(), 1e-3), (random_surface(4, rational=True), 1e-2)]
+    fast = [tessellate(s, t, relative=True) for s, t in cases]
+    monkeypatch.setenv("SPLINEKIT_NUMBA", "0")
+    for (s, t), a in zip(cases, fast):
+        b = tessellate(s, t, relative=True)
+        assert np.array_equal(np.asarray(a.faces), np.asarray(b.faces))
+        assert np.allclose(a.vertices, b.vertices, rtol=0, atol=1e-12 * np.abs(a.vertices).max())
+        assert np.allclose(a.normals, b.normals, atol=1e-12)
+        assert a.max_deviation == pytest.approx(b.max_deviation, rel=1e-9)
+
+
+# -- invariance (hypothesis) --------------------------------------------------------------------
+@settings(max_examples=10, deadline=None)
+@given(
+    seed=st.integers(0, 10_000),
+    angles=st.tuples(*[st.floats(-np.pi, np.pi)] * 3),
+    scale=st.floats(0.01, 100.0),
+    shift=st.tuples(*[st.floats(-100.0, 100.0)] * 3),
+)
+def test_tessellation_commutes_with_similarity_transforms(seed, angles, scale, shift):
+    S = random_surface(seed, rational=seed % 2 == 0, max_degree=3)
+    a, b, c = angles
+    Rz = np.array([[np.cos(a), -np.sin(a), 0], [np.sin(a), np.cos(a), 0], [0, 0, 1]])
+    Ry = np.array([[np.cos(b), 0, np.sin(b)], [0, 1, 0], [-np.sin(b), 0, np.cos(b)]])
+    Rx = np.array([[1, 0, 0], [0, np.cos(c), -np.sin(c)], [0, np.sin(c), np.cos(c)]])
+    M = np.eye(4)
+    M[:3, :3] = scale * Rz @ Ry @ Rx
+    M[:3, 3] = shift
+    base = tessellate(S, 1e-2, relative=True, angle_tolerance=None)
+    # an absolute tolerance scaled with the model (the bounding box is not rotation invariant)
+    moved = tessellate(S.transform(M), scale * base.tolerance, angle_tolerance=None)
+    # counts come from deviations, which scale exactly: equal up to rounding at thresholds
+    assert abs(moved.n_faces - base.n_faces) <= 0.1 * base.n_faces
+    assert moved.max_deviation <= moved.tolerance
+    assert moved.max_deviation == pytest.approx(scale * base.max_deviation, rel=0.3)
+
+
+# -- curves -------------------------------------------------------------------------------------
+def circle_curve(radius=2.0):
+    P = radius * np.array([[1, 0], [1, 1], [0, 1], [-1, 1], [-1, 0], [-1, -1], [0, -1], [1, -1], [1, 0]], float)
+    W = [1, S2, 1, S2, 1, S2, 1, S2, 1]
+    knots = [0, 0, 0, 0.25, 0.25, 0.5, 0.5, 0.75, 0.75, 1, 1, 1]
+    return sk.NurbsCurve(2, knots, np.column_stack([P, np.zeros(9)]), W)
+
+
+def test_circle_polyline_sagitta_closed_form():
+    r = 2.0
+    C = circle_curve(r)
+    for tol in (1e-2, 1e-4):
+        line = tessellate(C, tol, angle_tolerance=None)
+        assert isinstance(line, Polyline)
+        assert np.allclose(np.linalg.norm(line.points, axis=1), r, atol=1e-12)
+        # a chord of angle theta has sagitta r (1 - cos(theta / 2)); all must be <= tol
+        chords = np.linalg.norm(np.diff(line.points, axis=0), axis=1)
+        theta = 2 * np.arcsin(np.clip(chords / (2 * r), 0, 1))
+        assert (r * (1 - np.cos(theta / 2))).max() <= tol
+        fewest = 2 * np.pi / (2 * np.arccos(1 - tol / r))
+        assert fewest <= len(line) - 1 <= 3 * fewest
+        assert line.params[0] == 0.0 and line.params[-1] == 1.0 and (np.diff(line.params) > 0).all()
+
+
+@pytest.mark.parametrize("seed", range(8))
+def test_random_curve_polyline_within_tolerance(seed):
+    rng = np.random.default_rng(seed)
+    p, U, P, W = random_curve_data(rng, rational=seed % 2 == 1, max_degree=6)
+    C = sk.NurbsCurve(p, U, P, W) if W is not None else sk.BSplineCurve(p, U, P)
+    tol = 1e-3 * np.linalg.norm(np.ptp(P, axis=0))
+    line = tessellate(C, tol, angle_tolerance=None)
+    assert line.max_deviation <= tol
+    # random points inside random segments against the chord
+    k = rng.integers(0, len(line) - 1, 3000)
+    s = rng.random(3000)
+    t = line.params[k] + s * (line.params[k + 1] - line.params[k])
+    chord = line.points[k] + s[:, None] * (line.points[k + 1] - line.points[k])
+    assert np.linalg.norm(C.evaluate(t) - chord, axis=1).max() <= tol
+    assert np.allclose(C.evaluate(line.params), line.points)
+
+
+def test_bezier_curve_and_straight_line():
+    B = sk.BezierCurve([[0, 0], [1, 2], [3, 2], [4, 0]])
+    line = tessellate(B, 1e-3)
+    assert line.max_deviation <= line.tolerance
+    straight = sk.BezierCurve([[0, 0, 0], [1, 1, 1]])
+    assert len(tessellate(straight, 1e-9)) == 2
+
+
+# -- results ------------------------------------------------------------------------------------
+def test_result_attributes_shapes_and_pickle():
+    mesh = tessellate(sphere_patches(), 1e-2)
+    n, f = mesh.n_vertices, mesh.n_faces
+    assert mesh.normals.shape == (n, 3) and mesh.uv.shape == (n, 2)
+    assert mesh.vertex_patch.shape == (n,) and mesh.face_patch.shape == (f,)
+    assert mesh.corner_uv.shape == (f, 3, 2)
+    assert not mesh.vertices.flags.writeable and not mesh.normals.flags.writeable
+    with pytest.raises(AttributeError):
+        mesh.max_deviation = 0.0
+    again = pickle.loads(pickle.dumps(mesh))
+    assert isinstance(again, Tessellation) and again == mesh
+    assert np.array_equal(again.corner_uv, mesh.corner_uv) and again.max_deviation == mesh.max_deviation
+
+
+# -- bad input ----------------------------------------------------------------------------------
+@pytest.mark.parametrize("tol", [0.0, -1.0, float("nan"), float("inf"), "abc", [1e-3, 1e-3], 1j])
+def test_bad_tolerance(tol):
+    with pytest.raises(SplineKitError, match="tolerance"):
+        tessellate(sphere_surface(), tol)
+
+
+@pytest.mark.parametrize("angle", [0.0, -0.1, 4.0, float("nan")])
+def test_bad_angle_tolerance(angle):
+    with pytest.raises(SplineKitError, match="angle_tolerance"):
+        tessellate(sphere_surface(), 1e-3, angle_tolerance=angle)
+
+
+@pytest.mark.parametrize(
+    "obj",
+    [None, 3, "sphere", {"a": 1}, [], np.zeros((3, 3)), sk.PolyMesh([[0, 0, 0], [1, 0, 0], [0, 1, 0]], [[0, 1, 2]])],
+)
+def test_unsupported_objects(obj):
+    with pytest.raises(SplineKitError):
+        tessellate(obj, 1e-3)
+
+
+def test_bad_patch_lists():
+    with pytest.raises(SplineKitError, match="patch 1"):
+        tessellate([sphere_surface(), circle_curve()], 1e-3)
+    flat2d = sk.BSplineSurface(1, 1, [0, 0, 1, 1], [0, 0, 1, 1], np.zeros((2, 2, 2)) + [[[0, 0], [0, 1]], [[1, 0], [1, 1]]])
+    with pytest.raises(SplineKitError, match="3-D"):
+        tessellate(flat2d, 1e-3)
+    with pytest.raises(SplineKitError, match="relative"):
+        tessellate(sphere_surface(), 1e-3, relative="yes")
+
+
+def test_too_small_tolerance_is_refused_not_hung():
+    with pytest.raises(SplineKitError, match="triangles"):
+        tessellate(sphere_surface(), 1e-13)
