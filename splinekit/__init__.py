@@ -1,18 +1,61 @@
 """splinekit: vectorized Bézier, B-spline and NURBS curves and surfaces.
 
 The math core imports only numpy and scipy; the OpenCascade bridge
-(:mod:`splinekit.occ`) imports OCP lazily, inside its functions.
+(:mod:`splinekit.occ`) imports OCP lazily, inside its functions, and the
+booleans import manifold3d the same way.
 """
+
+import sys as _sys
 
 from . import errors
 from .basis import bernstein, design_matrix
 from .curves import BezierCurve, BSplineCurve, NurbsCurve, SplineCurve
 from .errors import SplineKitError
+from .closest import Projection, distance, project
+from .construct import (
+    arc,
+    arc_through_points,
+    bicubic_coons,
+    circle,
+    coons,
+    ellipse,
+    extrude,
+    gordon,
+    line,
+    loft,
+    make_compatible,
+    polyline,
+    revolve,
+    ruled,
+    sweep,
+)
+from .diffgeom import (
+    ExplicitSurface,
+    ImplicitSurface,
+    ParametricSurface,
+    SubdivisionPatch,
+    curvature,
+    geodesic,
+    trace_geodesic,
+)
+from .diffgeom.curves import ParametricCurve, frenet_frame, rotation_minimizing_frames
+from .diffgeom.curves import curvature as curve_curvature
+from .diffgeom.curves import torsion as curve_torsion
+from .fit import approximate_curve, approximate_surface, fit_surface, interpolate_curve, interpolate_surface
 from .interop import occ
+from .interop.booleans import difference, intersection, union, union_all
 from .mesh import PolyMesh
 from .subdiv import Refinement, SubdivisionSurface, subdivide, subdivision_matrix
 from .surfaces import BezierSurface, BSplineSurface, NurbsSurface, SplineSurface
+from .tessellate import Tessellation
+from .tessellate import tessellate as _tessellate_function
 from .tolerances import Tolerances
+
+# ``import splinekit.occ`` / ``from splinekit.occ import to_occ`` as the design notes spell it
+_sys.modules[__name__ + ".occ"] = occ
+# ``splinekit.tessellate`` is the function (as the design notes spell it); the
+# subpackage stays importable: ``from splinekit.tessellate import Tessellation``
+tessellate = _tessellate_function
 
 __version__ = "0.1.0"
 
@@ -36,4 +79,51 @@ __all__ = [
     "Tolerances",
     "errors",
     "occ",
+    # construction
+    "line",
+    "polyline",
+    "circle",
+    "arc",
+    "ellipse",
+    "arc_through_points",
+    "make_compatible",
+    "extrude",
+    "ruled",
+    "revolve",
+    "loft",
+    "sweep",
+    "coons",
+    "bicubic_coons",
+    "gordon",
+    # fitting
+    "interpolate_curve",
+    "interpolate_surface",
+    "approximate_curve",
+    "approximate_surface",
+    "fit_surface",
+    # closest points
+    "project",
+    "distance",
+    "Projection",
+    # differential geometry
+    "curvature",
+    "geodesic",
+    "trace_geodesic",
+    "ParametricSurface",
+    "ExplicitSurface",
+    "ImplicitSurface",
+    "SubdivisionPatch",
+    "ParametricCurve",
+    "curve_curvature",
+    "curve_torsion",
+    "frenet_frame",
+    "rotation_minimizing_frames",
+    # tessellation
+    "tessellate",
+    "Tessellation",
+    # booleans (manifold3d)
+    "union",
+    "difference",
+    "intersection",
+    "union_all",
 ]

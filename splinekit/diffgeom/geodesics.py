@@ -21,9 +21,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.integrate import solve_bvp, solve_ivp
-from scipy.sparse import coo_matrix
-from scipy.sparse.csgraph import dijkstra
 
 from .._validate import as_float_array, as_int, as_real
 from ..errors import ConvergenceError, DomainError, ParameterError
@@ -174,6 +171,8 @@ def trace_geodesic(surface, start_uv, direction, length, *, samples: int = 201, 
     if not length > 0:
         raise ParameterError(f"length must be positive, got {length!r}")
     samples = as_int(samples, "samples", minimum=2)
+    from scipy.integrate import solve_ivp  # imported here: keeps `import splinekit` fast
+
     d = per.derivatives(uv0[None], 1)
     J = np.stack([d[1, 0, 0], d[0, 1, 0]], 1)  # (dim, 2)
     vec = as_float_array(direction, "direction").ravel()
@@ -211,6 +210,9 @@ def _grid_path(per: _Periodic, a: np.ndarray, b: np.ndarray, n: int) -> np.ndarr
     grid (16-neighbourhood, weights the 3-D chord lengths): ``(k, 2)`` unwrapped
     parameters from ``a`` to ``b`` (``b`` shifted by whole periods when the
     path crosses a seam)."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import dijkstra
+
     t = np.linspace(0.0, 1.0, n)
     U, V = np.meshgrid(per.lo[0] + per.period[0] * t, per.lo[1] + per.period[1] * t, indexing="ij")
     nodes = np.column_stack([U.ravel(), V.ravel()])
@@ -308,6 +310,8 @@ def _speed(per, uv, vel):
 def _collocation(per: _Periodic, a, path, tol):
     """``solve_bvp`` on the geodesic equation seeded by the graph ``path``
     (unwrapped parameters): ``(solution or None, the seed (2, k))``."""
+    from scipy.integrate import solve_bvp
+
     X = per.derivatives(path, 0)[0, 0]
     seg = np.linalg.norm(np.diff(X, axis=0), axis=1)
     t_nodes = np.concatenate([[0.0], np.cumsum(seg)]) / seg.sum()
