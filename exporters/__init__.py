@@ -1,14 +1,40 @@
-"""File writers and readers (STEP, STL, 3MF, OBJ, PLY, glTF) built on splinekit.
+"""File writers and readers built on splinekit.
 
-Nothing is here yet; the exporters issue fills this package.
+* exact geometry: STEP AP214 through OpenCascade (:func:`export_step`,
+  :func:`import_step`), curves and surfaces as B-spline geometry, bodies as
+  sewn shells or solids, with names and units;
+* meshes: STL (binary and ASCII), OBJ, PLY (binary and ASCII), 3MF and glTF
+  binary (.glb), written with numpy; :func:`export_mesh` / :func:`import_mesh`
+  choose the format from the suffix.
+
+Every writer writes a temporary file beside the target and renames it into
+place, so a failed or interrupted export leaves no partial file and never
+damages an existing one.
 """
 
-# mesh formats (STL, OBJ, PLY, 3MF, glTF binary)
 from ._meshio import export_mesh, import_mesh
 from .gltf import export_glb, import_glb
 from .obj import export_obj, import_obj
 from .ply import export_ply, import_ply
+from .step import STEP_UNITS, StepItem, export_step, import_step
 from .stl import export_stl, import_stl
 from .threemf import export_3mf, import_3mf
 
-from .step import export_step, import_step
+__all__ = [
+    "export_step",
+    "import_step",
+    "StepItem",
+    "STEP_UNITS",
+    "export_mesh",
+    "import_mesh",
+    "export_stl",
+    "import_stl",
+    "export_obj",
+    "import_obj",
+    "export_ply",
+    "import_ply",
+    "export_3mf",
+    "import_3mf",
+    "export_glb",
+    "import_glb",
+]
