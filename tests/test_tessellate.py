@@ -416,3 +416,21 @@ def test_bad_patch_lists():
 def test_too_small_tolerance_is_refused_not_hung():
     with pytest.raises(SplineKitError, match="triangles"):
         tessellate(sphere_surface(), 1e-13)
+
+
+def test_inward_facing_closed_body_is_turned_outward():
+    """A half circle revolved the other way round gives patches whose Su x Sv
+    points into the ball; the tessellation of the closed body faces outward
+    anyway (positive volume, normals along the position), like OCC's solids."""
+    half = sk.arc([0, 0, 0], [0, 1, 0], 1.0, -np.pi / 2, np.pi / 2)
+    ball = sk.revolve(half, [0, 0, 0], [0, 0, 1])
+    inward = ball.normal(np.array([0.3]), np.array([0.4]))[0] @ ball.evaluate(0.3, 0.4)
+    assert inward < 0  # the construction really faces inward
+    m = sk.tessellate([ball], 1e-3)
+    assert m.is_closed and m.volume > 0
+    assert np.allclose(np.einsum("ij,ij->i", m.normals, m.vertices), 1.0, atol=1e-9)
+    # corner parameters follow the flipped winding: the centre of each triangle's
+    # corner (u, v) maps next to the flat triangle's centre
+    centre_uv = m.corner_uv.mean(axis=1)
+    gap = np.linalg.norm(ball.evaluate(centre_uv[:, 0], centre_uv[:, 1]) - m.vertices[m.faces].mean(axis=1), axis=1)
+    assert gap.max() <= 2 * m.max_deviation

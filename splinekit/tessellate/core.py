@@ -139,4 +139,17 @@ def tessellate(obj, tolerance=None, *, angle_tolerance=DEFAULT_ANGLE_TOLERANCE, 
         return tessellate_curve(item, tol, angle_tolerance)
     from .surfaces import tessellate_patches
 
-    return tessellate_patches(item, tol, angle_tolerance, size)
+    return _outward(tessellate_patches(item, tol, angle_tolerance, size))
+
+
+def _outward(mesh):
+    """A closed body whose patches all face inward (``Su x Sv`` pointing into
+    the solid, e.g. a profile revolved the other way round) turned outward:
+    triangle winding, corner parameters and normals flipped, so its volume is
+    positive, as OCC's solids and manifold3d expect."""
+    if mesh.n_faces == 0 or not mesh.is_closed or mesh.volume >= 0:
+        return mesh
+    return type(mesh)._build(
+        mesh.vertices, np.asarray(mesh.faces)[:, ::-1], -mesh.normals, mesh.uv, mesh.vertex_patch,
+        mesh.face_patch, np.asarray(mesh.corner_uv)[:, ::-1], mesh.max_deviation, mesh.tolerance,
+    )  # fmt: skip

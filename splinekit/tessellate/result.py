@@ -32,8 +32,10 @@ class Tessellation(PolyMesh):
     ----------
     normals : (n, 3) float64
         Exact unit surface normals ``Su x Sv / |Su x Sv|`` at the vertices (the
-        limit normal at a collapsed edge such as a pole). A vertex shared by
-        several patches carries the normal of one of them.
+        limit normal at a collapsed edge such as a pole); for a closed body
+        whose patches face inward, triangles and normals are flipped so the
+        body faces outward (positive volume). A vertex shared by several
+        patches carries the normal of one of them.
     uv : (n, 2) float64
         Parameters of each vertex in its patch (``vertex_patch``).
     vertex_patch : (n,) int64
