@@ -17,12 +17,15 @@ sub-face's bicubic Coons patch, the same patch :meth:`to_bsplines` makes: it
 interpolates the exact limit points at the sub-face's corners and edge
 midpoints and shares its edges with the exact neighbouring patches, so the
 evaluated surface is continuous; its error shrinks with the sub-face size
-(measured in the tests). Only the one-ring neighbourhoods of the irregular
-faces queried are refined (their disjoint union; the limit surface over a face
-depends on nothing else), or the whole mesh when that is smaller, and
-``max_level`` is capped so that the refined union stays under 4 million faces;
-exact evaluation by Stam's eigen-analysis, which needs no refinement, is not
-implemented.
+(measured in the tests). At every level, the queries still irregular go on
+in the disjoint union of their faces' one-ring neighbourhoods (the limit
+surface over a face depends on nothing else) whenever that union is smaller
+than the level, so the refined area follows the queries: a point at an
+extraordinary vertex stays irregular down to ``max_level``, and refining the
+whole mesh for it would cost ``4**max_level`` times the mesh. ``max_level`` is
+capped so that the whole mesh refined ``max_level + 1`` times would stay under
+4 million faces; exact evaluation by Stam's eigen-analysis, which needs no
+refinement, is not implemented.
 """
 
 from __future__ import annotations
@@ -210,7 +213,7 @@ class SubdivisionSurface:
 
     def _level_budget(self) -> int:
         """Most levels below the evaluation base that stay within EVAL_FACE_BUDGET faces
-        (the whole mesh is refined; see the module docstring)."""
+        if the whole mesh were refined (see the module docstring)."""
         faces = self._level_data(self._eval_base_level)[0].n_faces
         return max(int(math.floor(math.log(self.EVAL_FACE_BUDGET / max(faces, 1), 4))) - 1, 1)
 
@@ -267,27 +270,17 @@ class SubdivisionSurface:
         return P, Du, Dv, normals
 
     def _evaluate(self, face, u, v, max_level, base, local=True):
-        """Points and partials; irregular faces of a large mesh are evaluated on
-        the union of their one-ring neighbourhoods (see :func:`_neighbourhoods`)."""
-        t0, X0, regular0, r0 = self._level_data(base)
-        irregular = np.unique(face[~regular0[face]])
-        if local and irregular.size:
-            union = _neighbourhoods(t0, X0, r0, irregular)
-            if union is not None and union[0].n_faces < t0.n_faces:
-                mesh, creases, corners, where = union
-                inner = SubdivisionSurface(mesh, "catmull-clark", creases=creases, corners=corners, boundary="edge-only")
-                dim = self.mesh.vertices.shape[1]
-                P, Du, Dv = np.zeros((face.size, dim)), np.zeros((face.size, dim)), np.zeros((face.size, dim))
-                reg = regular0[face]
-                if reg.any():
-                    p, du, dv = _eval_patches(t0, X0, face[reg], u[reg], v[reg])
-                    P[reg], Du[reg], Dv[reg] = p, du, dv
-                if (~reg).any():
-                    sub = where[np.searchsorted(irregular, face[~reg])]
-                    inner_level = min(max_level, inner._level_budget())
-                    p, du, dv = inner._evaluate(sub, u[~reg], v[~reg], inner_level, 0, local=False)
-                    P[~reg], Du[~reg], Dv[~reg] = p, du, dv
-                return P, Du, Dv
+        """Points and partials ``(m, dim)`` x 3 at ``(face, u, v)`` of level ``base``,
+        descending at most ``max_level`` levels.
+
+        With ``local``, the queries still irregular at a level are handed to a
+        surface on the union of their faces' one-ring neighbourhoods (see
+        :func:`_neighbourhoods`) whenever that union is smaller than the level,
+        so the descent refines only around the queries: a point at an
+        extraordinary vertex never stops being irregular, and refining the
+        whole mesh ``max_level`` (+ 1 for the Coons limit points) times for it
+        costs ``4**max_level`` times the mesh.
+        """
         m = face.size
         dim = self.mesh.vertices.shape[1]
         P = np.zeros((m, dim))
@@ -296,8 +289,9 @@ class SubdivisionSurface:
         f, s, w = face.copy(), u.copy(), v.copy()
         J = np.broadcast_to(np.eye(2), (m, 2, 2)).copy()
         todo = np.arange(m)
-        for level in range(base, base + max_level + 1):
-            t, X, regular, _ = self._level_data(level)
+        last = base + max_level
+        for level in range(base, last + 1):
+            t, X, regular, r = self._level_data(level)
             reg = regular[f]
             if reg.any():
                 idx = todo[reg]
@@ -310,8 +304,15 @@ class SubdivisionSurface:
             todo, f, s, w, J = todo[keep], f[keep], s[keep], w[keep], J[keep]
             if todo.size == 0:
                 break
-            if level == base + max_level:
-                p, ds, dt = _eval_coons(self, level, t, X, regular, f, s, w)
+            found = None
+            if level == last:
+                found = _eval_coons(self, level, t, X, regular, f, s, w)
+            elif local:
+                # only with a level left below: the union's border faces are classified as
+                # irregular, which matters for the Coons edges at its level 0 alone
+                found = self._evaluate_in_neighbourhoods(t, X, r, f, s, w, last - level)
+            if found is not None:
+                p, ds, dt = found
                 P[todo] = p
                 Du[todo] = ds * J[:, 0, 0, None] + dt * J[:, 1, 0, None]
                 Dv[todo] = ds * J[:, 0, 1, None] + dt * J[:, 1, 1, None]
@@ -323,6 +324,21 @@ class SubdivisionSurface:
             s, w = np.clip(st[:, 0], 0, 1), np.clip(st[:, 1], 0, 1)
             J = np.einsum("mij,mjk->mik", _QUAD_J[q], J)
         return P, Du, Dv
+
+    def _evaluate_in_neighbourhoods(self, t, X, r, face, u, v, levels):
+        """Points and partials at ``(face, u, v)`` of level topology ``t`` (vertices
+        ``X``, refinement ``r``), descending ``levels`` more levels on the disjoint
+        union of the faces' one-ring neighbourhoods; None when that union is not
+        smaller than ``t`` (refining the level itself is then no dearer)."""
+        faces, where_face = np.unique(face, return_inverse=True)
+        union = _neighbourhoods(t, X, r, faces, max_faces=t.n_faces - 1)
+        if union is None:
+            return None
+        mesh, creases, corners, where = union
+        inner = SubdivisionSurface(mesh, "catmull-clark", creases=creases, corners=corners, boundary="edge-only",
+                                   crease_method=self._options["crease_method"])
+        inner_levels = min(levels, inner._level_budget())
+        return inner._evaluate(where[where_face.ravel()], u, v, inner_levels, 0, local=True)
 
     # -- conversion -------------------------------------------------------------------------
     def to_bsplines(self, levels: int = 2):
@@ -393,19 +409,21 @@ class SubdivisionSurface:
             "axes": np.concatenate([m[0] for m in maps]),
             "origin": np.concatenate([m[1] for m in maps]),
         }
-        info["max_deviation"] = self._patch_deviation(patches, info)
+        info["max_deviation"] = self._patch_deviation(nets, info)
         return patches, info
 
-    def _patch_deviation(self, patches, info, samples: int = 9) -> float:
-        """Largest distance between the approximate patches and :meth:`evaluate`
-        on a ``samples x samples`` grid of each (0 when all patches are exact)."""
+    def _patch_deviation(self, nets, info, samples: int = 9) -> float:
+        """Largest distance between the approximate patches (Bézier nets ``(n, 4, 4,
+        dim)``) and :meth:`evaluate` on a ``samples x samples`` grid of each (0 when
+        all patches are exact)."""
         approx = np.flatnonzero(info["kind"] == "coons")
         if approx.size == 0:
             return 0.0
         g = np.linspace(0, 1, samples)
         S, T = np.meshgrid(g, g, indexing="ij")
         st = np.column_stack([S.ravel(), T.ravel()])
-        pts = np.stack([patches[k].evaluate(st[:, 0], st[:, 1]) for k in approx])  # (a, s*s, dim)
+        Bs, Bt = all_bernstein(3, st[:, 0]), all_bernstein(3, st[:, 1])  # (4, s*s) each
+        pts = np.einsum("is,js,aijd->asd", Bs, Bt, nets[approx], optimize=True)  # (a, s*s, dim)
         uv = np.einsum("aij,sj->asi", info["axes"][approx], st) + info["origin"][approx][:, None, :]
         uv = np.clip(uv, 0.0, 1.0)
         face = np.repeat(info["face"][approx], st.shape[0])
@@ -413,10 +431,11 @@ class SubdivisionSurface:
         return float(np.linalg.norm(pts.reshape(exact.shape) - exact, axis=1).max())
 
 
-def _neighbourhoods(t: Topology, X: np.ndarray, r: Refinement, faces: np.ndarray):
+def _neighbourhoods(t: Topology, X: np.ndarray, r: Refinement, faces: np.ndarray, max_faces: int | None = None):
     """The disjoint union of the one-ring neighbourhoods (all faces sharing a
-    vertex) of ``faces``, as ``(mesh, edge sharpness, vertex sharpness,
-    face_in_union)``.
+    vertex) of the distinct ``faces``, as ``(mesh, edge sharpness, vertex
+    sharpness, face_in_union)``; None when it would have more than
+    ``max_faces`` faces.
 
     Under Catmull-Clark refinement the limit surface over a face depends only
     on this neighbourhood, at every level: so refining the (small) union
@@ -433,6 +452,8 @@ def _neighbourhoods(t: Topology, X: np.ndarray, r: Refinement, faces: np.ndarray
     own = np.repeat(owner, counts)
     pos = ranges(offsets[verts], counts)
     pair = np.unique(own * t.n_faces + vface[pos])
+    if max_faces is not None and pair.size > max_faces:
+        return None
     own, g = pair // t.n_faces, pair % t.n_faces
     gs = t.face_sizes[g]
     cown = np.repeat(own, gs)
