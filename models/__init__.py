@@ -1,4 +1,49 @@
-"""Scripted parametric models; each module has a ``build(**params)``.
+"""Scripted parametric models: examples, command-line targets and test fixtures.
 
-Nothing is here yet; the models issue fills this package.
+Every model module has a docstring (what it is; lengths in millimetres),
+``PARAMETERS`` (a tuple of :class:`Parameter`) and ``build(**params) -> Model``.
+``MODELS`` lists them in a stable order; :func:`build_model` builds one by name.
+The default, ``"teapot"``, builds fastest (32 patches from a table) and is
+the best-known shape in the set.
 """
+
+from __future__ import annotations
+
+from splinekit.errors import ParameterError
+
+from . import bracket, mug, teapot, vase, wing
+from ._base import Model, Parameter, resolve_params, surface_integrals
+
+__all__ = [
+    "DEFAULT_MODEL",
+    "MODELS",
+    "Model",
+    "Parameter",
+    "build_model",
+    "get_model",
+    "resolve_params",
+    "surface_integrals",
+]
+
+MODELS = {
+    "teapot": teapot,
+    "vase": vase,
+    "mug": mug,
+    "bracket": bracket,
+    "wing": wing,
+}
+
+DEFAULT_MODEL = "teapot"
+
+
+def get_model(name: str):
+    """The model module registered as ``name``; ParameterError naming the available ones otherwise."""
+    module = MODELS.get(name) if isinstance(name, str) else None
+    if module is None:
+        raise ParameterError(f"unknown model {name!r}; available: {', '.join(MODELS)}")
+    return module
+
+
+def build_model(name: str, **params) -> Model:
+    """``get_model(name).build(**params)``."""
+    return get_model(name).build(**params)
