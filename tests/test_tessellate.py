@@ -434,3 +434,32 @@ def test_inward_facing_closed_body_is_turned_outward():
     centre_uv = m.corner_uv.mean(axis=1)
     gap = np.linalg.norm(ball.evaluate(centre_uv[:, 0], centre_uv[:, 1]) - m.vertices[m.faces].mean(axis=1), axis=1)
     assert gap.max() <= 2 * m.max_deviation
+
+
+def test_utah_teapot_is_stitched_along_every_shared_patch_edge():
+    """The 32 Bezier patches of the Utah teapot: the tessellation may only have
+    boundary edges on the patch edges that no other patch shares (the rim, the
+    spout and handle ends, found here from the control nets alone); every
+    shared edge is stitched, so no boundary vertex lies anywhere else."""
+    import models
+
+    patches = models.build_model("teapot").bodies[0]
+    mesh = sk.tessellate(patches, 1e-3, relative=True)
+    assert mesh.max_deviation <= mesh.tolerance
+
+    def key(row):
+        return tuple(map(tuple, np.round(row, 9)))
+
+    count = {}
+    for p in patches:
+        C = np.asarray(p.control_points)
+        for side in (C[0], C[-1], C[:, 0], C[:, -1]):
+            k = min(key(side), key(side[::-1]))
+            count[k] = count.get(k, 0) + 1
+    open_edges = [np.array(k) for k, c in count.items() if c == 1 and np.ptp(np.array(k), axis=0).max() > 0]
+    assert 0 < len(open_edges) < len(count)
+    boundary = np.unique(mesh.edges[mesh.boundary_edges])
+    assert boundary.size > 0
+    X = mesh.vertices[boundary]
+    nearest = np.min([sk.project(sk.BezierCurve(e), X).distances for e in open_edges], axis=0)
+    assert nearest.max() <= 1e-9 * np.abs(mesh.vertices).max()
