@@ -693,6 +693,12 @@ class _Implicit:
             tol = 1e-9 * max(1.0, float(np.abs(P).max(initial=0.0)))
         else:
             tol = _positive_tolerance(tolerance)
+        if callable(getattr(self.f, "closest_points", None)) and dim == 3:
+            # splinekit.implicit objects know their own structure (CSG seams
+            # need a crease step a plain gradient iteration lacks)
+            q = np.asarray(self.f.closest_points(P, tol=tol), dtype=np.float64).reshape(P.shape)
+            dist = np.linalg.norm(q - P, axis=1)
+            return Projection(None, _readonly(q.reshape(lead + (dim,))), _readonly(dist.reshape(lead)))
         q = P.copy()
         active = np.arange(P.shape[0])
         for _ in range(IMPLICIT_ITERATIONS + 1):

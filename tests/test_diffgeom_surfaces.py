@@ -409,3 +409,9 @@ def test_compiled_grid_kernel_matches_numpy_path(kind, monkeypatch):
     for name in ("mean", "k1", "k2", "shape_operator"):
         assert np.allclose(getattr(fast, name), getattr(slow, name), atol=1e-9 * scale), name
     assert np.allclose(fast.gaussian, slow.gaussian, atol=1e-9 * scale**2)
+
+
+def test_implicit_numeric_derivatives_of_no_points():
+    s = ImplicitSurface(lambda p: p[:, 0] ** 2 + p[:, 1])
+    assert s.gradient(np.zeros((0, 3))).shape == (0, 3)
+    assert s.hessian(np.zeros((0, 3))).shape == (0, 3, 3)

@@ -432,7 +432,8 @@ class ImplicitSurface:
         n = len(p)
         shifts = _OFFSETS[None, :, None] * h * np.eye(3)[:, None, :]  # (3 axes, 5 offsets, 3)
         q = (p[:, None, None, :] + shifts[None]).reshape(-1, 3)
-        vals = np.asarray(g(q)).reshape(n, 3, 5, -1)  # [point, axis, offset, component]
+        vals = np.asarray(g(q))
+        vals = vals.reshape(n, 3, 5, vals.shape[-1])  # [point, axis, offset, component]
         return np.einsum("j,najk->nak", _D1, vals) / h
 
 
