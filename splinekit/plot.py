@@ -87,11 +87,8 @@ COLOR_MODES = ("curvature", "gaussian", "mean", "normal", "patch")
 """What :func:`render_patches` / :func:`render_mesh` can color by:
 ``curvature`` the RMS of the principal curvatures ``sqrt((k1^2 + k2^2) / 2)``
 (unsigned, 1/length), ``gaussian`` K (1/length^2, signed), ``mean`` H
-(1/length, signed, positive where the surface is convex seen from the side its
-normals point to: PolyMesh's convention, so a sphere with outward normals has
-H = +1/r; patch sets are taken as oriented the way the area-weighted flux of
-``x - centre`` through them says, so a closed, consistently oriented patch set
-reads as a mesh would), ``normal`` the unit normal as RGB, ``patch`` the patch
+(1/length, signed against the normals as everywhere in splinekit and in OCC:
+a sphere with outward normals has H = -1/r), ``normal`` the unit normal as RGB, ``patch`` the patch
 (or, for a plain mesh, connected component) index."""
 
 COLOR_SCALES = ("percentile", "symlog")
@@ -157,14 +154,6 @@ def _polygon_normals(polys):
         half = polys.shape[1] // 2
         n = np.cross(polys[:, half] - polys[:, 0], polys[:, half + 1] - polys[:, 1])
     return _unit_rows(n)
-
-
-def _points_inward(polys, normals) -> bool:
-    """Whether the ``(F, 3)`` normals point into the shape on balance: the flux of
-    ``x - centre`` through the ``(F, k, 3)`` polygons (3 x the enclosed volume for a
-    closed, consistently oriented surface) is negative."""
-    centre = 0.5 * (polys.reshape(-1, 3).min(axis=0) + polys.reshape(-1, 3).max(axis=0))
-    return float(np.einsum("ij,ij,i->", polys.mean(axis=1) - centre, normals, _polygon_areas(polys))) < 0
 
 
 def _polygon_areas(polys) -> np.ndarray:
@@ -352,10 +341,6 @@ def render_patches(patches, path, *, color: str = "curvature", scale: str = "per
     flat = ~normals.any(axis=1)  # corner normals cancelled or were undefined: use the polygon's own
     normals[flat] = _polygon_normals(polys[flat])
     H = np.concatenate(H)
-    if color == "mean" and not _points_inward(polys, normals):
-        # splinekit.curvature follows OCC: H < 0 on a sphere with outward normals; show the
-        # mesh convention instead (PolyMesh.mean_curvature: + on convex parts, outward normals)
-        H = -H
     values = None if color in ("normal", "patch") else _field(color, np.concatenate(K), H)
     patch_id = np.repeat(np.arange(len(patches)), len(quads))
     return _draw(polys, normals, color, values, patch_id, scale, size, view, title, path)

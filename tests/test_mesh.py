@@ -417,12 +417,12 @@ class TestCurvature:
         rows = []
         for level, h_max, h_mean, k_max, k_mean in SPHERE_BOUNDS:
             m = icosphere(level, R)
-            eh = np.abs(m.mean_curvature - 1 / R)
+            eh = np.abs(m.mean_curvature + 1 / R)
             ek = np.abs(m.gaussian_curvature - 1 / R**2)
             rows.append((level, m.n_vertices, eh.max(), eh.mean(), ek.max(), ek.mean()))
             assert eh.max() < h_max and eh.mean() < h_mean, rows[-1]
             assert ek.max() < k_max and ek.mean() < k_mean, rows[-1]
-            assert (m.mean_curvature > 0).all()  # outward normals: positive
+            assert (m.mean_curvature < 0).all()  # outward normals: negative (OCC's sign)
         e = np.array(rows)
         # second-order convergence from level 2 on (level 1 is exact by symmetry for H)
         assert (e[1:-1, 2] / e[2:, 2] > 3.5).all() and (e[:-1, 4] / e[1:, 4] > 3.5).all()
@@ -465,7 +465,7 @@ class TestCurvature:
         H = (R + 2 * r * np.cos(t)) / (2 * r * (R + r * np.cos(t)))
         # measured on this quad mesh: max errors 7.6e-3 (K) and 1.5e-3 (H)
         assert np.abs(m.gaussian_curvature - K).max() < 1e-2
-        assert np.abs(m.mean_curvature - H).max() < 2e-3
+        assert np.abs(m.mean_curvature + H).max() < 2e-3  # outward normals: -H
         # K < 0 on the inside of the ring, > 0 outside
         assert (np.sign(m.gaussian_curvature[np.abs(np.cos(t)) > 0.1]) == np.sign(np.cos(t)[np.abs(np.cos(t)) > 0.1])).all()
 
@@ -488,7 +488,7 @@ class TestCurvature:
         np.testing.assert_array_equal(m.mean_curvature_normal[b], 0.0)
         # ... interior vertices are unaffected by the cut
         s = icosphere(4, R)
-        assert np.abs(m.mean_curvature[~b] - 1 / R).max() < 1e-5
+        assert np.abs(m.mean_curvature[~b] + 1 / R).max() < 1e-5
         assert np.abs(m.gaussian_curvature[~b] - 1 / R**2).max() < 1e-3
         # discrete Gauss-Bonnet with the boundary turning angles (pi - angle sum)
         assert np.isclose(G.angle_defects(m).sum(), TWO_PI * m.euler_characteristic, atol=1e-10)
@@ -516,11 +516,11 @@ class TestCurvature:
         centre = (n // 2) * n + n // 2
         assert np.isclose(m.gaussian_curvature[centre], -4.0, rtol=2e-2)
         assert abs(m.mean_curvature[centre]) < 1e-2
-        # a bowl z = x^2 + y^2 with normal +z (inside): H = -2 at the bottom... sign follows the normal
+        # a bowl z = x^2 + y^2 with normal +z (toward the centre of curvature): H = +2 at the bottom
         Vb = V.copy()
         Vb[:, 2] = (X**2 + Y**2).ravel()
         bowl = triangulated(PolyMesh(Vb, g.faces))
-        assert np.isclose(bowl.mean_curvature[centre], -2.0, rtol=2e-2)
+        assert np.isclose(bowl.mean_curvature[centre], 2.0, rtol=2e-2)
         assert np.isclose(bowl.gaussian_curvature[centre], 4.0, rtol=2e-2)
 
 

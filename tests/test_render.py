@@ -59,11 +59,15 @@ def test_sphere_in_every_color_mode(tmp_path, color):
     assert_good_picture(path)
 
 
-def test_sphere_gaussian_and_mean_curvature_are_positive(tmp_path):
-    """K = 1/r^2 > 0 and (outward normals) H = 1/r > 0: the warm end of the map only."""
-    for color in ("gaussian", "mean"):
-        _, _, red, blue = stats(render_patches(sphere(3.0), tmp_path / f"{color}.png", color=color, size=SMALL))
-        assert red > 0.1 and blue < 0.001, (color, red, blue)
+def test_sphere_gaussian_curvature_is_positive_and_mean_curvature_negative(tmp_path):
+    """K = 1/r^2 > 0: the warm end of the map only; with outward normals H = -1/r
+    (OCC's sign, splinekit's everywhere): the cool end only."""
+    _, _, red, blue = stats(render_patches(sphere(3.0), tmp_path / "gaussian.png", color="gaussian", size=SMALL))
+    assert red > 0.1 and blue < 0.001, (red, blue)
+    _, _, red, blue = stats(render_patches(sphere(3.0), tmp_path / "mean.png", color="mean", size=SMALL))
+    assert blue > 0.1 and red < 0.001, (red, blue)
+    _, _, red, blue = stats(render_mesh(primitives.icosphere(3, radius=3.0), tmp_path / "mesh-mean.png", color="mean", size=SMALL))
+    assert blue > 0.1 and red < 0.001, (red, blue)
 
 
 def test_torus_gaussian_curvature_changes_sign(tmp_path):

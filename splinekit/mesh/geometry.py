@@ -437,13 +437,13 @@ def mean_curvature(mesh, *, laplacian=None, normals=None) -> np.ndarray:
     """Signed mean curvature ``H = (k1 + k2) / 2`` per vertex ``(V,)`` (1/length), 3-D only.
 
     ``|H| = |L @ X| / (2 A_mixed)`` (the cotangent formula on the fan
-    triangulation, see :func:`mean_curvature_normal`), signed by
-    ``(L @ X) . n`` with ``n`` the :func:`vertex_normals` normal (a tie counts
-    as positive). **Sign convention:** positive where the surface bends away
-    from its normal: ``H = +1/R`` on a sphere of radius R with outward
-    normals (faces counter-clockwise seen from outside); reversing the face
-    orientation flips the sign. Boundary vertices, isolated vertices and
-    vertices of zero mixed area get 0.
+    triangulation, see :func:`mean_curvature_normal`), signed against
+    ``n``, the :func:`vertex_normals` normal. **Sign convention** (the one of
+    :func:`splinekit.curvature` and OpenCascade, for every representation):
+    positive where the surface bends toward its normal, so ``H = -1/R`` on a
+    sphere of radius R with outward normals (faces counter-clockwise seen
+    from outside); reversing the face orientation flips the sign. Boundary
+    vertices, isolated vertices and vertices of zero mixed area get 0.
 
     ``laplacian`` / ``normals`` : optional precomputed :func:`cotangent_laplacian`
     and :func:`vertex_normals` of the same mesh.
@@ -451,7 +451,8 @@ def mean_curvature(mesh, *, laplacian=None, normals=None) -> np.ndarray:
     g = _Geometry(mesh, "mean curvature", need_3d=True)
     Hn = g.mean_curvature_normal(laplacian)
     n = g.vertex_normals() if normals is None else _given(normals, (g.topology.n_vertices, 3), "normals")
-    sign = np.where(np.einsum("vd,vd->v", Hn, n) < 0, -1.0, 1.0)
+    # L @ X points away from the centre of curvature (outward on a sphere)
+    sign = np.where(np.einsum("vd,vd->v", Hn, n) > 0, -1.0, 1.0)
     return _unscale(sign * np.sqrt(np.einsum("vd,vd->v", Hn, Hn)), g.e, -1, "the mean curvature", "vertex")
 
 

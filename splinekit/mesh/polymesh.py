@@ -289,7 +289,8 @@ class PolyMesh:
 
     @cached_property
     def mean_curvature(self) -> np.ndarray:
-        """``(V,)`` signed mean curvature, ``+1/R`` on a sphere with outward normals; 0 on the boundary."""
+        """``(V,)`` signed mean curvature, ``-1/R`` on a sphere with outward normals (the
+        convention of :func:`splinekit.curvature` and OCC); 0 on the boundary."""
         from . import geometry
 
         geometry.check_dimension(self, "mean curvature", need_3d=True)
