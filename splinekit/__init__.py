@@ -57,6 +57,19 @@ _sys.modules[__name__ + ".occ"] = occ
 # subpackage stays importable: ``from splinekit.tessellate import Tessellation``
 tessellate = _tessellate_function
 
+_LAZY_SUBMODULES = ("implicit", "pointcloud", "levelset", "convert")
+
+
+def __getattr__(name):
+    """``splinekit.implicit``, ``.pointcloud``, ``.levelset`` and ``.convert`` are
+    imported on first use, keeping ``import splinekit`` fast."""
+    if name in _LAZY_SUBMODULES:
+        import importlib
+
+        return importlib.import_module(f"{__name__}.{name}")
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
 __version__ = "0.1.0"
 
 __all__ = [
