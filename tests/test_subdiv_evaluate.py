@@ -151,3 +151,123 @@ def test_evaluate_rejects_bad_max_level(bad):
     s = sk.SubdivisionSurface(primitives.box(), "catmull-clark")
     with pytest.raises(SplineKitError, match="max_level"):
         s.evaluate([0], [0.5], [0.5], max_level=bad)
+
+
+# -- semi-sharp creases: limits from the fans of the vertices, not the whole mesh ----------------
+# A crease of sharpness s changes the rules for ceil(s) levels, and the limit masks apply
+# only after that. Refining the whole mesh that far for the Coons corner limits cost 4**s
+# times the mesh (the cube with sharpness 10: 6 million faces). The limit of a vertex
+# depends only on its fan, so refining the fans of the vertices that need it gives the
+# same limits with a cost linear in s.
+
+
+def _whole_mesh_limits(s, level, extra):
+    """Limit points of the level-``level`` vertices, from the whole mesh refined ``extra``
+    more levels (past every finite sharpness) and the limit masks there."""
+    from splinekit.subdiv.limit import limit_matrix
+
+    fine = s.refinement(level + extra)
+    L = limit_matrix(fine.topology, fine.edge_sharpness[-1], fine.vertex_sharpness[-1], s.scheme)
+    # the vertex points of a level keep their indices at every finer level
+    return (L @ fine.apply(s.mesh.vertices))[: s.refinement(level).topology.n_vertices]
+
+
+def _whole_mesh_normals(s, extra):
+    """Unit limit normals of the control vertices from the tangent masks and crease
+    sectors of the whole mesh refined ``extra`` levels."""
+    from splinekit.subdiv.limit import crease_normals, tangent_matrices
+
+    fine = s.refinement(extra)
+    t, es, vs = fine.topology, fine.edge_sharpness[-1], fine.vertex_sharpness[-1]
+    X = fine.apply(s.mesh.vertices)
+    T1, T2, ok = tangent_matrices(t, es, vs, s.scheme)
+    n = np.cross(T1 @ X, T2 @ X)
+    cn, covered = crease_normals(t, X, es, vs, s.scheme)
+    n[~ok] = cn[~ok]
+    assert (ok | covered)[: s.mesh.n_vertices].all()
+    n = n[: s.mesh.n_vertices]
+    return n / np.linalg.norm(n, axis=1, keepdims=True)
+
+
+def _mug_cage():
+    from models.mug import cage
+
+    return cage(size=1.0)
+
+
+def _creased_surfaces(method):
+    """(surface, levels past its largest finite sharpness): semi-sharp creases (fractional,
+    varying along a crease, ending in darts), a sharp vertex, boundaries, n-gons, Loop."""
+    box = primitives.box()
+    yield sk.SubdivisionSurface(box, "catmull-clark", creases=(box.edges[:4], [2.5, 0.7, 1.0, 3.2]),
+                                corners={6: 1.4}, crease_method=method), 4
+    mug, rim = _mug_cage()
+    sharp = np.linspace(0.4, 2.6, len(rim))
+    yield sk.SubdivisionSurface(mug, "catmull-clark", creases=(rim, sharp), crease_method=method), 3
+    grid = primitives.grid(4, 3)
+    edges = sk.SubdivisionSurface(grid, "catmull-clark").refinement(0).topology.edges
+    yield sk.SubdivisionSurface(grid, "catmull-clark", creases=(edges[3:9], np.linspace(0.3, 2.2, 6)),
+                                crease_method=method), 3
+    ico = primitives.icosphere(1)
+    edges = sk.SubdivisionSurface(ico, "loop").refinement(0).topology.edges
+    creases = (edges[::7], np.linspace(0.2, 2.9, len(edges[::7])))
+    yield sk.SubdivisionSurface(ico, "loop", creases=creases, crease_method=method), 3
+    yield sk.SubdivisionSurface(ico, "catmull-clark", creases=creases, crease_method=method), 3
+
+
+@pytest.mark.parametrize("method", ["uniform", "chaikin"])
+def test_semi_sharp_limit_points_and_normals_equal_whole_mesh_refinement(method):
+    for s, extra in _creased_surfaces(method):
+        np.testing.assert_allclose(s.limit_points(), _whole_mesh_limits(s, 0, extra), rtol=0, atol=1e-13)
+        n = s.limit_normals()
+        np.testing.assert_allclose(n, _whole_mesh_normals(s, extra), rtol=0, atol=1e-12)
+        if s.scheme != "catmull-clark":
+            continue
+        # the Coons corners of to_bsplines(1) are limit points of the level their faces belong to
+        patches, info = s.to_bsplines(1)
+        for level in np.unique(info["level"][info["kind"] == "coons"]):
+            pick = np.flatnonzero((info["kind"] == "coons") & (info["level"] == level))
+            corners = np.array([patches[i].control_points[[0, 3, 3, 0], [0, 0, 3, 3]] for i in pick]).reshape(-1, 3)
+            reference = _whole_mesh_limits(s, int(level), extra)
+            gap = np.linalg.norm(corners[:, None, :] - reference[None, :, :], axis=2).min(axis=1)
+            assert gap.max() < 1e-13
+
+
+def _cube_with_creased_loop(sharpness):
+    """The cube with the four edges of one face creased (a closed crease: no darts)."""
+    box = primitives.box()
+    loop = np.stack([box.faces[0], np.roll(box.faces[0], -1)], axis=1)
+    return sk.SubdivisionSurface(box, "catmull-clark", creases=(loop, np.full(4, float(sharpness))))
+
+
+def test_to_bsplines_with_high_crease_sharpness_refines_a_bounded_area(refined_sizes):
+    totals = {}
+    for sharpness in (3.0, 10.0, 30.0):
+        refined_sizes.clear()
+        _patches, info = _cube_with_creased_loop(sharpness).to_bsplines(1)
+        assert info["approximate"] > 0 and np.isfinite(info["max_deviation"])
+        # the whole cube refined 10 (30) times has 6 * 4**10 (6 * 4**30) faces
+        assert max(refined_sizes) <= 6 * 4**6
+        totals[sharpness] = sum(refined_sizes)
+    # each further unit of sharpness refines the crease fans one more level: linear growth
+    assert totals[30.0] < 4 * totals[10.0]
+
+
+def test_limit_points_with_high_sharpness_refine_only_the_fans(refined_sizes):
+    s = _cube_with_creased_loop(40.0)
+    refined_sizes.clear()
+    limits = s.limit_points()
+    # 40 levels of the four crease vertices' fans (3 quads each, 12 after refinement)
+    assert len(refined_sizes) <= 41
+    assert max(refined_sizes) <= 4 * 3 * 4
+    # the crease stays sharp for 40 levels, so the limit is the sharp crease's to ~2**-40
+    sharp = _cube_with_creased_loop(np.inf).limit_points()
+    np.testing.assert_allclose(limits, sharp, rtol=0, atol=1e-10)
+    assert np.abs(limits - sharp).max() > 0  # and not the same surface
+
+
+def test_huge_finite_sharpness_is_the_sharp_limit_and_terminates():
+    huge = _cube_with_creased_loop(1e300)
+    sharp = _cube_with_creased_loop(np.inf)
+    np.testing.assert_allclose(huge.limit_points(), sharp.limit_points(), rtol=0, atol=1e-14)
+    np.testing.assert_allclose(huge.limit_normals(), sharp.limit_normals(), rtol=0, atol=1e-12)

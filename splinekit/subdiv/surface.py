@@ -26,6 +26,14 @@ whole mesh for it would cost ``4**max_level`` times the mesh. ``max_level`` is
 capped so that the whole mesh refined ``max_level + 1`` times would stay under
 4 million faces; exact evaluation by Stam's eigen-analysis, which needs no
 refinement, is not implemented.
+
+Limit positions and normals at vertices come from the limit masks, which
+apply once every sharpness at the vertex is 0 or infinite: a semi-sharp crease
+of sharpness ``s`` changes the rules for ``ceil(s)`` levels. The limit of a
+vertex depends only on its fan (the faces around it), so only the fans of the
+vertices with semi-sharp features are refined, one level at a time, keeping
+each child's fan (:func:`settled_fans`): the cost grows linearly with the
+sharpness, where refining the whole mesh would grow it fourfold per unit.
 """
 
 from __future__ import annotations
@@ -34,6 +42,7 @@ import math
 from functools import cached_property
 
 import numpy as np
+import scipy.sparse as sp
 
 from .._validate import as_float_array, as_int
 from ..basis.bernstein import all_bernstein
@@ -139,8 +148,10 @@ class SubdivisionSurface:
     # -- limit masks ----------------------------------------------------------------------
     @cached_property
     def _mask_level(self) -> int:
-        """Levels to refine before the limit masks apply: every finite sharpness
-        must have expired, and Catmull-Clark masks need quads."""
+        """Levels after which the limit masks apply everywhere: every finite
+        sharpness has expired, and Catmull-Clark masks need quads. Used only by
+        the fallback of :meth:`limit_normals` (vertices no mask covers); the
+        masks themselves are applied per vertex (see :func:`settled_fans`)."""
         base = self.refinement(0)
         finite = np.concatenate([base.edge_sharpness[0], base.vertex_sharpness[0]])
         finite = finite[np.isfinite(finite)]
@@ -157,10 +168,9 @@ class SubdivisionSurface:
     def limit_stencil(self):
         """Sparse ``(V, V)`` map from control vertices to their limit positions."""
         self._check_masks()
-        r = self.refinement(self._mask_level)
-        L = limit_matrix(r.topology, r.edge_sharpness[-1], r.vertex_sharpness[-1], self.scheme)
-        # the vertex points of the control vertices keep their indices at every level
-        return (L @ r.matrix)[: self.mesh.n_vertices]
+        r = self.refinement(0)
+        return exact_limit_rows(r.topology, r.edge_sharpness[0], r.vertex_sharpness[0], self.scheme,
+                                self._options["crease_method"])
 
     def limit_points(self) -> np.ndarray:
         """Limit positions of the control vertices ``(V, dim)``."""
@@ -183,17 +193,19 @@ class SubdivisionSurface:
         if self.mesh.vertices.shape[1] != 3:
             raise ParameterError("limit normals need 3-D vertices")
         V0 = self.mesh.n_vertices
-        r = self.refinement(self._mask_level)
-        X = r.apply(self.mesh.vertices)
-        t, es, vs = r.topology, r.edge_sharpness[-1], r.vertex_sharpness[-1]
-        T1, T2, ok = tangent_matrices(t, es, vs, self.scheme)
-        n = np.cross(T1 @ X, T2 @ X)[:V0]
-        ok = ok[:V0].copy()
-        if not ok.all():
-            cn, covered = crease_normals(t, X, es, vs, self.scheme)
-            use = ~ok & covered[:V0]
-            n[use] = cn[:V0][use]
-            ok |= covered[:V0]
+        r = self.refinement(0)
+        X = self.mesh.vertices
+        t, es, vs = r.topology, r.edge_sharpness[0], r.vertex_sharpness[0]
+        n, ok = _mask_normals(t, X, es, vs, self.scheme)
+        pending = np.flatnonzero(unsettled_vertices(t, es, vs, self.scheme))
+        if pending.size:
+            # semi-sharp features (and non-quads): the masks apply once the fans are refined past them
+            ok[pending] = False
+            fans = settled_fans(t, es, vs, self.scheme, self._options["crease_method"], pending, X)
+            for topo, fes, fvs, Y, centre, ids in fans:
+                fn, fok = _mask_normals(topo, Y, fes, fvs, self.scheme)
+                n[pending[ids]] = fn[centre]
+                ok[pending[ids]] = fok[centre]
         if not ok.all():
             fine = self.refinement(self._mask_level + levels)
             t = fine.topology
@@ -470,6 +482,21 @@ def _neighbourhoods(t: Topology, X: np.ndarray, r: Refinement, faces: np.ndarray
     return mesh, creases, corners, where
 
 
+def _mask_normals(t: Topology, X: np.ndarray, edge_s: np.ndarray, vertex_s: np.ndarray, scheme: str):
+    """Limit normals ``(V, 3)`` (not unit) where the tangent masks (smooth and dart
+    vertices) or the crease sectors (see :func:`~splinekit.subdiv.limit.crease_normals`)
+    give them, and the mask ``(V,)`` of those vertices; valid where every sharpness
+    at the vertex is 0 or infinite."""
+    T1, T2, ok = tangent_matrices(t, edge_s, vertex_s, scheme)
+    n = np.cross(T1 @ X, T2 @ X)
+    if not ok.all():
+        cn, covered = crease_normals(t, X, edge_s, vertex_s, scheme)
+        use = ~ok & covered
+        n[use] = cn[use]
+        ok = ok | covered
+    return n, ok
+
+
 def _fan_normals(t: Topology, P: np.ndarray) -> np.ndarray:
     """Sum over the faces at each vertex of the face's vector area (Newell), ``(V, 3)``."""
     a = P[t.face_indices]
@@ -494,17 +521,152 @@ def _eval_patches(t, X, faces, u, v):
     return p, du, dv
 
 
-def _corner_limits(surface, level):
-    cache = surface.__dict__.setdefault("_corner_limit_cache", {})
+def _limit_points(surface, level, vertices):
+    """Limit positions ``(k, dim)`` of ``vertices`` of refinement level ``level``.
+
+    Computed for the vertices asked for only (and cached per level): a vertex on
+    a semi-sharp crease needs its fan refined until the sharpness expires, so
+    asking for the whole level would descend at every crease vertex of it.
+    """
+    cache = surface.__dict__.setdefault("_limit_point_cache", {})
+    t, X, _regular, r = surface._level_data(level)
     if level not in cache:
-        r = surface.refinement(level)
-        # masks need expired semi-sharp features; refine that far, read back level rows
-        extra = max(surface._mask_level - level, 0)
-        fine = surface.refinement(level + extra)
-        L = limit_matrix(fine.topology, fine.edge_sharpness[-1], fine.vertex_sharpness[-1], surface.scheme)
-        pts = L @ fine.apply(surface.mesh.vertices)
-        cache[level] = np.asarray(pts[: r.topology.n_vertices])
-    return cache[level]
+        cache[level] = (np.zeros((t.n_vertices, X.shape[1])), np.zeros(t.n_vertices, dtype=bool))
+    values, known = cache[level]
+    vertices = np.asarray(vertices, dtype=np.int64)
+    missing = np.unique(vertices[~known[vertices]])
+    if missing.size:
+        L = exact_limit_rows(t, r.edge_sharpness[-1], r.vertex_sharpness[-1], surface.scheme,
+                             surface._options["crease_method"], missing)
+        values[missing] = L @ X
+        known[missing] = True
+    return values[vertices]
+
+
+MAX_DESCENT = 128
+"""Most levels a vertex's fan is refined for its semi-sharp features to expire. Past
+that the fan has shrunk by at least ``0.7**128 < 1e-19`` of its size (the
+subdominant eigenvalues of the Catmull-Clark and Loop smooth and crease-sector
+maps are at most about 0.66), so the remaining finite sharpness is treated as
+infinite: the difference is below rounding."""
+
+
+def unsettled_vertices(t: Topology, edge_s: np.ndarray, vertex_s: np.ndarray, scheme: str) -> np.ndarray:
+    """Mask ``(V,)`` of the vertices whose limit masks do not apply yet: a finite
+    positive sharpness on the vertex or an incident edge (its rule will change),
+    or, for Catmull-Clark, an incident face that is not a quad."""
+    semi = (edge_s > 0) & np.isfinite(edge_s)
+    out = np.bincount(t.edges[semi].ravel(), minlength=t.n_vertices) > 0
+    out |= (vertex_s > 0) & np.isfinite(vertex_s)
+    if scheme == "catmull-clark":
+        odd = t.face_sizes[t.corner_face] != 4
+        out[t.face_indices[odd]] = True
+    return out & (t.vertex_face_count > 0)
+
+
+def exact_limit_rows(t: Topology, edge_s: np.ndarray, vertex_s: np.ndarray, scheme: str,
+                     crease_method: str = "uniform", vertices: np.ndarray | None = None):
+    """Sparse ``(k, V)`` limit stencils of ``vertices`` (distinct; default all) of a
+    mesh, semi-sharp features included.
+
+    :func:`~splinekit.subdiv.limit.limit_matrix` rows where the masks apply
+    (every sharpness at the vertex 0 or infinite); the rows of the other
+    vertices come from :func:`descended_limit_rows`, which refines only their
+    fans, so the cost grows linearly with the sharpness, not fourfold per unit.
+    """
+    vertices = np.arange(t.n_vertices) if vertices is None else np.asarray(vertices, dtype=np.int64)
+    L = limit_matrix(t, edge_s, vertex_s, scheme)[vertices]
+    pending = unsettled_vertices(t, edge_s, vertex_s, scheme)[vertices]
+    if not pending.any():
+        return L
+    rows = descended_limit_rows(t, edge_s, vertex_s, scheme, crease_method, vertices[pending]).tocoo()
+    keep = sp.diags((~pending).astype(np.float64)) @ L
+    moved = sp.csr_matrix((rows.data, (np.flatnonzero(pending)[rows.row], rows.col)), shape=L.shape)
+    return sp.csr_matrix(keep + moved)
+
+
+def descended_limit_rows(t: Topology, edge_s: np.ndarray, vertex_s: np.ndarray, scheme: str, crease_method: str,
+                         centres: np.ndarray):
+    """Sparse ``(k, V)`` limit stencils of the vertices ``centres`` (distinct) of ``t``,
+    from their fans refined until the masks apply (see :func:`settled_fans`)."""
+    blocks, owners = [], []
+    for topo, es, vs, W, centre, ids in settled_fans(t, edge_s, vertex_s, scheme, crease_method, centres):
+        blocks.append(limit_matrix(topo, es, vs, scheme)[centre] @ W)
+        owners.append(ids)
+    order = np.argsort(np.concatenate(owners), kind="stable")
+    return sp.csr_matrix(sp.vstack(blocks, format="csr")[order])
+
+
+def settled_fans(t: Topology, edge_s: np.ndarray, vertex_s: np.ndarray, scheme: str, crease_method: str,
+                 centres: np.ndarray, X: np.ndarray | None = None):
+    """Refine the fans of the vertices ``centres`` (distinct, with faces) of ``t``
+    until the limit masks apply at them.
+
+    The limit position and tangents of a vertex depend only on its fan (the
+    faces around it): the fan of its child is made of the child faces at it,
+    whose corners (its vertex point, the edge points of its edges, the face
+    points of its faces) come from the parent fan, and whose sharpness comes
+    from its own edges (and, for Chaikin creases, the other edges at it). So
+    each level refines the disjoint union of the fans still unsettled (see
+    :func:`unsettled_vertices`) by one level and keeps only their child fans:
+    ``ceil(s)`` levels of a few faces per vertex for sharpness ``s`` (at most
+    :data:`MAX_DESCENT`), where refining the whole mesh would cost ``4**s``
+    times the mesh. The union's outer border is in no centre's child fan, so
+    the (boundary) rules there do not matter.
+
+    Yields, level by level, ``(topology, edge sharpness, vertex sharpness, data,
+    centre, ids)`` for the fans settled at that level: the union's topology and
+    sharpness, ``data`` (see below) on the union's vertices, the settled
+    centres' vertices in the union and their positions in ``centres``.
+    Without ``X``, ``data`` is the sparse map from the vertices of ``t`` to the
+    union's vertices. With positions ``X`` ``(V, dim)`` of ``t``, it is the
+    union's positions relative to the centre of their fan: the fans shrink by
+    half per level, and the tangents (differences of ring points) would drown
+    in the rounding of absolute positions after a few dozen levels.
+    """
+    topo, vertex, centre, edge, fan = _vertex_fans(t, centres)
+    es, vs = edge_s[edge], vertex_s[vertex]
+    if X is None:
+        data = sp.csr_matrix((np.ones(vertex.size), (np.arange(vertex.size), vertex)), shape=(vertex.size, t.n_vertices))
+    else:
+        data = X[vertex] - X[centres[fan]]
+    ids = np.arange(centres.size)
+    for depth in range(MAX_DESCENT):
+        r = Refinement(topo, scheme, 1, creases=es, corners=vs, boundary="edge-only", crease_method=crease_method)
+        topo, es, vs = r.topology, r.edge_sharpness[-1], r.vertex_sharpness[-1]
+        data = sp.csr_matrix(r.stencils[0] @ data) if X is None else r.stencils[0] @ data
+        # vertex points keep their parent's index: the centres are where they were
+        done = ~unsettled_vertices(topo, es, vs, scheme)[centre]
+        if depth == MAX_DESCENT - 1:
+            done[:] = True
+        if done.any():
+            yield topo, es, vs, data, centre[done], ids[done]
+        if done.all():
+            return
+        ids = ids[~done]
+        topo, sub, centre, edge, fan = _vertex_fans(topo, centre[~done])
+        es, vs, data = es[edge], vs[sub], data[sub]
+        if X is not None:
+            data = data - data[centre[fan]]
+
+
+def _vertex_fans(t: Topology, centres: np.ndarray):
+    """The disjoint union of the fans (the faces at a vertex) of the distinct
+    ``centres``: ``(topology, vertex of t per union vertex, the centres in the
+    union, edge of t per union edge, fan (position in centres) per union vertex)``."""
+    offsets, vface = t.vertex_faces
+    counts = offsets[centres + 1] - offsets[centres]
+    owner = np.repeat(np.arange(centres.size), counts)
+    g = vface[ranges(offsets[centres], counts)]
+    gs = t.face_sizes[g]
+    corner_owner = np.repeat(owner, gs)
+    corners = ranges(t.face_offsets[g], gs)
+    keys, new_index = np.unique(corner_owner * t.n_vertices + t.face_indices[corners], return_inverse=True)
+    vertex = keys % t.n_vertices
+    topo = Topology(keys.size, new_index.ravel(), np.concatenate([[0], np.cumsum(gs)]), check=False)
+    centre = np.searchsorted(keys, np.arange(centres.size) * t.n_vertices + centres)
+    edge = t.find_edges(vertex[topo.edges])
+    return topo, vertex, centre, edge, keys // t.n_vertices
 
 
 def _eval_coons(surface, level, t, X, regular, faces, u, v):
@@ -540,16 +702,15 @@ def _coons_nets(surface, level, t, X, regular, faces):
     """Bicubic Coons nets ``(m, 4, 4, dim)`` for irregular quads (see ``to_bsplines``)."""
     m = faces.size
     dim = X.shape[1]
-    L = _corner_limits(surface, level)
-    # limit positions of the edge points of the next level give each edge's midpoint
-    L_next = _corner_limits(surface, level + 1)
-    V = t.n_vertices
+    # limit positions of the corners, and of the edge points of the next level for the midpoints
+    h = t.face_offsets[faces][:, None] + np.arange(4)  # (m, 4) half-edges in face order
+    ends = _limit_points(surface, level, np.stack([t.face_indices[h], t.halfedge_dst[h]]).ravel())
+    ends = ends.reshape(2, m, 4, dim)
+    mids = _limit_points(surface, level + 1, t.n_vertices + t.halfedge_edge[h].ravel()).reshape(m, 4, dim)
     curves = np.empty((4, m, 4, dim))
     for k in range(4):
         h = t.face_offsets[faces] + k
-        a = L[t.face_indices[h]]
-        b = L[t.halfedge_dst[h]]
-        mid = L_next[V + t.halfedge_edge[h]]
+        a, b, mid = ends[0, :, k], ends[1, :, k], mids[:, k]
         # cubic through a, mid (at 1/2), b: the quadratic with those values, raised to degree 3
         q1 = 2 * mid - 0.5 * (a + b)
         curves[k] = np.stack([a, (a + 2 * q1) / 3, (2 * q1 + b) / 3, b], axis=1)
