@@ -33,6 +33,7 @@ __all__ = [
     "SUFFIXES",
     "build_mesh",
     "check_mesh",
+    "check_target",
     "export_mesh",
     "finite_or_raise",
     "format_of",
@@ -212,6 +213,18 @@ def write_part(fh, data) -> None:
     fh.write(data)
 
 
+def check_target(path, what: str) -> str:
+    """``path`` as a str if a file can be written there: ParameterError for a ``path`` that is not
+    a path, ExportError (naming ``what``) if its folder is missing or ``path`` is a folder."""
+    path = _fspath(path)
+    folder = os.path.dirname(os.path.abspath(path))
+    if not os.path.isdir(folder):
+        raise ExportError(f"cannot write {what} {path!r}: the folder {folder!r} does not exist or is not a folder")
+    if os.path.isdir(path):
+        raise ExportError(f"cannot write {what} {path!r}: it is a folder")
+    return path
+
+
 def save(path, write, what: str) -> str:
     """Write a file atomically: ``write(fh)`` fills a temporary binary file beside ``path``, which is
     then renamed onto ``path``. Returns ``path`` as a string.
@@ -220,12 +233,7 @@ def save(path, write, what: str) -> str:
     :class:`~splinekit.errors.ExportError` (naming ``what`` and the path); in every failure the
     temporary file is removed and an existing target is left byte-for-byte as it was.
     """
-    path = _fspath(path)
-    folder = os.path.dirname(os.path.abspath(path))
-    if not os.path.isdir(folder):
-        raise ExportError(f"cannot write {what} {path!r}: the folder {folder!r} does not exist")
-    if os.path.isdir(path):
-        raise ExportError(f"cannot write {what} {path!r}: it is a folder")
+    path = check_target(path, what)
 
     def fill(tmp):
         with open(tmp, "wb") as fh:

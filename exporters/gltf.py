@@ -148,7 +148,12 @@ def _node_matrix(node: dict, what: str) -> np.ndarray:
             raise FileFormatError(f"{what}: a node matrix must have 16 numbers, got {node['matrix']!r}")
         return M.reshape(4, 4).T  # glTF stores column-major
     t = np.asarray(node.get("translation", [0, 0, 0]), dtype=np.float64)
-    x, y, z, w = np.asarray(node.get("rotation", [0, 0, 0, 1]), dtype=np.float64)
+    q = np.asarray(node.get("rotation", [0, 0, 0, 1]), dtype=np.float64)
+    norm = np.linalg.norm(q) if q.shape == (4,) else np.nan
+    # glTF requires a unit quaternion; a slightly off one is normalized, a zero or broken one refused
+    if not (np.isfinite(norm) and norm > 0.5):
+        raise FileFormatError(f"{what}: a node rotation must be a unit quaternion (x, y, z, w), got {node['rotation']!r}")
+    x, y, z, w = q / norm
     s = np.asarray(node.get("scale", [1, 1, 1]), dtype=np.float64)
     R = np.array([
         [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],

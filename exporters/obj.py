@@ -74,12 +74,15 @@ def _line_number(text: bytes, kind: bytes, k: int) -> int:
 def _parse_ints(parts: np.ndarray, what: str, text: bytes, face_of_corner, name: str) -> np.ndarray:
     try:
         return parts.astype(np.int64)
-    except ValueError:
-        ok = np.array([p.lstrip(b"+-").isdigit() for p in parts.tolist()])  # error path only
+    except (ValueError, OverflowError):
+        # error path only: a token that is not an integer, or one beyond int64
+        digits = np.array([p.lstrip(b"+-").isdigit() for p in parts.tolist()])
+        ok = digits & np.array([d and abs(int(p)) < 2**63 for p, d in zip(parts.tolist(), digits.tolist())])
         c = int(np.flatnonzero(~ok)[0])
         f = int(face_of_corner[c])
+        problem = "an out-of-range" if digits[c] else "a non-integer"
         raise FileFormatError(
-            f"{what}: face {f} (line {_line_number(text, b'f', f)}) has a non-integer {name} index {parts[c].decode('latin-1')!r}"
+            f"{what}: face {f} (line {_line_number(text, b'f', f)}) has {problem} {name} index {parts[c].decode('latin-1')!r}"
         ) from None
 
 

@@ -292,18 +292,20 @@ def import_ply(path):
         if raw.dtype.kind == "f" and raw.size and not np.array_equal(raw, np.round(raw)):
             c = int(np.flatnonzero(raw != np.round(raw))[0])
             f = int(np.searchsorted(np.cumsum(sizes), c, side="right"))
-            raise FileFormatError(f"{what}: PLY face {f} has a non-integer vertex index {raw[c]!r}")
-        idx = raw.astype(np.int64)
+            raise FileFormatError(f"{what}: PLY face {f} has a non-integer vertex index {float(raw[c])!r}")
         if sizes.size and sizes.min() < 3:
             f = int(np.flatnonzero(sizes < 3)[0])
             raise FileFormatError(f"{what}: PLY face {f} has {int(sizes[f])} corners; a face needs at least 3")
-        bad = (idx < 0) | (idx >= len(V))
+        # the range check comes before the cast: an ASCII index beyond int64 (or inf) has no int64 value
+        bad = (raw < 0) | (raw >= len(V))
         if bad.any():
             c = int(np.flatnonzero(bad)[0])
             f = int(np.searchsorted(np.cumsum(sizes), c, side="right"))
+            shown = int(raw[c]) if np.isfinite(raw[c]) else float(raw[c])
             raise FileFormatError(
-                f"{what}: PLY face {f} refers to vertex {int(idx[c])}, outside 0..{len(V) - 1}"
+                f"{what}: PLY face {f} refers to vertex {shown}, outside 0..{len(V) - 1}"
             )
+        idx = raw.astype(np.int64)
     offsets = np.concatenate([[0], np.cumsum(sizes)]).astype(np.int64)
     return _meshio.build_mesh(V, idx, offsets, what)
 

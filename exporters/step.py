@@ -26,6 +26,8 @@ from splinekit._atomic import atomic_write
 from splinekit.errors import ExportError, FileFormatError, ParameterError
 from splinekit.interop.occ import from_occ, require_ocp, to_shape
 
+from ._meshio import _fspath, check_target
+
 __all__ = ["export_step", "import_step", "StepItem", "STEP_UNITS"]
 
 #: Length units a STEP file can declare: name -> (OCC's ``write.step.unit`` value, metres per unit).
@@ -190,7 +192,10 @@ def _names(names, count: int) -> list:
         return [None] * count
     if isinstance(names, str):
         names = [names]
-    names = list(names)
+    try:
+        names = list(names)
+    except TypeError:
+        raise ParameterError(f"names must be a list of strings (or None), got {type(names).__name__}") from None
     if len(names) != count:
         raise ParameterError(f"names has {len(names)} entries but there are {count} objects to export")
     for i, n in enumerate(names):
@@ -234,14 +239,14 @@ def _products(shapes, names):
     return out
 
 
-def _check_target(path: str) -> None:
+def _check_target(path) -> str:
+    """``path`` as a str, checked before the (slow) OCC translation: the mesh writers' checks,
+    and a writable folder."""
+    path = check_target(path, "STEP file")
     folder = os.path.dirname(os.path.abspath(path))
-    if not os.path.isdir(folder):
-        raise ExportError(f"cannot write {path!r}: the folder {folder!r} does not exist or is not a folder")
-    if os.path.isdir(path):
-        raise ExportError(f"cannot write {path!r}: it is a folder")
     if not os.access(folder, os.W_OK):
-        raise ExportError(f"cannot write {path!r}: the folder {folder!r} is not writable")
+        raise ExportError(f"cannot write STEP file {path!r}: the folder {folder!r} is not writable")
+    return path
 
 
 def export_step(path, objects, *, names=None, unit: str = "mm", tolerance: float = 1e-7) -> str:
@@ -266,13 +271,14 @@ def export_step(path, objects, *, names=None, unit: str = "mm", tolerance: float
 
     Raises ExportError if the folder is missing or unwritable or OCC fails to
     write (any existing file at ``path`` is left unchanged), ParameterError on
-    bad arguments and BackendError if OCC rejects the geometry.
+    bad arguments (including a ``path`` that is not a str / os.PathLike, or is
+    empty) and BackendError if OCC rejects the geometry.
     """
-    path = os.fspath(path)
+    path = _fspath(path)
     step_unit, metres = _unit(unit)
     items = _objects(objects)
     labels = _names(names, len(items))
-    _check_target(path)
+    path = _check_target(path)
     IFSelect, _, _, STEPCAFControl, STEPControl, TCollection, TDataStd, _, _, XCAFDoc = _ocp_step()
     shapes = [to_shape(obj, tolerance=tolerance) for obj in items]
     doc = _new_document(metres)
@@ -352,9 +358,10 @@ def import_step(path, *, unit: str = "mm") -> list[StepItem]:
     ``unit`` (millimetres by default), converted from the unit the file declares.
 
     Raises FileFormatError if ``path`` is missing, unreadable or not STEP, or
-    holds no geometry.
+    holds no geometry; ParameterError if ``path`` is not a path (``None``, an
+    empty string) or ``unit`` is unknown.
     """
-    path = os.fspath(path)
+    path = _fspath(path)
     _, metres = _unit(unit)
     if not os.path.isfile(path):
         raise FileFormatError(f"STEP file {path!r} does not exist or is not a file")

@@ -46,6 +46,11 @@ _RELS = (
 )
 
 
+# characters outside XML 1.0's Char production (controls other than tab / newline / return,
+# surrogates, U+FFFE and U+FFFF)
+_NOT_XML_CHAR = re.compile("[\x00-\x08\x0b\x0c\x0e-\x1f\ud800-\udfff\ufffe\uffff]")
+
+
 def export_3mf(path, mesh, *, name="splinekit", unit="millimeter") -> str:
     """Write ``mesh`` as a 3MF package; returns the path written.
 
@@ -56,13 +61,20 @@ def export_3mf(path, mesh, *, name="splinekit", unit="millimeter") -> str:
     mesh : splinekit.PolyMesh
         3-D vertices and at least one face; polygons are fan-triangulated from their first corner.
     name : str
-        The object's name (any text; XML-escaped).
+        The object's name (any text XML can hold, escaped; control characters other than tab and
+        line breaks, and lone surrogates, raise :class:`~splinekit.errors.ParameterError`).
     unit : str
         The model unit, one of :data:`UNITS`; the coordinates are written as they are, in this unit.
     """
     mesh = _meshio.check_mesh(mesh, "export_3mf")
     if not isinstance(name, str):
         raise ParameterError(f"name must be a str, got {type(name).__name__}")
+    bad = _NOT_XML_CHAR.search(name)
+    if bad is not None:  # no escape makes these legal in XML 1.0; UTF-8 cannot hold a lone surrogate
+        raise ParameterError(
+            f"name = {name!r} has the character U+{ord(bad.group()):04X} at position {bad.start()}, "
+            "which an XML document cannot hold"
+        )
     if unit not in UNITS:
         raise ParameterError(f"unit must be one of {', '.join(UNITS)}; got {unit!r}")
     if mesh.n_faces == 0:

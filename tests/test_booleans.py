@@ -507,15 +507,19 @@ def test_non_finite_vertices():
 
 
 def test_malformed_faces():
-    with pytest.raises(MeshTopologyError, match="vertex 9"):
+    # the message names the operand, the face and the vertex
+    with pytest.raises(MeshTopologyError, match=r"first operand: face 11 refers to vertex 9, outside 0\.\.7"):
         union(unchecked(BOX_V, np.vstack([BOX_T[:-1], [[0, 1, 9]]])), icosphere(1))
-    with pytest.raises(MeshTopologyError, match="more than once"):
-        union(unchecked(BOX_V, np.vstack([BOX_T, [[0, 0, 1]]])), icosphere(1))
+    with pytest.raises(MeshTopologyError, match="second operand: face 12 uses vertex 0 more than once"):
+        union(icosphere(1), unchecked(BOX_V, np.vstack([BOX_T, [[0, 0, 1]]])))
     quads = [list(q) for q in BOX_Q]
     quads[0] = [0, 1, 3, 1]
     bad = PolyMesh.from_topology(BOX_V, Topology(8, np.ravel(quads), np.arange(7) * 4, check=False))
-    with pytest.raises(MeshTopologyError, match="more than once"):
+    with pytest.raises(MeshTopologyError, match="first operand: face 0 uses vertex 1 more than once"):
         union(bad, icosphere(1))
+    small = PolyMesh.from_topology(BOX_V, Topology(8, np.r_[BOX_T.ravel(), 0, 1], np.r_[np.arange(13) * 3, 38], check=False))
+    with pytest.raises(MeshTopologyError, match=r"bodies\[0\]: face 12 has 2 vertices"):
+        union_all([small])
 
 
 def test_bad_arguments():

@@ -86,6 +86,23 @@ def fan_triangles(mesh: PolyMesh) -> np.ndarray:
     return np.array(tris, dtype=np.int64).reshape(-1, 3)
 
 
+def angle_weighted_normals(mesh: PolyMesh) -> np.ndarray:
+    """Unit vertex normals, sum over faces of (corner angle) x (unit normal of the face's vector
+    area), computed face by face here (zero at vertices with no faces)."""
+    V = mesh.vertices
+    N = np.zeros_like(V)
+    for face in mesh.faces:
+        P = V[face]
+        area = 0.5 * sum(np.cross(P[0], P[j]) + np.cross(P[j], P[j + 1]) + np.cross(P[j + 1], P[0])
+                         for j in range(1, len(face) - 1))
+        n = area / np.linalg.norm(area)
+        for k, v in enumerate(face):
+            a, b = P[(k + 1) % len(face)] - P[k], P[k - 1] - P[k]
+            N[v] += np.arctan2(np.linalg.norm(np.cross(a, b)), a @ b) * n
+    length = np.linalg.norm(N, axis=1, keepdims=True)
+    return np.divide(N, length, out=np.zeros_like(N), where=length > 0)
+
+
 def assert_same_polygons(got: PolyMesh, want_vertices: np.ndarray, want_flat, want_offsets) -> None:
     """``got`` has exactly the vertices ``want_vertices`` (any order) and the same faces."""
     assert got.vertices.shape == want_vertices.shape
@@ -167,6 +184,31 @@ def test_text_formats_round_trip_any_float64(coords):
             got = exporters.import_stl(path)
             tris = fan_triangles(mesh)
             assert_same_polygons(got, mesh.vertices + 0.0, tris.ravel(), np.arange(len(tris) + 1) * 3)
+
+
+def test_written_normals_are_the_angle_weighted_vertex_normals(tmp_path, mesh):
+    """OBJ ``vn`` lines (read here as text) and the glTF NORMAL accessor hold the angle-weighted unit
+    normal of each vertex, computed independently above; on the sphere they are nearly radial."""
+    want = angle_weighted_normals(mesh)
+    exporters.export_obj(tmp_path / "n.obj", mesh)
+    lines = (tmp_path / "n.obj").read_text().splitlines()
+    vn = np.array([[float(t) for t in line.split()[1:]] for line in lines if line.startswith("vn ")])
+    assert vn.shape == mesh.vertices.shape
+    assert np.abs(vn - want).max() <= 1e-12
+    faces = [line.split()[1:] for line in lines if line.startswith("f ")]
+    assert all(c.split("//")[0] == c.split("//")[1] for f in faces for c in f)  # vertex k uses normal k
+    exporters.export_glb(tmp_path / "n.glb", mesh)
+    data = (tmp_path / "n.glb").read_bytes()
+    doc = json.loads(data[20:20 + struct.unpack_from("<I", data, 12)[0]])
+    blob = data[28 + struct.unpack_from("<I", data, 12)[0]:]
+    acc = doc["accessors"][doc["meshes"][0]["primitives"][0]["attributes"]["NORMAL"]]
+    view = doc["bufferViews"][acc["bufferView"]]
+    N = np.frombuffer(blob, dtype="<f4", count=3 * acc["count"], offset=view["byteOffset"]).reshape(-1, 3)
+    assert np.abs(N - want).max() <= 1e-7  # float32
+    if mesh.n_faces == primitives.icosphere(2).n_faces:  # the sphere centred at (0.1, -0.2, 0.3)
+        radial = mesh.vertices - [0.1, -0.2, 0.3]
+        radial /= np.linalg.norm(radial, axis=1, keepdims=True)
+        assert np.einsum("ij,ij->i", vn, radial).min() > 0.99
 
 
 # -- an independent reader: trimesh -------------------------------------------------------------
@@ -340,7 +382,7 @@ def test_glb_layout(tmp_path):
 def test_3mf_package_read_with_the_standard_library(tmp_path):
     mesh = random_coordinates(primitives.torus(6, 5), seed=11)
     path = tmp_path / "m.3mf"
-    exporters.export_3mf(path, mesh, name='bracket <v2> & "final"', unit="inch")
+    exporters.export_3mf(path, mesh, name='bracket <v2> & "final"\ttab\nline', unit="inch")
     with zipfile.ZipFile(path) as package:
         assert {"[Content_Types].xml", "_rels/.rels", "3D/3dmodel.model"} <= set(package.namelist())
         rels = ET.fromstring(package.read("_rels/.rels"))
@@ -350,7 +392,7 @@ def test_3mf_package_read_with_the_standard_library(tmp_path):
     ns = {"m": "http://schemas.microsoft.com/3dmanufacturing/core/2015/02"}
     assert root.get("unit") == "inch"
     obj = root.find("m:resources/m:object", ns)
-    assert obj.get("name") == 'bracket <v2> & "final"'
+    assert obj.get("name") == 'bracket <v2> & "final"\ttab\nline'
     V = np.array([[float(v.get(c)) for c in "xyz"] for v in obj.iterfind("m:mesh/m:vertices/m:vertex", ns)])
     T = np.array([[int(t.get(c)) for c in ("v1", "v2", "v3")] for t in obj.iterfind("m:mesh/m:triangles/m:triangle", ns)])
     assert np.array_equal(V, mesh.vertices)
@@ -602,6 +644,9 @@ def test_writer_arguments():
             exporters.export_stl(p + ".stl", box, binary="yes")
         with pytest.raises(ParameterError, match="unit"):
             exporters.export_3mf(p + ".3mf", box, unit="parsec")
+        for bad, code in (("a\x01b", "0001"), ("nul\x00", "0000"), ("\ud800", "D800")):
+            with pytest.raises(ParameterError, match=f"U\\+{code}"):
+                exporters.export_3mf(p + ".3mf", box, name=bad)
         with pytest.raises(ParameterError, match="name"):
             exporters.export_stl(p + ".stl", box, name="two\nlines")
         empty = PolyMesh(np.zeros((0, 3)), [])
@@ -649,6 +694,9 @@ def test_malformed_obj(tmp_path):
     _bad(tmp_path, "c.obj", tri + "f -1 -2 -4\n", "vertex -4; 3 vertices are defined above it")
     _bad(tmp_path, "d.obj", tri + "f 1 2\n", "face 0 .* 2 corners")
     _bad(tmp_path, "e.obj", tri + "f 1 2 x\n", "non-integer vertex index 'x'")
+    _bad(tmp_path, "e2.obj", tri + "f 1 2 3\nf 1 2 -99999999999999999999\n",
+         r"face 1 \(line 5\) has an out-of-range vertex index '-99999999999999999999'")
+    _bad(tmp_path, "e3.obj", tri + "vn 0 0 1\nf 1//1 2//1 3//99999999999999999999\n", "out-of-range normal index")
     _bad(tmp_path, "f.obj", "v 0 0\n", r"vertex 0 \(line 1\) has fewer than 3")
     _bad(tmp_path, "g.obj", "v 0 0 inf\n", "not finite")
     _bad(tmp_path, "h.obj", "v 0 0 a\n", "non-numeric")
@@ -671,6 +719,10 @@ def test_malformed_ply(tmp_path):
     _bad(tmp_path, "h.ply", head.replace("1 0 0\n", "1 0 nan\n") + "3 0 1 2\n", "vertex 1 has non-finite")
     _bad(tmp_path, "i.ply", head.replace("property float x\n", "") + "3 0 1 2\n", "no scalar x")
     _bad(tmp_path, "j.ply", head + "3 0 1 two\n", "not a number")
+    # beyond int64 in ASCII: named (as parsed) instead of wrapped around by a cast
+    _bad(tmp_path, "k.ply", head + "3 0 1 99999999999999999999\n", r"refers to vertex 1(0{20}), outside 0\.\.2")  # as read: a float64
+    _bad(tmp_path, "l.ply", head + "3 0 1 inf\n", "refers to vertex inf, outside 0..2")
+    _bad(tmp_path, "m.ply", head + "3 0 1 2.5\n", "non-integer vertex index 2.5")
 
 
 def test_malformed_glb_and_3mf(tmp_path):
@@ -687,6 +739,13 @@ def test_malformed_glb_and_3mf(tmp_path):
     rest = good[20 + doc_len:]
     bad = struct.pack("<III", 0x46546C67, 2, 20 + len(text) + len(rest)) + struct.pack("<I4s", len(text), b"JSON") + text + rest
     _bad(tmp_path, "d.glb", bad, "accessor 0 reaches past the end")
+    for rotation in ([0, 0, 0, 0], [0, 0, 1], [0, 0, float("nan"), 1]):
+        doc = json.loads(good[20:20 + doc_len])
+        doc["nodes"][0]["rotation"] = rotation
+        text = json.dumps(doc).encode()
+        text += b" " * (-len(text) % 4)
+        bad = struct.pack("<III", 0x46546C67, 2, 20 + len(text) + len(rest)) + struct.pack("<I4s", len(text), b"JSON") + text + rest
+        _bad(tmp_path, "q.glb", bad, "unit quaternion")
     _bad(tmp_path, "a.3mf", b"PK not really a zip", "not a readable 3MF")
     with zipfile.ZipFile(tmp_path / "b.3mf", "w") as z:
         z.writestr("3D/other.model", "<model/>")

@@ -341,6 +341,21 @@ def test_from_occ_edges_and_wires():
     assert np.allclose(lengths, 1.0, atol=1e-12)
 
 
+def test_from_occ_of_a_compound_gives_faces_then_only_the_free_edges():
+    import build123d as bd
+
+    # a box (6 faces, 12 edges that bound them) with a loose segment and a loose two-segment wire
+    loose = [((5.0, 0.0, 0.0), (6.0, 1.0, 2.0)), ((0.0, 0.0, 9.0), (1.0, 0.0, 9.0)), ((1.0, 0.0, 9.0), (1.0, 3.0, 9.0))]
+    wire = bd.Wire([bd.Edge.make_line(*loose[1]), bd.Edge.make_line(*loose[2])])
+    shapes = occ.from_occ(bd.Compound(children=[bd.Box(1, 2, 3), bd.Edge.make_line(*loose[0]), wire]))
+    assert len(shapes) == 6 + 3
+    assert all(isinstance(s, sk.BSplineSurface) for s in shapes[:6])
+    ends = sorted(
+        tuple(map(tuple, np.round(c.evaluate(np.array(c.domain)), 12))) for c in shapes[6:]
+    )
+    assert ends == sorted(loose)
+
+
 def test_from_occ_round_trips_faces_and_edges_exactly():
     rng = np.random.default_rng(504)
     for rational in (False, True):
@@ -419,6 +434,18 @@ def test_bad_input_from_occ():
 
     with pytest.raises(ParameterError, match="null"):
         occ.from_occ(TopoDS_Shape())
+    # topology without bounds: an infinite planar face and an infinite straight edge
+    from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeEdge
+
+    with pytest.raises(ParameterError, match="unbounded face"):
+        occ.from_occ(BRepBuilderAPI_MakeFace(gp_Pln()).Face())
+    with pytest.raises(ParameterError, match="unbounded edge"):
+        occ.from_occ(BRepBuilderAPI_MakeEdge(gp_Lin(gp_Pnt(0, 0, 0), gp_Dir(1, 0, 0))).Edge())
+    for flag in ("yes", 1, None):
+        with pytest.raises(ParameterError, match="oriented must be True or False"):
+            occ.from_occ(occ.to_shape(box_patches()[0]), oriented=flag)
+        with pytest.raises(ParameterError, match="workplane must be True or False"):
+            occ.to_cadquery(box_patches()[0], workplane=flag)
 
 
 def test_missing_ocp_names_the_package(monkeypatch):

@@ -317,6 +317,13 @@ def test_bad_export_arguments(tmp_path):
         export_step(tmp_path / "a.step", [])
     with pytest.raises(ParameterError, match="dict"):
         export_step(tmp_path / "a.step", [{}])
+    with pytest.raises(ParameterError, match="names must be a list.*int"):
+        export_step(tmp_path / "a.step", [patch], names=3)
+    for bad, match in ((None, "path must be a str.*NoneType"), (3, "path must be a str.*int"), ("", "path is empty")):
+        with pytest.raises(ParameterError, match=match):
+            export_step(bad, patch)
+        with pytest.raises(ParameterError, match=match):
+            import_step(bad)
     assert _only(tmp_path) == []
 
 

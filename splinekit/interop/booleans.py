@@ -81,35 +81,16 @@ def _edge_text(topology, e: int) -> str:
     return f"edge ({int(a)}, {int(b)})"
 
 
-def _check_indices(topology, name: str) -> None:
-    """Index range, face sizes and repeated vertices in a face (MeshTopologyError)."""
-    idx, n = topology.face_indices, topology.n_vertices
-    if idx.size and (int(idx.min()) < 0 or int(idx.max()) >= n):
-        c = int(np.flatnonzero((idx < 0) | (idx >= n))[0])
-        raise MeshTopologyError(
-            f"{name}: face {int(topology.corner_face[c])} refers to vertex {int(idx[c])}, outside 0..{n - 1}"
-        )
-    sizes = topology.face_sizes
-    small = np.flatnonzero(sizes < 3)
-    if small.size:
-        f = int(small[0])
-        raise MeshTopologyError(f"{name}: face {f} has {int(sizes[f])} vertices; a face needs at least 3")
-    if (sizes == 3).all():
-        # in a triangle any repeated vertex is also a repeated neighbour
-        T = idx.reshape(-1, 3)
-        rep = (T[:, 0] == T[:, 1]) | (T[:, 1] == T[:, 2]) | (T[:, 2] == T[:, 0])
-        if rep.any():
-            f = int(np.flatnonzero(rep)[0])
-            raise MeshTopologyError(f"{name}: face {f} {T[f].tolist()} uses a vertex more than once")
-        return
-    key = topology.corner_face * max(n, 1) + idx
-    order = np.argsort(key, kind="stable")
-    dup = np.flatnonzero(np.diff(key[order]) == 0)
-    if dup.size:
-        c = order[dup[0]]
-        raise MeshTopologyError(
-            f"{name}: face {int(topology.corner_face[c])} uses vertex {int(idx[c])} more than once"
-        )
+def _check_faces(topology, name: str) -> None:
+    """Index range, face sizes and repeated vertices in a face (MeshTopologyError naming ``name``).
+
+    The checks are the Topology constructor's own (an operand may come from an unchecked
+    ``Topology(..., check=False)``); only the edge checks below are specific to booleans.
+    """
+    try:
+        topology._check_faces()
+    except MeshTopologyError as exc:
+        raise MeshTopologyError(f"{name}: {exc}") from None
 
 
 def _check_edges(topology, name: str) -> None:
@@ -156,7 +137,7 @@ def _checked_triangles(mesh, name: str) -> tuple[np.ndarray, np.ndarray]:
         raise MeshTopologyError(f"{name}: vertex {i} has non-finite coordinates {V[i].tolist()}")
     topology = mesh.topology
     if topology.n_faces and topology not in _VERIFIED:
-        _check_indices(topology, name)
+        _check_faces(topology, name)
         _check_edges(topology, name)
         _VERIFIED.add(topology)
     # manifold3d's bindings refuse read-only arrays: one copy each (the uint64 view is free)

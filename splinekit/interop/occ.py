@@ -254,6 +254,11 @@ def _face_to_surface(face, oriented: bool):
     BRep, BRepTools, GeomConvert, TopAbs = _ocp("BRep", "BRepTools", "GeomConvert", "TopAbs")
     surf = BRep.BRep_Tool.Surface_s(face)  # a located copy when the face is moved
     u0, u1, v0, v1 = BRepTools.BRepTools.UVBounds_s(face)
+    if not all(abs(x) < 1e100 for x in (u0, u1, v0, v1)):  # OCC's "infinite" is 2e100
+        raise ParameterError(
+            f"cannot convert an unbounded face (UV bounds {[u0, u1, v0, v1]} on a {type(surf).__name__}): "
+            "bound it with edges first"
+        )
     nu0, nu1, nv0, nv1 = surf.Bounds()
     native = isinstance(surf, (Geom.Geom_BSplineSurface, Geom.Geom_BezierSurface))
     if not (native and _same_range((u0, u1), (nu0, nu1)) and _same_range((v0, v1), (nv0, nv1))):
@@ -276,6 +281,11 @@ def _edge_to_curve(edge):
     if curve is None:
         return None
     first, last = BRep.BRep_Tool.Range_s(edge)
+    if not (abs(first) < 1e100 and abs(last) < 1e100):  # OCC's "infinite" is 2e100
+        raise ParameterError(
+            f"cannot convert an unbounded edge (parameter range [{first!r}, {last!r}] on a "
+            f"{type(curve).__name__}): give it finite end parameters"
+        )
     return _curve_to_bspline(curve, first, last)
 
 
@@ -341,6 +351,8 @@ def from_occ(handle, *, oriented: bool = False):
     orientation; with ``oriented=True`` a surface of a reversed face is reversed
     in u, so that ``Su x Sv`` follows the face normal (outward on a solid).
     """
+    if not isinstance(oriented, (bool, np.bool_)):
+        raise ParameterError(f"oriented must be True or False, got {oriented!r}")
     Geom, _, _, _ = require_ocp()
     direct = _from_geom(handle)
     if direct is not None:
@@ -390,12 +402,13 @@ def from_occ(handle, *, oriented: bool = False):
 
 def _free_edges(shape) -> list:
     """The distinct edges of ``shape`` that bound none of its faces (wires, loose edges)."""
-    (TopTools,) = _ocp("TopTools")
-    on_faces = TopTools.TopTools_IndexedMapOfShape()
-    for face in _sub_shapes(shape, "FACE"):
-        for edge in _sub_shapes(face, "EDGE"):
-            on_faces.Add(edge)
-    return [e for e in _sub_shapes(shape, "EDGE") if not on_faces.Contains(e)]
+    TopAbs, TopExp, TopoDS, TopTools = _ocp("TopAbs", "TopExp", "TopoDS", "TopTools")
+    # one OCC pass maps every edge to the faces it bounds (an empty list for a free edge)
+    faces_of = TopTools.TopTools_IndexedDataMapOfShapeListOfShape()
+    kinds = TopAbs.TopAbs_ShapeEnum
+    TopExp.TopExp.MapShapesAndAncestors_s(shape, kinds.TopAbs_EDGE, kinds.TopAbs_FACE, faces_of)
+    free = (i for i in range(1, faces_of.Extent() + 1) if faces_of.FindFromIndex(i).Size() == 0)
+    return [TopoDS.TopoDS.Edge_s(faces_of.FindKey(i)) for i in free]
 
 
 # ----------------------------------------------------------------------------------------
@@ -578,6 +591,8 @@ def to_cadquery(obj, *, workplane: bool = False, tolerance: float = 1e-7):
     shape comes on a ``cadquery.Workplane`` (``Workplane().add(shape)``), ready
     for cadquery's fluent API.
     """
+    if not isinstance(workplane, (bool, np.bool_)):
+        raise ParameterError(f"workplane must be True or False, got {workplane!r}")
     shape = to_shape(obj, tolerance=tolerance)
     try:
         import cadquery
