@@ -463,3 +463,110 @@ def test_utah_teapot_is_stitched_along_every_shared_patch_edge():
     X = mesh.vertices[boundary]
     nearest = np.min([sk.project(sk.BezierCurve(e), X).distances for e in open_edges], axis=0)
     assert nearest.max() <= 1e-9 * np.abs(mesh.vertices).max()
+
+
+# -- internal helpers of the patch tessellator, against independent references --------------
+def test_close_pairs_match_a_kd_tree():
+    """The sweep that finds the vertices to weld returns exactly the pairs of a k-d tree
+    query (scipy), on clouds with planted near-duplicates, axis-aligned planar grids and a
+    plane across the sweep direction (which takes the k-d tree fallback)."""
+    from scipy.spatial import cKDTree
+
+    from splinekit.tessellate.surfaces import _SWEEP, _close_pairs
+
+    rng = np.random.default_rng(3)
+    g = np.stack(np.meshgrid(np.arange(30.0), np.arange(30.0), indexing="ij"), axis=-1).reshape(-1, 2)
+    e1 = np.cross(_SWEEP, [1.0, 0.0, 0.0])
+    e1 /= np.linalg.norm(e1)
+    e2 = np.cross(_SWEEP, e1)
+    clouds = [
+        rng.random((500, 3)),
+        np.column_stack([g, np.zeros(len(g))]),  # a plane z = 0
+        np.column_stack([np.ones(len(g)), g]),  # a plane x = 1
+        g[:, :1] * e1 + g[:, 1:] * e2,  # a plane across the sweep
+    ]
+    r = 1e-6
+    for X in clouds:
+        k = rng.choice(len(X), len(X) // 3, replace=False)
+        X = np.concatenate([X, X[k] + rng.uniform(-0.5, 0.5, (k.size, 3)) * r, X[k[:20]] + 3 * r])
+        X = X[rng.permutation(len(X))]
+        got = {tuple(sorted(map(int, p))) for p in _close_pairs(X, r)}
+        want = {tuple(sorted(map(int, p))) for p in cKDTree(X).query_pairs(r)}
+        assert got == want and len(want) >= len(k) // 2
+
+
+def test_components_match_scipy_connected_components():
+    """Connected components of random sparse graphs (chains in shuffled order included)
+    partition the nodes like scipy's, each labelled with its smallest node."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    from splinekit.tessellate.surfaces import _components
+
+    rng = np.random.default_rng(5)
+    for n, m in [(1, 0), (10, 0), (50, 30), (400, 390), (1000, 600)]:
+        a, b = rng.integers(0, n, m), rng.integers(0, n, m)
+        if n == 400:  # one long chain through a random permutation
+            perm = rng.permutation(n)
+            a, b = perm[:-1][:m], perm[1:][:m]
+        lab = _components(n, a, b)
+        _, ref = connected_components(coo_matrix((np.ones(m), (a, b)), shape=(n, n)), directed=False)
+        assert (lab[a] == lab[b]).all()
+        # same partition: the map ref -> lab is one-to-one
+        pairs = set(zip(ref.tolist(), lab.tolist()))
+        assert len(pairs) == len(set(ref.tolist())) == len(set(lab.tolist()))
+        smallest = np.full(n, n)
+        np.minimum.at(smallest, ref, np.arange(n))
+        assert (lab == smallest[ref]).all()
+
+
+def test_cells_of_a_mixed_patch_list_reproduce_their_patches():
+    """Rational and polynomial Bezier patches mixed with a multi-span patch of the same
+    degrees: every Bezier cell's net, evaluated at interior points, gives the patch's own
+    point at the mapped parameters, and the cells keep the order of their patches."""
+    from splinekit.basis.bernstein import all_bernstein
+    from splinekit.tessellate.cells import cells_of_patches
+
+    rng = np.random.default_rng(11)
+    bez = sk.BSplineSurface(2, 3, [0, 0, 0, 1, 1, 1], [0, 0, 0, 0, 2, 2, 2, 2], rng.random((3, 4, 3)))
+    rat = sk.NurbsSurface(2, 3, [0, 0, 0, 1, 1, 1], [0, 0, 0, 0, 1, 1, 1, 1], rng.random((3, 4, 3)), rng.uniform(0.5, 2, (3, 4)))
+    multi = sk.NurbsSurface(
+        2, 3, [0, 0, 0, 0.4, 1, 1, 1], [0, 0, 0, 0, 0.5, 1, 1, 1, 1], rng.random((4, 5, 3)), rng.uniform(0.5, 2, (4, 5))
+    )
+    other = sk.BSplineSurface(1, 1, [0, 0, 1, 1], [0, 0, 1, 1], rng.random((2, 2, 3)))
+    patches = [rat, multi, other, bez, rat]
+    sets = cells_of_patches(patches)
+    assert [(cs.p, cs.q) for cs in sets] == [(1, 1), (2, 3)]
+    cs = sets[1]
+    assert cs.patch.tolist() == [0, 1, 1, 1, 1, 3, 4]
+    s, t = np.array([0.2, 0.7]), np.array([0.6, 0.1])
+    Bu, Bv = all_bernstein(cs.p, s), all_bernstein(cs.q, t)  # (p + 1, 2)
+    for k in range(len(cs)):
+        h = np.einsum("ia,jb,ijc->abc", Bu, Bv, cs.nets[k])
+        got = h[..., :3] / h[..., 3:]
+        u0, u1, v0, v1 = cs.box[k]
+        want = patches[cs.patch[k]].evaluate_grid(u0 + (u1 - u0) * s, v0 + (v1 - v0) * t)
+        assert np.allclose(got, want, atol=1e-12)
+
+
+@pytest.mark.parametrize("flip", [False, True])
+def test_open_patch_keeps_the_winding_of_its_parametrization(flip):
+    """An open cap (a bump over the unit square, once with u and v swapped so that
+    Su x Sv points down): the mesh is open, so no orientation fix applies, and every
+    triangle winds like the exact normal (surface.normal) at its parametric centre."""
+    rng = np.random.default_rng(8)
+    g = np.linspace(0.0, 1.0, 5)
+    X, Y = np.meshgrid(g, g, indexing="ij")
+    P = np.stack([X, Y, 0.3 * np.sin(np.pi * X) * np.sin(np.pi * Y) + 0.05 * rng.random((5, 5))], axis=-1)
+    if flip:
+        P = P.transpose(1, 0, 2)
+    k = [0, 0, 0, 0, 0.5, 1, 1, 1, 1]
+    s = sk.BSplineSurface(3, 3, k, k, P)
+    m = tessellate(s, 1e-3, relative=True)
+    assert not m.is_closed
+    T = m.vertices[m.faces]
+    face_n = np.cross(T[:, 1] - T[:, 0], T[:, 2] - T[:, 0])
+    c = m.corner_uv.mean(axis=1)
+    exact = s.normal(c[:, 0], c[:, 1])
+    assert (np.einsum("ij,ij->i", face_n, exact) > 0).all()
+    assert ((exact[:, 2] < 0) == flip).all()  # the swapped cap really faces down

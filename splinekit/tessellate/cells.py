@@ -46,43 +46,69 @@ class CellSet:
         return len(self.nets)
 
 
-def _homogeneous(surface):
-    """``(p, q, knots_u, knots_v, coefs (nu, nv, 4))`` of a 3-D spline surface."""
-    coefs = np.asarray(surface.homogeneous_points)
-    return surface.degree_u, surface.degree_v, surface.knots_u, surface.knots_v, coefs
-
-
-def _is_bezier(p, U):
-    return U.size == 2 * (p + 1) and U[0] == U[p] and U[p + 1] == U[-1]
-
-
 def cells_of_patches(patches) -> list[CellSet]:
-    """Cut 3-D :class:`~splinekit.SplineSurface` patches into Bézier cells, grouped by degrees."""
+    """Cut 3-D :class:`~splinekit.SplineSurface` patches into Bézier cells, grouped by degrees.
+
+    Cells keep the order of their patches within each group. Single-cell patches (the
+    common case of patch sets) need no knot algebra: their knots are checked and their
+    control points stacked once per group (the polynomial ones given unit weights in
+    one operation).
+    """
     groups: dict = {}
     for index, s in enumerate(patches):
-        p, q, U, V, coefs = _homogeneous(s)
-        entry = groups.setdefault((p, q), ([], [], [], []))
-        if _is_bezier(p, U) and _is_bezier(q, V):
-            # already one Bézier cell (the common case of patch sets): no knot algebra
-            entry[0].append(coefs[None])
-            entry[1].append(np.array([index]))
-            entry[2].append(np.array([[U[p], U[p + 1], V[q], V[q + 1]]]))
-            entry[3].append(np.zeros((1, 2), dtype=np.int64))
-            continue
-        bu, su = algebra.bezier_segments(p, U, coefs)  # (nsu, p + 1, nv, 4)
-        bv, sv = algebra.bezier_segments(q, V, su.transpose(2, 0, 1, 3))  # (nsv, q + 1, nsu, p + 1, 4)
-        nets = sv.transpose(2, 0, 3, 1, 4)  # (nsu, nsv, p + 1, q + 1, 4)
-        nsu, nsv = nets.shape[:2]
-        entry[0].append(nets.reshape(nsu * nsv, p + 1, q + 1, 4))
-        entry[1].append(np.full(nsu * nsv, index))
-        iu, iv = np.meshgrid(np.arange(nsu), np.arange(nsv), indexing="ij")
-        iu, iv = iu.ravel(), iv.ravel()
-        entry[2].append(np.column_stack([bu[iu], bu[iu + 1], bv[iv], bv[iv + 1]]))
-        entry[3].append(np.column_stack([iu, iv]))
-    return [
-        CellSet(p, q, np.concatenate(n), np.concatenate(i), np.concatenate(b), np.concatenate(k))
-        for (p, q), (n, i, b, k) in sorted(groups.items())
-    ]
+        groups.setdefault((s.degree_u, s.degree_v), []).append(index)
+    return [_cellset(p, q, members, [patches[i] for i in members]) for (p, q), members in sorted(groups.items())]
+
+
+def _bezier_knots(p, knots):
+    """``(single (k,) bool, ends (k, 2))``: which knot vectors are one Bézier span
+    (``p + 1`` equal values, then ``p + 1`` equal values) and their ``(first, last)``."""
+    sized = np.flatnonzero([U.size == 2 * (p + 1) for U in knots])
+    single = np.zeros(len(knots), dtype=bool)
+    ends = np.zeros((len(knots), 2))
+    if sized.size:
+        K = np.stack([knots[i] for i in sized])  # (k, 2 p + 2)
+        single[sized[(K[:, 0] == K[:, p]) & (K[:, p + 1] == K[:, -1])]] = True
+        ends[sized] = K[:, [p, p + 1]]
+    return single, ends
+
+
+def _cellset(p, q, index, surfaces) -> CellSet:
+    """The :class:`CellSet` of patches of degrees ``(p, q)`` (their ``index`` in the input)."""
+    su, eu = _bezier_knots(p, [s.knots_u for s in surfaces])
+    sv, ev = _bezier_knots(q, [s.knots_v for s in surfaces])
+    single = su & sv
+    parts = [None if one else _split(p, q, s) for one, s in zip(single, surfaces)]
+    count = np.array([1 if part is None else len(part[0]) for part in parts])
+    start = np.concatenate([[0], np.cumsum(count)])
+    nets = np.empty((start[-1], p + 1, q + 1, 4))
+    nets[..., 3] = 1.0
+    box = np.repeat(np.column_stack([eu, ev]), count, axis=0)  # (u0, u1, v0, v1)
+    span = np.zeros((start[-1], 2), dtype=np.int64)
+    rational = np.array([s.is_rational for s in surfaces])
+    for flag, k in ((False, 3), (True, 4)):  # single-cell patches, polynomial then rational: one stack each
+        which = np.flatnonzero(single & (rational == flag))
+        if which.size:
+            # homogeneous points of a rational patch, Cartesian of a polynomial one (no copies)
+            pts = [surfaces[w].homogeneous_points if flag else surfaces[w].control_points for w in which]
+            nets[start[which], ..., :k] = np.stack(pts)
+    for w in np.flatnonzero(~single):
+        nets[start[w] : start[w + 1]], box[start[w] : start[w + 1]], span[start[w] : start[w + 1]] = parts[w]
+    return CellSet(p, q, nets, np.repeat(np.asarray(index, dtype=np.int64), count), box, span)
+
+
+def _split(p, q, surface):
+    """``(nets (k, p + 1, q + 1, 4), boxes (k, 4), spans (k, 2))`` of a multi-span patch's
+    Bézier cells, ``(iu, iv)`` order with ``iu`` major."""
+    coefs = np.asarray(surface.homogeneous_points)
+    bu, su = algebra.bezier_segments(p, surface.knots_u, coefs)  # (nsu, p + 1, nv, 4)
+    bv, sv = algebra.bezier_segments(q, surface.knots_v, su.transpose(2, 0, 1, 3))  # (nsv, q + 1, nsu, p + 1, 4)
+    nets = sv.transpose(2, 0, 3, 1, 4)  # (nsu, nsv, p + 1, q + 1, 4)
+    nsu, nsv = nets.shape[:2]
+    iu, iv = np.meshgrid(np.arange(nsu), np.arange(nsv), indexing="ij")
+    iu, iv = iu.ravel(), iv.ravel()
+    box = np.column_stack([bu[iu], bu[iu + 1], bv[iv], bv[iv + 1]])
+    return nets.reshape(nsu * nsv, p + 1, q + 1, 4), box, np.column_stack([iu, iv])
 
 
 @functools.lru_cache(maxsize=64)
@@ -160,14 +186,14 @@ def edge_samples(cells: CellSet):
     (zero when the edge collapses to a point, as at a pole).
     """
     N = cells.nets
-    edges_u = [N[:, :, 0], N[:, :, -1]]  # (c, p + 1, 4)
-    edges_v = [N[:, 0, :], N[:, -1, :]]  # (c, q + 1, 4)
+    edges_u = np.stack([N[:, :, 0], N[:, :, -1]], axis=1)  # (c, 2, p + 1, 4)
+    edges_v = np.stack([N[:, 0, :], N[:, -1, :]], axis=1)  # (c, 2, q + 1, 4)
     Bu = _bernstein_table(cells.p, 0, 0)  # (p + 1, 5) at EDGE_T
     Bv = _bernstein_table(cells.q, 0, 0)
     pts, extent = [], []
-    for e, B in ((edges_u[0], Bu), (edges_u[1], Bu), (edges_v[0], Bv), (edges_v[1], Bv)):
-        h = np.einsum("it,cik->ctk", B, e)
+    for e, B in ((edges_u, Bu), (edges_v, Bv)):  # both edges of a direction at once
+        h = np.einsum("it,ceik->cetk", B, e)
         pts.append(h[..., :3] / h[..., 3:])
         cart = e[..., :3] / e[..., 3:]
-        extent.append(_norms(cart - cart[:, :1]).max(axis=1))
-    return np.stack(pts, axis=1), np.stack(extent, axis=1)
+        extent.append(_norms(cart - cart[:, :, :1]).max(axis=2))
+    return np.concatenate(pts, axis=1), np.concatenate(extent, axis=1)

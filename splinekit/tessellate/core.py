@@ -52,7 +52,8 @@ def _patches(obj, levels):
 
 
 def _diagonal(points) -> float:
-    lo, hi = points.min(axis=0), points.max(axis=0)
+    rows = np.ascontiguousarray(np.reshape(points, (-1, points.shape[-1])).T)  # (dim, n): fast row reductions
+    lo, hi = rows.min(axis=1), rows.max(axis=1)
     return float(np.linalg.norm(hi - lo))
 
 
@@ -139,17 +140,4 @@ def tessellate(obj, tolerance=None, *, angle_tolerance=DEFAULT_ANGLE_TOLERANCE, 
         return tessellate_curve(item, tol, angle_tolerance)
     from .surfaces import tessellate_patches
 
-    return _outward(tessellate_patches(item, tol, angle_tolerance, size))
-
-
-def _outward(mesh):
-    """A closed body whose patches all face inward (``Su x Sv`` pointing into
-    the solid, e.g. a profile revolved the other way round) turned outward:
-    triangle winding, corner parameters and normals flipped, so its volume is
-    positive, as OCC's solids and manifold3d expect."""
-    if mesh.n_faces == 0 or not mesh.is_closed or mesh.volume >= 0:
-        return mesh
-    return type(mesh)._build(
-        mesh.vertices, np.asarray(mesh.faces)[:, ::-1], -mesh.normals, mesh.uv, mesh.vertex_patch,
-        mesh.face_patch, np.asarray(mesh.corner_uv)[:, ::-1], mesh.max_deviation, mesh.tolerance,
-    )  # fmt: skip
+    return tessellate_patches(item, tol, angle_tolerance, size)

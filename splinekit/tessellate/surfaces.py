@@ -29,13 +29,22 @@ triangles):
    only the changed cells (patches) evaluated again.
 5. Grids are triangulated by index arithmetic. Only vertices on a grid's
    boundary can merge: collapsed cell edges (poles) become one vertex, the
-   rest are welded with a k-d tree, and only triangles touching a grid
+   rest are welded where they lie within the weld distance (a sweep along one
+   direction, :func:`_close_pairs`), and only triangles touching a grid
    boundary are remapped, and dropped when they collapse.
+6. A closed body facing inward is turned outward; the common cases (an open
+   mesh: nothing welded; an outward body: clearly positive volume) are told
+   apart cheaply, without building the mesh's edge table.
+
+Small models spend most of their time in fixed per-call work rather than in
+evaluation, so the bookkeeping avoids sorts, sparse matrices and per-patch
+Python work where a cached table or one whole-array operation does.
 """
 
 from __future__ import annotations
 
 import functools
+import itertools
 import math
 
 import numpy as np
@@ -99,6 +108,19 @@ def _bern(p, n, where, order=0):
     return B
 
 
+@functools.lru_cache(maxsize=128)
+def _row_block(p, n):
+    """The u tables of a cell grid stacked for one product (cached, read-only):
+    ``(rows (R, p + 1), sizes, offsets)`` with the blocks half steps, d/du at the nodes,
+    nodes, first and second triangle-centre thirds."""
+    rows = [_bern(p, n, "halves"), _bern(p, n, "nodes", 1), _bern(p, n, "nodes"), _bern(p, n, "first"),
+            _bern(p, n, "second")]  # fmt: skip
+    sizes = tuple(len(r) for r in rows)
+    block = np.concatenate(rows)
+    block.setflags(write=False)
+    return block, sizes, (0, *itertools.accumulate(sizes))
+
+
 def _cross2(a, b):
     """Cross product along axis 2 of ``(a, c, 3, b)`` arrays."""
     return np.stack(
@@ -146,12 +168,10 @@ class _Grid:
         c = len(idx)
         # (p + 1, c, k, q + 1): rows of the first product
         flat = np.ascontiguousarray(nets.transpose(1, 0, 3, 2)).reshape(p + 1, c * k * (q + 1))
-        rows = [_bern(p, n, "halves"), _bern(p, n, "nodes", 1), _bern(p, n, "nodes"), _bern(p, n, "first"),
-                _bern(p, n, "second")]
-        sizes = [len(r) for r in rows]
-        T = _product(np.concatenate(rows), flat)  # (sum rows, c * k * (q + 1))
+        rows, sizes, offsets = _row_block(p, n)
+        T = _product(rows, flat)  # (sum rows, c * k * (q + 1))
         T = T.reshape(-1, q + 1)
-        starts = np.concatenate([[0], np.cumsum(sizes)]) * c * k
+        starts = [o * c * k for o in offsets]
 
         def grid(block, Bv):
             a = sizes[block]
@@ -229,8 +249,7 @@ class _Grid:
             self.weak = self.weak.transpose(1, 0, 2)
             return
         c, n, m = H.shape[1], (H.shape[0] - 1) // 2, (H.shape[3] - 1) // 2
-        ri = (np.searchsorted(rs, np.arange(n + 1), side="right") - 1).astype(np.int64)
-        ci = (np.searchsorted(cs, np.arange(m + 1), side="right") - 1).astype(np.int64)
+        ri, ci = _span_of_index(rs, n), _span_of_index(cs, m)
         V = np.empty((c, n + 1, m + 1, 3))
         N = np.empty((c, n + 1, m + 1, 3))
         weak = np.empty((c, n + 1, m + 1), dtype=np.bool_)
@@ -296,6 +315,13 @@ class _Grid:
         self.V, self.N = V, N
 
 
+def _span_of_index(starts, n):
+    """``(n + 1,)`` span of each grid row (column) ``0 .. n``, spans starting at ``starts``."""
+    if starts.size == 1:
+        return np.zeros(n + 1, dtype=np.int64)
+    return (np.searchsorted(starts, np.arange(n + 1), side="right") - 1).astype(np.int64)
+
+
 def _cartesian(H, Hu, Hv, C1, C2, rational):
     """Points, vertices and (multiples of) the first partials from homogeneous grids."""
     if not rational:
@@ -325,10 +351,6 @@ def _node_groups(cellsets, patch_of, span_of, nsv, weld_tol):
     Node ``2 g`` is global cell ``g``'s u samples, ``2 g + 1`` its v samples.
     Returns ``(labels (2 C,), collapsed (C, 4) bool)``.
     """
-    from scipy.sparse import coo_matrix
-    from scipy.sparse.csgraph import connected_components
-    from scipy.spatial import cKDTree
-
     pts, ext = [], []
     for cs in cellsets:
         p, e = edge_samples(cs)
@@ -343,8 +365,7 @@ def _node_groups(cellsets, patch_of, span_of, nsv, weld_tol):
     node = 2 * (np.arange(C * 4) // 4) + (np.arange(C * 4) % 4 >= 2)
     links = [np.zeros((0, 2), dtype=np.int64)]
     if live.size > 1:
-        tree = cKDTree(flat[live, 2])
-        pairs = tree.query_pairs(r=weld_tol, output_type="ndarray")
+        pairs = _close_pairs(flat[live, 2], weld_tol)
         if len(pairs):
             a, b = live[pairs[:, 0]], live[pairs[:, 1]]
             A, B = flat[a], flat[b]
@@ -362,9 +383,64 @@ def _node_groups(cellsets, patch_of, span_of, nsv, weld_tol):
     links.append(np.column_stack([2 * right, 2 * (right + 1)]))
     links.append(np.column_stack([2 * down + 1, 2 * below[down] + 1]))
     links = np.concatenate(links)
-    graph = coo_matrix((np.ones(len(links)), (links[:, 0], links[:, 1])), shape=(2 * C, 2 * C))
-    _, labels = connected_components(graph, directed=False)
-    return labels, collapsed
+    return _components(2 * C, links[:, 0], links[:, 1]), collapsed
+
+
+_SWEEP = np.array([0.5773502691896258, 0.6289340932953637, -0.5206089939262417])
+"""Unit direction of the sweep in :func:`_close_pairs`: generic, so that the planes
+of axis-aligned geometry do not project many points onto one value."""
+
+
+def _close_pairs(X, r):
+    """``(k, 2)`` index pairs ``i != j`` of the points ``X`` ``(n, 3)`` at most ``r`` apart
+    (each pair once). A sweep along one direction: points are sorted by their
+    projection, each is paired with those whose projection lies within ``r`` above
+    its own, and the candidates are kept when they are truly within ``r``. Points to
+    weld are few and isolated, so the candidates are few; should they not be (many
+    points on a plane across the sweep), a k-d tree answers instead."""
+    n = len(X)
+    if n < 2:
+        return np.zeros((0, 2), dtype=np.int64)
+    proj = X @ _SWEEP
+    order = np.argsort(proj, kind="stable")
+    ps = proj[order]
+    # the margin covers rounding of the projections; the exact test follows
+    end = np.searchsorted(ps, ps + r * (1.0 + 1e-6) + 4.0 * np.finfo(float).eps * np.abs(ps), side="right")
+    count = end - np.arange(1, n + 1)
+    total = int(count.sum())
+    if total > 16 * n + 1000:
+        from scipy.spatial import cKDTree
+
+        return cKDTree(X).query_pairs(r=r, output_type="ndarray")
+    i = np.repeat(np.arange(n), count)
+    j = i + 1 + (np.arange(total) - np.repeat(np.cumsum(count) - count, count))
+    a, b = order[i], order[j]
+    d = X[a] - X[b]
+    ok = np.einsum("ij,ij->i", d, d) <= r * r
+    return np.column_stack([a[ok], b[ok]])
+
+
+def _components(n, a, b):
+    """``(n,)`` label of each of ``n`` nodes linked by the edges ``a[k] - b[k]``: the smallest
+    node of its connected component. Roots hook onto the smallest root they are linked
+    to, then every node jumps to its root; a few rounds of whole-array operations, far
+    cheaper than building a sparse graph for the small graphs of a tessellation."""
+    lab = np.arange(n)
+    while a.size:
+        la, lb = lab[a], lab[b]
+        lo = np.minimum(la, lb)
+        new = lab.copy()
+        np.minimum.at(new, la, lo)
+        np.minimum.at(new, lb, lo)
+        while True:  # pointer jumping: labels only decrease, so this ends at the roots
+            jumped = new[new]
+            if np.array_equal(jumped, new):
+                break
+            new = jumped
+        if np.array_equal(new, lab):
+            break
+        lab = new
+    return lab
 
 
 def _initial_counts(cellsets, tol, angle_tol):
@@ -459,12 +535,13 @@ def tessellate_patches(patches, tol: float, angle_tol, weld_scale: float) -> Tes
         # single-cell patches: group by (cell set, nu, nv), evaluate each group at once
         single = todo[~multi[todo]]
         if single.size:
-            key = np.stack([set_of[single], nu[single], nv[single]], axis=1)
-            uniq, inverse = np.unique(key, axis=0, return_inverse=True)
-            inverse = inverse.ravel()
+            # one int64 key per cell, ordered like the rows (set, nu, nv): counts are <= MAX_COUNT
+            base = MAX_COUNT + 1
+            key = (set_of[single] * base + nu[single]) * base + nv[single]
+            uniq, inverse = np.unique(key, return_inverse=True)
             order = np.argsort(inverse, kind="stable")
             bounds = np.searchsorted(inverse[order], np.arange(len(uniq) + 1))
-            for g, (s, n, m) in enumerate(uniq):
+            for g, (s, n, m) in enumerate(zip(uniq // base**2, uniq // base % base, uniq % base)):
                 members = single[order[bounds[g] : bounds[g + 1]]]
                 flags = any_collapsed[offsets[s] : offsets[s + 1]]
                 grid = _Grid.cells(cellsets[s], members - offsets[s], int(n), int(m), tol, angle_tol, weld_tol, flags)
@@ -524,7 +601,39 @@ def tessellate_patches(patches, tol: float, angle_tol, weld_scale: float) -> Tes
         nu = np.where(over_u, np.maximum(grow_u, np.minimum(nu + 1, MAX_COUNT)), nu)
         nv = np.where(over_v, np.maximum(grow_v, np.minimum(nv + 1, MAX_COUNT)), nv)
     cell_index = _CellIndex(cellsets, offsets, first, n_cells, nsv, box_of)
-    return _assemble(grids, record, collapsed, span_of, cell_index, tol, weld_tol)
+    mesh, welded, V, T = _assemble(grids, record, collapsed, span_of, cell_index, tol, weld_tol)
+    return _outward(mesh, welded, V, T)
+
+
+@functools.lru_cache(maxsize=256)
+def _ring_split(n, m):
+    """Index tables of an ``(n + 1) x (m + 1)`` grid (cached, read-only): interior and
+    ring (border) local vertices ``Li``, ``Lr``; each vertex's ``slot`` among its kind;
+    the ``on_ring`` mask; the local triangles off the ring and touching it."""
+    i, j = np.meshgrid(np.arange(n + 1), np.arange(m + 1), indexing="ij")
+    on_ring = ((i == 0) | (i == n) | (j == 0) | (j == m)).ravel()
+    Li, Lr = np.flatnonzero(~on_ring), np.flatnonzero(on_ring)
+    slot = np.empty(on_ring.size, dtype=np.int64)
+    slot[Li] = np.arange(Li.size)
+    slot[Lr] = np.arange(Lr.size)
+    tmpl = _grid_triangles(n, m)
+    touch = on_ring[tmpl].any(axis=1)
+    out = (Li, Lr, slot, on_ring, tmpl[~touch], tmpl[touch])
+    for a in out:
+        a.setflags(write=False)
+    return out
+
+
+@functools.lru_cache(maxsize=512)
+def _template_slots(n, m, touching):
+    """``(is_ring, slot)`` ``(t, 3)`` of the local triangles of an ``(n + 1) x (m + 1)`` grid
+    off the ring (``touching=False``) or touching it (cached, read-only)."""
+    _, _, slot, on_ring, tmpl_in, tmpl_edge = _ring_split(n, m)
+    tmpl = tmpl_edge if touching else tmpl_in
+    out = (on_ring[tmpl], slot[tmpl])
+    for a in out:
+        a.setflags(write=False)
+    return out
 
 
 class _Piece:
@@ -551,16 +660,7 @@ class _Piece:
         c = sel.size
         if c == b.V.shape[0]:
             sel = slice(None)  # every cell of the grid is current: no copy
-        i, j = np.meshgrid(np.arange(n + 1), np.arange(m + 1), indexing="ij")
-        on_ring = ((i == 0) | (i == n) | (j == 0) | (j == m)).ravel()
-        self.Li, self.Lr = np.flatnonzero(~on_ring), np.flatnonzero(on_ring)
-        slot = np.empty(per, dtype=np.int64)
-        slot[self.Li] = np.arange(self.Li.size)
-        slot[self.Lr] = np.arange(self.Lr.size)
-        self.slot, self.on_ring = slot, on_ring
-        tmpl = _grid_triangles(n, m)
-        touch = on_ring[tmpl].any(axis=1)
-        self.tmpl_in, self.tmpl_edge = tmpl[~touch], tmpl[touch]
+        self.Li, self.Lr, self.slot, self.on_ring, self.tmpl_in, self.tmpl_edge = _ring_split(n, m)
         self.n, self.m, self.c, self.per = n, m, c, per
         self.V = b.V[sel].reshape(c, per, 3)
         self.N = b.N[sel].reshape(c, per, 3)
@@ -568,13 +668,14 @@ class _Piece:
         self.U, self.W = U, W
         # collapsed cell edges: (ring vertex, ring vertex it becomes), in this piece's ring slots
         pins = []
+        slot, on_ring = self.slot, self.on_ring
         col = collapsed[b.cells[keep]]
         if col.any():
             if b.kind == "cells":
                 for e, loc in enumerate(_edge_locals(n, m)):
-                    for k in np.flatnonzero(col[:, e]):
-                        r = k * self.Lr.size + slot[loc]
-                        pins.append(np.column_stack([r, np.full(r.size, r[0])]))
+                    # every collapsed edge e of a cell k: its ring vertices -> the edge's first one
+                    r = (np.flatnonzero(col[:, e])[:, None] * self.Lr.size + slot[loc]).ravel()
+                    pins.append(np.column_stack([r, np.repeat(r[:: loc.size], loc.size)]))
             else:
                 cu, cv = b.counts
                 r0s, c0s = np.concatenate([[0], np.cumsum(cu)]), np.concatenate([[0], np.cumsum(cv)])
@@ -592,24 +693,56 @@ class _Piece:
         i, j = L // (self.m + 1), L % (self.m + 1)
         return np.stack([self.U[:, i], self.W[:, j]], axis=-1)
 
-    def triangles(self, tmpl, int_base, ring_base, out=None):
-        """Global triangles ``(c * len(tmpl), 3)`` of a template of local triangles."""
+    def triangles(self, touching, int_base, ring_base, out=None):
+        """Global triangles ``(c * t, 3)`` of the local triangles touching the ring
+        (``touching=True``, ``tmpl_edge``) or not (``tmpl_in``)."""
         ni, nr = self.Li.size, self.Lr.size
-        is_ring = self.on_ring[tmpl]
+        is_ring, slot = _template_slots(self.n, self.m, touching)
         cell = np.arange(self.c)[:, None, None]
         base = np.where(is_ring[None], ring_base + cell * nr, int_base + cell * ni)
         if out is None:
-            return (base + self.slot[tmpl][None]).reshape(-1, 3)
-        np.add(base, self.slot[tmpl][None], out=out.reshape(self.c, len(tmpl), 3))
+            return (base + slot[None]).reshape(-1, 3)
+        np.add(base, slot[None], out=out.reshape(self.c, len(slot), 3))
         return out
 
 
-def _assemble(grids, record, collapsed, span_of, cell_index, tol, weld_tol):
-    """Concatenate the latest evaluation of every cell, weld and triangulate."""
-    from scipy.sparse import coo_matrix
-    from scipy.sparse.csgraph import connected_components
-    from scipy.spatial import cKDTree
+def _outward(mesh, welded, vertices, triangles):
+    """A closed body whose patches all face inward (``Su x Sv`` pointing into
+    the solid, e.g. a profile revolved the other way round) turned outward:
+    triangle winding, corner parameters and normals flipped, so its volume is
+    positive, as OCC's solids and manifold3d expect. An unwelded mesh is open,
+    and an outward closed one is recognised by a cheap volume sum: both skip the
+    edge table that ``is_closed`` builds. ``vertices`` ``(n, 3)`` and ``triangles``
+    ``(F, 3)`` are the mesh's arrays."""
+    if len(triangles) == 0 or not welded or _clearly_positive_volume(vertices, triangles):
+        return mesh
+    if not mesh.is_closed or mesh.volume >= 0:
+        return mesh
+    return type(mesh)._build(
+        mesh.vertices, np.asarray(mesh.faces)[:, ::-1], -mesh.normals, mesh.uv, mesh.vertex_patch,
+        mesh.face_patch, np.asarray(mesh.corner_uv)[:, ::-1], mesh.max_deviation, mesh.tolerance,
+    )  # fmt: skip
 
+
+def _clearly_positive_volume(vertices, triangles) -> bool:
+    """True when the signed volume about the bounding-box centre is positive by a margin
+    far above rounding (then ``mesh.volume``, the same sum, is positive if the mesh is
+    closed, and an open mesh is left as it is anyway)."""
+    X = np.array(vertices.T, order="C")  # (3, n) copy: rows are fast to reduce and gather
+    X -= 0.5 * (X.min(axis=1) + X.max(axis=1))[:, None]
+    F = triangles
+    a, b, c = (X.take(F[:, k], axis=1) for k in range(3))  # (3, F) each
+    det = a[0] * (b[1] * c[2] - b[2] * c[1]) + a[1] * (b[2] * c[0] - b[0] * c[2]) + a[2] * (b[0] * c[1] - b[1] * c[0])
+    return bool(det.sum() > 1e-9 * np.abs(det).sum())
+
+
+def _assemble(grids, record, collapsed, span_of, cell_index, tol, weld_tol):
+    """Concatenate the latest evaluation of every cell, weld and triangulate.
+
+    Returns ``(mesh, welded, vertices, triangles)``: ``welded`` is False when no two grid
+    vertices were merged (then every grid's border edges keep their single triangle: the
+    mesh is open); the arrays are the mesh's, as built.
+    """
     pieces = []
     max_dev = 0.0
     for r, b in enumerate(grids):
@@ -639,28 +772,28 @@ def _assemble(grids, record, collapsed, span_of, cell_index, tol, weld_tol):
     at = 0
     for k, p in enumerate(pieces):
         size = p.c * len(p.tmpl_in)
-        p.triangles(p.tmpl_in, int_base[k], ring_base[k], out=T[at : at + size])
+        p.triangles(False, int_base[k], ring_base[k], out=T[at : at + size])
         FP[at : at + size] = np.repeat(p.pid, len(p.tmpl_in))
         at += size
-    T_edge = [p.triangles(p.tmpl_edge, int_base[k], ring_base[k]) for k, p in enumerate(pieces)]
+    T_edge = [p.triangles(True, int_base[k], ring_base[k]) for k, p in enumerate(pieces)]
     F_edge = [np.repeat(p.pid, len(p.tmpl_edge)) for p in pieces]
     E0 = np.concatenate(T_edge)  # before welding
     FE = np.concatenate(F_edge)
-    # weld ring vertices: collapsed edges first, then coincident points (k-d tree pairs)
+    # weld ring vertices: collapsed edges first, then coincident points (close pairs)
     rep = np.arange(NR)
     pins = [p.pins + (ring_base[k] - NI) for k, p in enumerate(pieces) if len(p.pins)]
     if pins:
         pins = np.concatenate(pins)
         rep[pins[:, 0]] = pins[:, 1]
-    cand = np.unique(rep)
-    pairs = cKDTree(V[NI + cand]).query_pairs(r=weld_tol, output_type="ndarray")
+    present = np.zeros(NR, dtype=bool)
+    present[rep] = True
+    cand = np.flatnonzero(present)  # np.unique(rep), without the sort
+    pairs = _close_pairs(V[NI + cand], weld_tol)
     if len(pairs):
-        g = coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(cand.size, cand.size))
-        _, lab = connected_components(g, directed=False)
-        first = np.full(lab.max() + 1, NR, dtype=np.int64)
-        np.minimum.at(first, lab, cand)
+        # every candidate becomes the first (smallest) candidate of its welded group
+        lab = _components(cand.size, pairs[:, 0], pairs[:, 1])
         remap = np.arange(NR)
-        remap[cand] = first[lab]
+        remap[cand] = cand[lab]
         rep = remap[rep]
     full = np.concatenate([np.arange(NI), NI + rep])
     E = full[E0]
@@ -668,13 +801,15 @@ def _assemble(grids, record, collapsed, span_of, cell_index, tol, weld_tol):
     E, FE, E0 = E[good], FE[good], E0[good]
     # drop exact duplicates (same corners in the same cyclic order) made by welding
     if len(E):
-        rot = np.argmin(E, axis=1)
-        canon = np.take_along_axis(E, (rot[:, None] + np.arange(3)) % 3, axis=1)
         nv = NI + NR
         if nv < 2_000_000:  # one int64 key per triangle: a 1-D sort instead of a row sort
-            key = (canon[:, 0] * nv + canon[:, 1]) * nv + canon[:, 2]
+            # the rotation that starts at the smallest corner has the smallest key
+            a, b, c = E[:, 0], E[:, 1], E[:, 2]
+            key = np.minimum(np.minimum((a * nv + b) * nv + c, (b * nv + c) * nv + a), (c * nv + a) * nv + b)
             _, first_idx = np.unique(key, return_index=True)
         else:
+            rot = np.argmin(E, axis=1)
+            canon = np.take_along_axis(E, (rot[:, None] + np.arange(3)) % 3, axis=1)
             _, first_idx = np.unique(canon, axis=0, return_index=True)
         if first_idx.size != len(E):
             first_idx.sort()
@@ -699,7 +834,8 @@ def _assemble(grids, record, collapsed, span_of, cell_index, tol, weld_tol):
         V, N, UV, VP, WK = V[:nv], N[:nv], UV[:nv], VP[:nv], WK[:nv]
     if WK.any():
         _fix_weak_normals(N, WK, UV, VP, cell_index)
-    return Tessellation._build(V, T, N, UV, VP, FP, (UV_pre, n_in, E0), max_dev, tol)
+    mesh = Tessellation._build(V, T, N, UV, VP, FP, (UV_pre, n_in, E0), max_dev, tol)
+    return mesh, bool(len(pins) or len(pairs)), V, T
 
 
 class _CellIndex:
@@ -712,8 +848,8 @@ class _CellIndex:
 
     def locate(self, P, u, v):
         """Global cell ``(k,)`` and local ``(s, t)`` of the points ``(P[i], u[i], v[i])``."""
-        g = np.empty(P.size, dtype=np.int64)
-        for p in np.unique(P):
+        g = self.first[P]  # right for single-cell patches
+        for p in np.unique(P[self.n_cells[P] > 1]):
             sel = np.flatnonzero(P == p)
             ns_v = self.nsv[p]
             ns_u = self.n_cells[p] // ns_v
@@ -730,8 +866,12 @@ class _CellIndex:
 def _cell_partials(nets, s, t, p, q):
     """``(S, Su, Sv, Suv)`` ``(k, 3)`` of Bézier cells ``nets`` ``(k, p + 1, q + 1, 4)`` at
     local parameters ``s, t`` ``(k,)`` (rational quotient rule)."""
-    Bu = all_bernstein(p, s, 1)  # (2, p + 1, k)
-    Bv = all_bernstein(q, t, 1)
+    if p == q:  # one table for both directions (values are per point)
+        B = all_bernstein(p, np.concatenate([s, t]), 1)  # (2, p + 1, 2 k)
+        Bu, Bv = B[..., : s.size], B[..., s.size :]
+    else:
+        Bu = all_bernstein(p, s, 1)  # (2, p + 1, k)
+        Bv = all_bernstein(q, t, 1)
     A = [[np.einsum("ik,jk,kijc->kc", Bu[a], Bv[b], nets) for b in range(2)] for a in range(2)]
     w = A[0][0][:, 3:]
     S = A[0][0][:, :3] / w
@@ -739,6 +879,15 @@ def _cell_partials(nets, s, t, p, q):
     Sv = (A[0][1][:, :3] - A[0][1][:, 3:] * S) / w
     Suv = (A[1][1][:, :3] - A[1][0][:, 3:] * Sv - A[0][1][:, 3:] * Su - A[1][1][:, 3:] * S) / w
     return S, Su, Sv, Suv
+
+
+def _cross(a, b):
+    """Row-wise cross product of ``(k, 3)`` arrays (``np.cross`` costs more on small inputs)."""
+    return np.column_stack([
+        a[:, 1] * b[:, 2] - a[:, 2] * b[:, 1],
+        a[:, 2] * b[:, 0] - a[:, 0] * b[:, 2],
+        a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0],
+    ])  # fmt: skip
 
 
 def _fix_weak_normals(N, weak, UV, VP, cells: _CellIndex):
@@ -752,11 +901,13 @@ def _fix_weak_normals(N, weak, UV, VP, cells: _CellIndex):
         sel = np.flatnonzero(sets == k)
         cs = cells.cellsets[k]
         nets = cs.nets[g[sel] - cells.offsets[k]]
-        _, Su, Sv, Suv = _cell_partials(nets, s[sel], t[sel], cs.p, cs.q)
-        alt = np.cross(Su, Suv) + np.cross(Suv, Sv)
         s_in, t_in = s[sel] + 1e-3 * (0.5 - s[sel]), t[sel] + 1e-3 * (0.5 - t[sel])
-        _, Su_in, Sv_in, _ = _cell_partials(nets, s_in, t_in, cs.p, cs.q)
-        ref = np.cross(Su_in, Sv_in)
+        # the points and the points slightly inside, in one evaluation
+        _, Su, Sv, Suv = _cell_partials(np.concatenate([nets, nets]), np.concatenate([s[sel], s_in]),
+                                        np.concatenate([t[sel], t_in]), cs.p, cs.q)  # fmt: skip
+        h = sel.size
+        alt = _cross(Su[:h], Suv[:h]) + _cross(Suv[:h], Sv[:h])
+        ref = _cross(Su[h:], Sv[h:])
         alt[np.einsum("ij,ij->i", alt, ref) < 0] *= -1.0
         size = np.linalg.norm(alt, axis=1)
         tiny = size <= 1e-14 * (np.linalg.norm(ref, axis=1) + 1e-300)
