@@ -35,7 +35,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ._validate import as_float_array, as_int, as_real
+from ._validate import as_degree, as_float_array, as_int, as_real
 from .errors import ParameterError
 
 __all__ = [
@@ -350,8 +350,10 @@ def points_to_mesh(points, normals=None, edge_length=None, *, k: int = 16, sampl
 
 def _explicit_domain(domain):
     d = as_float_array(domain, "domain")
-    if d.shape != (2, 2) or not np.isfinite(d).all() or not (d[:, 1] > d[:, 0]).all():
-        raise ParameterError(f"domain must be ((x0, x1), (y0, y1)) with finite x0 < x1 and y0 < y1, got {domain!r}")
+    with np.errstate(over="ignore"):  # a width beyond the float range is refused
+        ok = d.shape == (2, 2) and np.isfinite(d).all() and (d[:, 1] > d[:, 0]).all() and np.isfinite(d[:, 1] - d[:, 0]).all()
+    if not ok:
+        raise ParameterError(f"domain must be ((x0, x1), (y0, y1)) with finite x0 < x1 and y0 < y1 (and finite widths), got {domain!r}")
     return d
 
 
@@ -397,7 +399,7 @@ def explicit_to_bspline(f, domain, n=32, *, degree: int = 3, check: int = 4) -> 
     from .fit import interpolate_surface
 
     d = _explicit_domain(domain)
-    p = as_int(degree, "degree", minimum=1)
+    p = as_degree(degree)
     if isinstance(n, (tuple, list, np.ndarray)):
         if len(n) != 2:
             raise ParameterError(f"n must be an int or a pair, got {n!r}")

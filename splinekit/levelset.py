@@ -91,6 +91,10 @@ class LevelSet:
         self._origin = _origin3(origin)
         self._origin.setflags(write=False)
         self._h = float(h)
+        with np.errstate(over="ignore"):
+            far = self._origin + (np.array(p.shape) - 1) * self._h
+        if not np.isfinite(far).all():
+            raise ParameterError(f"a grid of shape {p.shape} with spacing {self._h!r} reaches beyond the float range")
         self._time = as_real(time, "time")
 
     @classmethod
@@ -212,19 +216,22 @@ class LevelSet:
         cache = [None]
         F0 = self._speed(speed, self._time, cache)
         fmax = float(np.max(np.abs(F0)))
-        dt_max = np.inf
-        if fmax > 0:
-            dt_max = cfl * h / fmax
-        if b > 0:
-            dt_max = min(dt_max, cfl * h * h / (6.0 * b))
+        # the step count is worked out in floating point and checked before it becomes an
+        # int: a huge speed or curvature makes dt underflow to 0 (and T / dt infinite)
+        with np.errstate(over="ignore", divide="ignore", invalid="ignore"):  # 0 / 0 for T = 0: returned below
+            dt_max = np.inf
+            if fmax > 0:
+                dt_max = cfl * h / fmax
+            if b > 0:
+                dt_max = min(dt_max, cfl * h * h / (6.0 * b))
+            steps = 1.0 if not np.isfinite(dt_max) else float(np.ceil(np.float64(T) / dt_max - 1e-9))
         if T == 0 or (fmax == 0 and b == 0 and not callable(speed)):
             return self._new(self._phi.copy(), self._time + T)
-        n_steps = 1 if not np.isfinite(dt_max) else int(np.ceil(T / dt_max - 1e-9))
-        if n_steps > MAX_STEPS:
+        if not steps <= MAX_STEPS:
             raise ParameterError(
-                f"advancing by {T!r} needs {n_steps} time steps (dt = {dt_max:.3g}), more than MAX_STEPS = {MAX_STEPS}"
+                f"advancing by {T!r} needs {steps:.3g} time steps (dt = {dt_max:.3g}), more than MAX_STEPS = {MAX_STEPS}"
             )
-        n_steps = max(n_steps, 1)
+        n_steps = max(int(steps), 1)
         dt = T / n_steps
         phi = np.array(self._phi)
         t = self._time
@@ -384,7 +391,9 @@ def _interface_distances(phi, h):
             valid[tuple(idx)] = False  # np.roll wrapped around there
             cross = valid & (neg != oneg)
             with np.errstate(divide="ignore", invalid="ignore"):
-                t = np.where(cross, phi / (phi - other), np.inf)
+                # |phi| / (|phi| + |other|) halved top and bottom: phi - other may overflow
+                a, o = 0.5 * np.abs(phi), 0.5 * np.abs(other)
+                t = np.where(cross, a / (a + o), np.inf)
             best = np.minimum(best, np.where(cross, np.abs(t) * h, np.inf))
         with np.errstate(divide="ignore"):
             inv2 += np.where(np.isfinite(best), 1.0 / np.maximum(best, 1e-300) ** 2, 0.0)

@@ -40,13 +40,15 @@ def render_surface(surface, path, resolution: int = 80, color: str = "normal", s
     """Write a shaded PNG of a 3-D spline surface to ``path`` (atomically).
 
     ``color`` is ``"normal"`` (Lambert shading of the unit normal) or
-    ``"height"`` (z coordinate). The control net is drawn as a wireframe when
-    ``show_net``. Returns the path.
+    ``"height"`` (z coordinate), sampled on a ``resolution x resolution``
+    parameter grid (an integer in ``[2, MAX_RESOLUTION]``). The control net is
+    drawn as a wireframe when ``show_net``. Returns the path.
     """
     if getattr(surface, "dim", None) != 3:
         raise ParameterError("render_surface needs a surface in 3-D space")
     if color not in ("normal", "height"):
         raise ParameterError(f"color must be 'normal' or 'height', got {color!r}")
+    resolution = _resolution(resolution)
     plt = _pyplot()
     from matplotlib import cm
 
@@ -102,6 +104,21 @@ _QUAD_BUDGET = 40000  # quads drawn for a whole patch set: matplotlib draws ~20-
 _DPI = 100
 _SIGNED = {"gaussian": "Gaussian curvature K", "mean": "mean curvature H"}
 _NAN_GREY = 0.6
+
+
+MAX_RESOLUTION = 1000
+"""Largest parameter grid per direction and patch (a million quads per patch
+is already far beyond what matplotlib draws in reasonable time)."""
+
+
+def _resolution(value) -> int:
+    """A grid resolution: an integer in ``[2, MAX_RESOLUTION]``, else ParameterError."""
+    from ._validate import as_int
+
+    n = as_int(value, "resolution", minimum=2)
+    if n > MAX_RESOLUTION:
+        raise ParameterError(f"resolution must be at most {MAX_RESOLUTION}, got {n}")
+    return n
 
 
 def _check_render_options(color, scale, size, view):
@@ -322,9 +339,7 @@ def render_patches(patches, path, *, color: str = "curvature", scale: str = "per
     if resolution is None:
         n = int(np.clip(np.sqrt(_QUAD_BUDGET / len(patches)), 4, 64)) + 1
     else:
-        from ._validate import as_int
-
-        n = as_int(resolution, "resolution", minimum=2)
+        n = _resolution(resolution)
     quads = _grid_quads(n, n)
     polys, normals, K, H = [], [], [], []
     for s in patches:  # one vectorized grid evaluation per patch
@@ -349,14 +364,13 @@ def render_patches(patches, path, *, color: str = "curvature", scale: str = "per
 def _mesh_corners(mesh):
     """``(corners (F', k), source face (F',))``: the faces' vertex indices as they are
     when every face has ``k`` sides, otherwise fan triangles (a face with k corners gives k - 2)."""
+    from .mesh.geometry import triangulate
+
     idx, off = np.asarray(mesh.face_indices), np.asarray(mesh.face_offsets)
     counts = np.diff(off)
     if counts.size and (counts == counts[0]).all():
         return idx.reshape(-1, counts[0]), np.arange(counts.size)
-    face_of_corner = np.repeat(np.arange(counts.size), counts)
-    pos = np.arange(idx.size) - off[face_of_corner]
-    j = np.flatnonzero((pos >= 1) & (pos < counts[face_of_corner] - 1))  # corners 1 .. k-2 start a fan triangle
-    return np.stack([idx[off[face_of_corner[j]]], idx[j], idx[j + 1]], axis=1), face_of_corner[j]
+    return triangulate(mesh)
 
 
 def _halves(corners, order):
@@ -402,10 +416,9 @@ def _face_components(mesh) -> np.ndarray:
     from scipy.sparse import coo_matrix
     from scipy.sparse.csgraph import connected_components
 
-    idx, off = np.asarray(mesh.face_indices), np.asarray(mesh.face_offsets)
-    counts = np.diff(off)
-    face_of_corner = np.repeat(np.arange(counts.size), counts)
-    n = mesh.n_vertices + counts.size
+    idx = np.asarray(mesh.face_indices)
+    face_of_corner = mesh.topology.corner_face
+    n = mesh.n_vertices + mesh.n_faces
     graph = coo_matrix((np.ones(idx.size), (idx, mesh.n_vertices + face_of_corner)), shape=(n, n))
     _, labels = connected_components(graph, directed=False)
     return labels[mesh.n_vertices:]

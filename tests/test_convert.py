@@ -181,6 +181,9 @@ def test_explicit_to_implicit_is_exact():
         lambda: convert.points_to_mesh(fibonacci_sphere(100), edge_length=-1.0),
         lambda: convert.nurbs_to_mesh([], 1e-3),
         lambda: convert.nurbs_to_mesh(nurbs_sphere(), 1e-3, samples=0),
+        # a domain whose width overflows (linspace would warn and return inf)
+        lambda: convert.explicit_to_bspline(lambda x, y: x, ((-1e308, 1e308), (0, 1)), 8),
+        lambda: convert.explicit_to_implicit(lambda x, y: x, ((0, 1), (-1e308, 1e308))),
     ],
 )
 def test_bad_input_raises_a_splinekit_error(call):
@@ -195,3 +198,12 @@ def test_sdf_to_mesh_refuses_bad_edge_length():
         convert.sdf_to_mesh(sphere((0, 0, 0), 1.0), 0.0)
     with pytest.raises(SplineKitError):
         convert.sdf_to_mesh(sphere((0, 0, 0), 1.0), float("nan"))
+
+
+def test_explicit_to_bspline_degree_is_checked_as_a_degree():
+    from splinekit.errors import DegreeError
+
+    for bad in (0, 200, 1.5):
+        with pytest.raises(DegreeError):
+            convert.explicit_to_bspline(lambda x, y: x, ((0, 1), (0, 1)), 8, degree=bad)
+

@@ -122,6 +122,22 @@ def test_rounded_box_closed_forms():
     assert np.array_equal(f.bounds[0], [-1, -1, -1]) and np.array_equal(f.bounds[1], [1, 1, 1])
 
 
+def test_spindle_torus_is_exact_outside_only():
+    # R < r: at the centre F = R - r, but the dimples on the axis (on the zero set) are
+    # sqrt(r^2 - R^2) away, nearer than |F| allows for a signed distance
+    R, r = 0.5, 1.0
+    f = si.torus((0, 0, 0), R, r)
+    dimple = np.sqrt(r * r - R * R)
+    assert np.allclose(f([[0, 0, 0], [0, 0, dimple], [0, 0, -dimple], [R + r, 0, 0]]), [R - r, 0, 0, 0], atol=1e-15)
+    assert dimple > abs(R - r)  # so F is not the distance at the centre
+    assert not f.is_exact_sdf and si.torus((0, 0, 0), 1.0, 1.0).is_exact_sdf
+    # outside it is still the distance: one gradient step lands on the zero set |F| away
+    p = np.random.default_rng(21).uniform(-3, 3, (2000, 3))
+    p = p[f(p) > 0]
+    on = p - f(p)[:, None] * f.gradient(p)
+    assert np.abs(f(on)).max() < 1e-12
+
+
 def test_torus_closed_forms():
     R, r = 2.0, 0.5
     f = si.torus((0, 0, 0), R, r)
@@ -510,6 +526,10 @@ def test_zero_gradient_normal_names_the_point():
         lambda: si.sphere().to_mesh(0.1, bounds=((0, 0), (1, 1))),
         lambda: si.plane().to_mesh(5.0, bounds=((-1, -1, -1), (1, 1, 1))),
         lambda: si.plane().to_mesh(0.1, bounds=((-1, -1, -1), (1, 1, np.inf))),
+        # grid counts beyond int64 (wrapped to a negative total before) and beyond the float range
+        lambda: si.sphere().to_mesh(1e-7),
+        lambda: si.sphere().to_mesh(1e-320),
+        lambda: si.plane().to_mesh(0.5, bounds=((-1e308,) * 3, (1e308,) * 3)),
     ],
 )
 def test_bad_input_raises_splinekit_error(call):

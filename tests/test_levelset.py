@@ -129,6 +129,8 @@ def test_external_field_moves_only_where_it_is_nonzero():
 def test_zero_duration_and_no_speed_keep_phi():
     ls = LevelSet.from_implicit(ball(0.4), BOX, 11, time=2.0)
     assert np.array_equal(ls.advance(0.0, 1.0).phi, ls.phi)
+    # even where the time step underflows to 0 (0 / 0 steps): nothing to do
+    assert np.array_equal(ls.advance(0.0, 0.0, curvature=1e308).phi, ls.phi)
     out = ls.advance(1.0, 0.0)
     assert np.array_equal(out.phi, ls.phi) and out.time == 3.0
 
@@ -194,6 +196,10 @@ def test_bad_input():
         lambda: ls.advance(1.0, lambda p, t: np.full(len(p), 1.0 + 10 * t)),  # speed outgrows the step
         lambda: LevelSet(np.ones((4, 4, 4)), (0, 0, 0), 1.0).reinitialize(),
         lambda: ls.reinitialize(max_passes=0),
+        # a huge speed or curvature: dt underflows and the step count is infinite, refused
+        lambda: ls.advance(1.0, 1e308),
+        lambda: ls.advance(1.0, 0.0, curvature=1e308),
+        lambda: LevelSet(np.zeros((4, 4, 4)), (0, 0, 0), 1e308),
     ]
     for i, case in enumerate(cases):
         with pytest.raises(SplineKitError):
@@ -201,3 +207,12 @@ def test_bad_input():
             pytest.fail(f"case {i} did not raise")
     with pytest.raises(ParameterError, match="MAX_STEPS"):
         ls.advance(1e9, 1.0)
+    with pytest.raises(ParameterError, match="MAX_STEPS"):
+        ls.advance(1.0, 1e308)
+
+
+def test_reinitialize_survives_samples_near_the_float_limit():
+    # phi - other would overflow; the crossing is still halfway between the two slabs
+    phi = np.where(np.arange(5)[:, None, None] < 2, -1e308, 1e308) * np.ones((5, 4, 4))
+    r = LevelSet(phi, (0, 0, 0), 0.1).reinitialize()
+    assert np.allclose(r.phi[:, 0, 0], [-0.15, -0.05, 0.05, 0.15, 0.25], atol=1e-15)

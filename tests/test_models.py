@@ -562,5 +562,16 @@ def test_wing_sections_follow_naca_and_meet_smoothly():
     yt = wing.half_thickness(x, 0.12)
     assert yt.max() == pytest.approx(0.06, abs=2e-3)  # thickness 12 % of the chord at about 30 %
     up0 = ups[0].evaluate(np.linspace(*ups[0].domain, 2001))
+    low0 = lows[0].evaluate(np.linspace(*lows[0].domain, 2001))
     chord = v["root_chord"]
-    assert up0[:, 2].max() / chord == pytest.approx(wing.airfoil_halves(0.12, 0.02, 0.4)[0][:, 1].max(), abs=2e-3)
+    # the textbook NACA 2412 (closed trailing edge) written out here, on a dense chord grid:
+    # upper y_c + y_t cos(theta), lower y_c - y_t cos(theta), theta = atan(dy_c / dx)
+    t, m, p = 0.12, 0.02, 0.4
+    xs = np.linspace(0.0, 1.0, 200001)
+    y_t = 5 * t * (0.2969 * np.sqrt(xs) - 0.1260 * xs - 0.3516 * xs**2 + 0.2843 * xs**3 - 0.1036 * xs**4)
+    y_c = np.where(xs < p, m / p**2 * (2 * p * xs - xs**2), m / (1 - p) ** 2 * ((1 - 2 * p) + 2 * p * xs - xs**2))
+    slope = np.where(xs < p, 2 * m / p**2 * (p - xs), 2 * m / (1 - p) ** 2 * (p - xs))
+    reach = y_t * np.cos(np.arctan(slope))
+    # 25 interpolated points per half: the extremes agree to about 1e-6 of the chord
+    assert up0[:, 2].max() / chord == pytest.approx((y_c + reach).max(), abs=2e-5)
+    assert low0[:, 2].min() / chord == pytest.approx((y_c - reach).min(), abs=2e-5)

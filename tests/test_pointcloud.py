@@ -17,7 +17,7 @@ from hypothesis import strategies as st
 from scipy import stats
 
 import splinekit as sk
-from splinekit.errors import FittingError, SplineKitError
+from splinekit.errors import DegreeError, FittingError, SplineKitError
 from splinekit.mesh import primitives
 from splinekit.pointcloud import (
     MeshDistance,
@@ -128,7 +128,13 @@ def test_closed_form_eigenpairs_match_lapack(seed, thinness, log_scale):
     C = np.einsum("mij,mj,mkj->mik", Q, lam, Q)
     values, v = smallest_eigenpairs(C)
     w, V = np.linalg.eigh(C)
-    assert np.allclose(values, w, rtol=0, atol=1e-12 * w[:, 2:].max())
+    # the trigonometric solution is conditioned like the cubic's roots: an eigenvalue only
+    # delta away from another carries a rounding error of order eps * lambda_max^2 / delta
+    # (about 3e-12 for a gap of 7e-6); well separated ones are good to 1e-12 * lambda_max
+    gap = np.min(np.abs(w[:, :, None] - w[:, None, :]) + np.diag([np.inf] * 3), axis=2)
+    top = w[:, 2:]
+    tol = 1e-12 * top + 4 * np.finfo(float).eps * top**2 / gap
+    assert np.all(np.abs(values - w) <= tol)
     sep = (w[:, 1] - w[:, 0]) / w[:, 2]
     ok = sep > 1e-3
     assert np.allclose(np.abs(np.einsum("md,md->m", v, V[:, :, 0]))[ok], 1.0, atol=1e-9)
@@ -361,6 +367,9 @@ def test_mls_distance_is_a_signed_distance_near_a_sphere_with_exact_gradient():
     ])
     assert np.abs(G - fd).max() < 1e-6
     assert np.abs(np.linalg.norm(G, axis=1) - 1).max() < 0.01
+    # without a tree one is built over the points: the same field
+    F0, G0 = mls_distance(P, N, None, 16, q)
+    assert np.array_equal(F0, F) and np.array_equal(G0, G)
 
 
 def test_implicit_reconstruction_of_a_sphere_meshes_close_to_it():
@@ -414,8 +423,41 @@ def test_implicit_reconstruction_of_a_sphere_meshes_close_to_it():
         lambda: reconstruct_implicit(np.random.default_rng(0).normal(size=(50, 3)), k=51),
         lambda: MeshDistance(np.eye(3), [[0, 1, 3]]),
         lambda: closest_points_on_mesh(primitives.icosphere(1), [[np.nan, 0, 0]]),
+        # not a curve or a mesh: named, not an AttributeError
+        lambda: sample_curve(3, 10),
+        lambda: sample_mesh(np.zeros((3, 3)), 10),
+        lambda: closest_points_on_mesh(np.zeros((3, 3)), [[0, 0, 0]]),
+        # a radius so small the sample count is beyond any budget (and beyond int64)
+        lambda: poisson_disk(primitives.icosphere(1), 1e-300),
+        # squared distances beyond the float range: the tree finds no neighbours
+        lambda: estimate_normals(np.random.default_rng(0).normal(size=(50, 3)) * 1e200),
+        lambda: curvature(np.random.default_rng(0).normal(size=(50, 3)) * 1e200),
+        lambda: remove_outliers(np.random.default_rng(0).normal(size=(50, 3)) * 1e307),
+        lambda: reconstruct_implicit(*sphere_cloud(200))([[1e300, 0, 0]]),
+        lambda: MeshDistance([[-1e308, 0, 0], [1e308, 0, 0], [0, 1, 0]], [[0, 1, 2]]),  # wider than the floats
+        lambda: MeshDistance(np.eye(3), [[0, 1, 2]]).query([[1e300, 0, 0]]),
+        lambda: closest_points_on_mesh(primitives.icosphere(2), [[2.0, 0, 0], [1e200, 0, 0]]),
     ],
 )
 def test_bad_input_raises_a_splinekit_error(call):
     with pytest.raises(SplineKitError):
         call()
+
+
+def test_height_field_degree_is_checked_as_a_degree():
+    P = np.random.default_rng(0).uniform(-1, 1, (50, 3))
+    for bad in (0, 200, 2.5):
+        with pytest.raises(DegreeError):
+            fit_height_field(P, degree=bad)
+
+
+@pytest.mark.parametrize("scale", [1e-200, 1e-80, 3.0, 1e80, 1e200])
+def test_mesh_distance_is_exact_at_any_scale(scale):
+    # the Voronoi tests multiply dot products (length^4): unscaled they overflow beyond
+    # ~1e77 and underflow below ~1e-77; distances must simply scale with the mesh
+    mesh = primitives.icosphere(2)
+    q = np.random.default_rng(23).uniform(-2, 2, (500, 3))
+    d, c, _ = closest_points_on_mesh(mesh, q)
+    ds, cs, _ = closest_points_on_mesh(sk.PolyMesh(mesh.vertices * scale, mesh.faces), q * scale)
+    assert np.allclose(ds / scale, d, rtol=0, atol=1e-14) and np.allclose(cs / scale, c, rtol=0, atol=1e-14)
+

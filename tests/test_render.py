@@ -115,11 +115,20 @@ def test_unwritable_target_leaves_nothing(tmp_path):
     "kwargs",
     [dict(color="rainbow"), dict(scale="linear"), dict(size=(10, 10)), dict(size=(100.5, 200)), dict(size="big"),
      dict(size=(float("inf"), 300)),
-     dict(view=(float("nan"), 0)), dict(view=(1,)), dict(resolution=1)],
+     dict(view=(float("nan"), 0)), dict(view=(1,)), dict(resolution=1), dict(resolution=10**5)],
 )
 def test_bad_options_raise(tmp_path, kwargs):
     with pytest.raises(ParameterError):
         render_patches(sphere(), tmp_path / "x.png", **kwargs)
+    assert os.listdir(tmp_path) == []
+
+
+@pytest.mark.parametrize("resolution", [0, 1, -3, 2.5, "80", 10**5])
+def test_render_surface_checks_its_resolution(tmp_path, resolution):
+    from splinekit.plot import render_surface
+
+    with pytest.raises(ParameterError, match="resolution"):
+        render_surface(sphere(), tmp_path / "x.png", resolution=resolution)
     assert os.listdir(tmp_path) == []
 
 

@@ -362,3 +362,32 @@ def test_from_mesh_signs_on_the_mug_model():
     # the exact distances of a few samples against brute force
     pick = np.random.default_rng(8).choice(len(P), 200, replace=False)
     assert np.allclose(np.abs(vals[pick]), brute_distance(P[pick], V, T), atol=1e-9 * np.abs(V).max(), rtol=0)
+
+
+def test_grid_mesh_level_and_grid_extent_are_checked():
+    with pytest.raises(ParameterError, match="level must be finite"):
+        grid_mesh(np.zeros((3, 3, 3)), (0, 0, 0), 1.0, level=np.nan)
+    with pytest.raises(ParameterError, match="single number"):
+        grid_mesh(np.zeros((3, 3, 3)), (0, 0, 0), 1.0, level=[0.0, 1.0])
+    with pytest.raises(ParameterError, match="overflows"):
+        grid_mesh(np.full((3, 3, 3), -1e308), (0, 0, 0), 1.0, level=1e308)
+    with pytest.raises(ParameterError, match="float range"):
+        SampledSDF(np.zeros((4, 4, 4)), (0, 0, 0), 1e308)
+    # a level other than 0: the mesh of v - level, the same as shifting the samples
+    v = np.linalg.norm(np.stack(np.meshgrid(*[np.linspace(-1, 1, 9)] * 3, indexing="ij"), -1), axis=-1)
+    a, b = grid_mesh(v, (-1, -1, -1), 0.25, level=0.5), grid_mesh(v - 0.5, (-1, -1, -1), 0.25)
+    assert a.n_faces > 0 and np.allclose(a.vertices, b.vertices, atol=1e-15)
+    # chords of the sphere of radius 0.5 (curvature 2) along edges up to sqrt(3) h: (sqrt(3) h)^2 * 2 / 8
+    assert np.abs(np.linalg.norm(a.vertices, axis=1) - 0.5).max() < 0.75 * 0.25**2
+
+
+@pytest.mark.parametrize("scale", [1e-120, 1e120])
+def test_from_mesh_is_exact_at_any_scale(scale):
+    # the closest-point tests and pseudo-normals involve length^4: unscaled they overflow
+    # (or underflow to wrong signs) for meshes of size ~1e77 (~1e-77)
+    mesh = primitives.icosphere(2)
+    ref = from_mesh(mesh, 12)
+    big = from_mesh(PolyMesh(mesh.vertices * scale, mesh.faces), 12)
+    assert big.shape == ref.shape
+    assert np.allclose(big.values / scale, ref.values, rtol=0, atol=1e-14)
+

@@ -271,8 +271,9 @@ class Implicit(ImplicitSurface):
         ----------
         points : (n, 3) finite points
         tol : float, optional
-            Distance in model units; default ``1e-10`` times the size of the
-            bounds (or of the points when unbounded), at least ``1e-10``.
+            Distance in model units; default ``1e-10`` times the largest
+            coordinate magnitude of the bounds (of the points when
+            unbounded), at least ``1e-10``.
         max_iter : int
             Iteration budget.
 

@@ -37,7 +37,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .._validate import as_float_array, as_int
+from .._validate import as_float_array, as_int, as_real
 from ..errors import (
     MissingDependencyError,
     NotManifoldError,
@@ -101,7 +101,10 @@ def _grid_layout(lo, hi, resolution):
 
     ``resolution`` is an int ``n >= 2`` (cubic voxels, ``n`` samples along
     the longest side) or three ints (``n_i`` samples along axis ``i``)."""
-    extent = hi - lo
+    with np.errstate(over="ignore"):
+        extent = hi - lo
+    if not np.isfinite(extent).all():
+        raise ParameterError(f"the box lo={lo.tolist()}, hi={hi.tolist()} is wider than the float range")
     res = np.asarray(resolution, dtype=object) if not np.isscalar(resolution) else None
     if res is None or res.ndim == 0:
         n = as_int(resolution, "resolution", minimum=2)
@@ -170,7 +173,13 @@ class SampledSDF(Implicit):
         if values is not None:
             values.setflags(write=False)
         self._values = values
-        hi = self._origin + (np.array(self._shape) - 1) * self._spacing
+        with np.errstate(over="ignore"):
+            hi = self._origin + (np.array(self._shape) - 1) * self._spacing
+        if not np.isfinite(hi).all():
+            raise ParameterError(
+                f"the grid of shape {self._shape} with spacing {self._spacing.tolist()} from origin "
+                f"{self._origin.tolist()} reaches beyond the float range"
+            )
         super().__init__(bounds=(self._origin, hi), exact=False)
         for a in (self._origin, self._spacing):
             a.setflags(write=False)
@@ -744,12 +753,11 @@ def _pseudo_normals(V, T):
     n = np.cross(b - a, c - a)
     ln = np.linalg.norm(n, axis=1)
     fn = n / np.where(ln > 0, ln, 1.0)[:, None]
-    # edges: key of the unordered pair, shared by the two triangles using it
-    e0 = T
-    e1 = np.roll(T, -1, axis=1)
-    lo, hi = np.minimum(e0, e1), np.maximum(e0, e1)
-    key = lo * len(V) + hi
-    _, inv = np.unique(key.ravel(), return_inverse=True)
+    # edges: corner k of triangle t is the half-edge T[t, k] -> T[t, k + 1]; the
+    # topology's edge table gives the edge shared by the two triangles using it
+    from ..mesh.topology import Topology
+
+    inv = Topology(len(V), T.ravel(), np.arange(len(T) + 1, dtype=np.int64) * 3, check=False).halfedge_edge
     rep = np.repeat(fn, 3, axis=0)
     esum = np.stack([np.bincount(inv, weights=rep[:, k]) for k in range(3)], axis=1)
     edge_n = esum[inv].reshape(len(T), 3, 3)
@@ -767,17 +775,32 @@ def _pseudo_normals(V, T):
 
 
 class _MeshDistance:
-    """Exact signed distance to a closed triangle mesh at arbitrary points."""
+    """Exact signed distance to a closed triangle mesh at arbitrary points.
+
+    Works on a copy of the mesh moved and scaled to the unit box: the closest-point
+    tests multiply dot products (length^4) and the pseudo-normals take norms of cross
+    products (length^4 as well), which overflow for meshes of size ~1e77 and underflow
+    for ~1e-77; distances scale back exactly by the power-of-two factor."""
 
     def __init__(self, mesh):
         V, T = _closed_triangles(mesh)
+        lo, hi = V.min(axis=0), V.max(axis=0)
+        self.shift = 0.5 * lo + 0.5 * hi
+        # a power of two: scaling by it is exact
+        self.scale = float(2.0 ** np.ceil(np.log2(max(float((hi - lo).max()), np.finfo(float).tiny))))
+        V = (V - self.shift) / self.scale
         self.V, self.T = V, T
         self.bvh = _TriangleBVH(V, T)
         self.fn, self.en, self.vn = _pseudo_normals(V, T)
 
     def __call__(self, points, max_distance=np.inf):
-        """``(signed distance (n,), found (n,))``; points beyond ``max_distance`` get
-        ``inf`` with no sign (``found`` False)."""
+        """``(signed distance (n,), found (n,))`` in model units; points beyond
+        ``max_distance`` get ``inf`` with no sign (``found`` False)."""
+        points = (np.asarray(points, dtype=np.float64) - self.shift) / self.scale
+        d, out = self._unit(points, max_distance / self.scale)
+        return d * self.scale, out
+
+    def _unit(self, points, max_distance):
         d, tri, cp, reg = self.bvh.nearest(points, max_distance)
         found = tri >= 0
         t, r = tri[found], reg[found]
@@ -822,10 +845,16 @@ def from_mesh(mesh, resolution, *, band=None, padding: float = 0.1, interpolatio
     _interp_name(interpolation)
     V, _ = _closed_triangles(mesh)
     lo, hi = V.min(axis=0), V.max(axis=0)
-    size = float((hi - lo).max())
+    with np.errstate(over="ignore"):
+        size = float((hi - lo).max())
+    if not np.isfinite(size):
+        raise ParameterError("the mesh is wider than the float range")
     if not size > 0:
         raise ParameterError("the mesh has no extent")
-    lo, hi = lo - pad * size, hi + pad * size
+    with np.errstate(over="ignore"):
+        lo, hi = lo - pad * size, hi + pad * size
+    if not (np.isfinite(lo).all() and np.isfinite(hi).all()):
+        raise ParameterError(f"padding = {pad!r} takes the grid box beyond the float range")
     shape, spacing = _grid_layout(lo, hi, resolution)
     # one more voxel all round, so the outermost samples are off the surface
     lo = lo - spacing
@@ -966,8 +995,11 @@ def grid_mesh(values, origin, spacing, level: float = 0.0):
         raise ParameterError("values must be finite")
     origin = _origin3(origin)
     spacing = _spacing3(spacing)
-    level = float(as_float_array(level, "level"))
-    v = vals - level
+    level = as_real(level, "level")
+    with np.errstate(over="ignore"):
+        v = vals - level
+    if not np.isfinite(v).all():
+        raise ParameterError(f"values - level overflows for level = {level!r}")
     border = np.concatenate([v[[0, -1]].ravel(), v[:, [0, -1]].ravel(), v[:, :, [0, -1]].ravel()])
     if (border < 0).any():
         v = np.pad(v, 1, constant_values=max(float(np.abs(v).max()), 1.0))

@@ -88,10 +88,21 @@ def _wrap(vertices, topology, deviation, edge_length) -> ImplicitMesh:
 
 
 def _grid_axes(lo, hi, edge_length):
-    """Per-axis point counts ``n`` and spacings of manifold3d's level-set grid."""
-    extent = hi - lo
-    n = (extent / edge_length + 1.0).astype(np.int64)
-    n = np.maximum(n, 2)
+    """Per-axis point counts ``n`` and spacings of manifold3d's level-set grid.
+
+    A grid above ``MAX_GRID_POINTS`` raises ParameterError; the count is
+    checked in floating point first, so a tiny edge length over a large box
+    can neither overflow the int64 cast nor wrap the product of the counts."""
+    with np.errstate(over="ignore"):  # an infinite extent or count is refused just below
+        extent = hi - lo
+        counts = np.maximum(np.floor(extent / edge_length + 1.0), 2.0)  # float: may exceed int64
+    total = float(np.prod(counts)) + float(np.prod(counts + 1.0))
+    if not total <= MAX_GRID_POINTS:
+        raise ParameterError(
+            f"edge_length={edge_length!r} over a box of size {extent.tolist()} needs {total:.3g} grid points "
+            f"(more than {MAX_GRID_POINTS:.3g}); use a longer edge length"
+        )
+    n = counts.astype(np.int64)
     return n, extent / (n - 1)
 
 
@@ -229,18 +240,14 @@ def mesh_implicit(implicit, edge_length, bounds=None) -> ImplicitMesh:
         lo, hi = lo - PADDING * h, hi + PADDING * h
     else:
         lo, hi = check_bounds(bounds)
-        if not (hi - lo >= 2.0 * h).all():  # fewer than 3 grid points: all of them on the outer layer
+        with np.errstate(over="ignore"):  # an overflowing extent is refused by _grid_axes
+            extent = hi - lo
+        if not (extent >= 2.0 * h).all():  # fewer than 3 grid points: all of them on the outer layer
             raise ParameterError(
                 f"bounds must be at least 2 * edge_length = {2 * h!r} long on every axis, "
                 f"got lo={lo.tolist()}, hi={hi.tolist()}"
             )
     n, spacing = _grid_axes(np.asarray(lo, float), np.asarray(hi, float), h)
-    total = int(np.prod(n)) + int(np.prod(n + 1))
-    if total > MAX_GRID_POINTS:
-        raise ParameterError(
-            f"edge_length={h!r} over a box of size {(hi - lo).tolist()} needs {total:.3g} grid points "
-            f"(more than {MAX_GRID_POINTS:.3g}); use a longer edge length"
-        )
     m3 = _require_manifold3d()
     sdf, _ = _lookup(implicit, np.asarray(lo, float), spacing, n)
     box = [float(v) for v in lo] + [float(v) for v in hi]

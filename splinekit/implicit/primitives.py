@@ -137,8 +137,8 @@ class Revolved(Implicit):
     """A solid of revolution about the axis through ``origin`` along unit
     ``axis``, given by a 2-D distance in the meridian half-plane."""
 
-    def __init__(self, origin, axis, *, bounds, convex):
-        super().__init__(bounds=bounds, exact=True, convex=convex)
+    def __init__(self, origin, axis, *, bounds, convex, exact=True):
+        super().__init__(bounds=bounds, exact=exact, convex=convex)
         self.origin, self.axis = origin, axis
 
     def _meridian(self, p):
@@ -166,11 +166,15 @@ class Revolved(Implicit):
 
 
 class Torus(Revolved):
-    """``sqrt((rho - R)^2 + h^2) - r``."""
+    """``sqrt((rho - R)^2 + h^2) - r``: the distance to the core circle minus
+    ``r``. Exact for ``r <= R``; for a spindle torus (``r > R``) it is exact
+    outside only: inside, the dimples on the axis can be nearer than
+    ``r - dist(core)`` (at the centre ``F = R - r`` while the dimples lie
+    ``sqrt(r^2 - R^2)`` away), so ``is_exact_sdf`` is False."""
 
     def __init__(self, center, axis, major, minor):
         ext = _disc_extent(axis, major) + minor
-        super().__init__(center, axis, bounds=(center - ext, center + ext), convex=False)
+        super().__init__(center, axis, bounds=(center - ext, center + ext), convex=False, exact=minor <= major)
         self.major, self.minor = major, minor
 
     def __repr__(self):
@@ -359,7 +363,7 @@ def rounded_box(center=(0.0, 0.0, 0.0), size=1.0, radius=0.1) -> Implicit:
 def torus(center=(0.0, 0.0, 0.0), major=1.0, minor=0.25, axis=(0.0, 0.0, 1.0)) -> Implicit:
     """Torus about ``axis`` (3,) through ``center``: a tube of radius ``minor``
     around the circle of radius ``major`` (both > 0; ``minor > major`` gives a
-    self-intersecting spindle torus, still an exact distance)."""
+    spindle torus, whose ``F`` is an exact distance outside only)."""
     return Torus(_vector(center, "center"), _unit(axis, "axis"), positive(major, "major"), positive(minor, "minor"))
 
 

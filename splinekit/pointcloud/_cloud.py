@@ -62,9 +62,21 @@ def kd_tree(points: np.ndarray):
 
 
 def neighbours(tree, points: np.ndarray, k: int):
-    """``(distances (n, k), indices (n, k))`` of the ``k`` nearest cloud points (the point itself first)."""
+    """``(distances (n, k), indices (n, k))`` of the ``k`` nearest cloud points (the point itself first).
+
+    Squared distances beyond the float range (coordinates or offsets above
+    about ``1e154``) leave the tree without neighbours: a ControlPointError
+    naming the point, not an out-of-range index further on."""
     d, i = tree.query(points, k=k, workers=-1)
-    return d.reshape(len(points), k), i.reshape(len(points), k)
+    d, i = d.reshape(len(points), k), i.reshape(len(points), k)
+    lost = ~(np.isfinite(d).all(axis=1) & (i < tree.n).all(axis=1))
+    if lost.any():
+        j = int(np.flatnonzero(lost)[0])
+        raise ControlPointError(
+            f"the distances from point {j} {np.asarray(points[j]).tolist()} to its {k} nearest cloud points "
+            "overflow the float range; rescale the cloud"
+        )
+    return d, i
 
 
 def local_frames(points: np.ndarray, idx: np.ndarray):

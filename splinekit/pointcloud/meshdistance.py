@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..errors import ParameterError
+from ..errors import ControlPointError, ParameterError
 from ._cloud import as_cloud, kd_tree
 
 __all__ = ["MeshDistance", "closest_points_on_mesh", "closest_points_on_triangles"]
@@ -93,15 +93,29 @@ class MeshDistance:
         if tris.min() < 0 or tris.max() >= len(V):
             raise ParameterError(f"triangle indices must lie in [0, {len(V) - 1}]")
         self.V, self.tris = V, tris
-        self.corners = V[tris]
+        # the Voronoi-region tests multiply dot products (length^4): they run on a copy
+        # moved and scaled (by a power of two, exactly) to the unit box, so meshes of any
+        # size neither overflow nor underflow; results are scaled back
+        lo, hi = V.min(axis=0), V.max(axis=0)
+        with np.errstate(over="ignore"):
+            size = float((hi - lo).max())
+        if not np.isfinite(size):
+            raise ControlPointError("the mesh is wider than the float range; rescale it")
+        self._shift = 0.5 * lo + 0.5 * hi
+        self._scale = float(2.0 ** np.ceil(np.log2(max(size, np.finfo(float).tiny))))
+        self.corners = ((V - self._shift) / self._scale)[tris]
         self.centroids = self.corners.mean(axis=1)
         self.reach = float(np.linalg.norm(self.corners - self.centroids[:, None], axis=2).max())
         self.tree = kd_tree(self.centroids)
 
     @classmethod
     def of_mesh(cls, mesh):
+        """The distance queries of a PolyMesh (faces fan-triangulated)."""
         from ..mesh.geometry import triangulate
+        from ..mesh.polymesh import PolyMesh
 
+        if not isinstance(mesh, PolyMesh):
+            raise ParameterError(f"mesh must be a splinekit PolyMesh, got {type(mesh).__name__}")
         tris, _ = triangulate(mesh)
         return cls(mesh.vertices, tris)
 
@@ -111,8 +125,23 @@ class MeshDistance:
         return q, np.linalg.norm(q - P, axis=1)
 
     def query(self, points):
-        """``(distances (m,), closest points (m, 3), triangle (m,))`` of ``points`` ``(m, 3)``."""
+        """``(distances (m,), closest points (m, 3), triangle (m,))`` of ``points`` ``(m, 3)``.
+
+        Points so far from the mesh (about ``1e154`` times its size) that their
+        squared distance overflows raise ControlPointError."""
         P = as_cloud(points, "points")
+        with np.errstate(over="ignore", invalid="ignore"):  # overflow is refused below
+            dist, close, tri = self._query((P - self._shift) / self._scale)
+            dist, close = dist * self._scale, close * self._scale + self._shift
+        bad = ~(np.isfinite(dist) & np.isfinite(close).all(axis=1))
+        if bad.any():
+            i = int(np.flatnonzero(bad)[0])
+            raise ControlPointError(
+                f"the distance from points[{i}] = {P[i].tolist()} to the mesh overflows the float range; rescale"
+            )
+        return dist, close, tri
+
+    def _query(self, P):
         m = len(P)
         dist, close, tri = np.empty(m), np.empty((m, 3)), np.empty(m, dtype=np.int64)
         k = min(CANDIDATES, len(self.tris))
@@ -120,6 +149,9 @@ class MeshDistance:
             Q = P[s:s + CHUNK]
             dc, ic = self.tree.query(Q, k=k, workers=-1)
             dc, ic = dc.reshape(len(Q), k), ic.reshape(len(Q), k)
+            # an overflowing distance leaves the tree without a candidate (index n): any
+            # triangle will do, its distance overflows too and query refuses the point
+            ic = np.minimum(ic, len(self.tris) - 1)
             q, d = self._pairs(np.repeat(Q, k, axis=0), ic.ravel())
             d = d.reshape(len(Q), k)
             j = d.argmin(axis=1)

@@ -6,7 +6,7 @@ import functools
 
 import numpy as np
 
-from .._validate import as_int, as_real
+from .._validate import as_degree, as_int, as_real
 from ..errors import FittingError, ParameterError
 from ._cloud import as_cloud, as_neighbour_count, kd_tree, neighbours
 
@@ -77,7 +77,7 @@ def fit_height_field(
     from ..fit.scattered import plane_parameters
 
     Q = as_cloud(points, min_count=3)
-    p = as_int(degree, "degree", minimum=1)
+    p = as_degree(degree)
     uv = plane_parameters(Q)
     if n_control is not None:
         nu, nv = _net_size(n_control, p, "n_control")
@@ -108,6 +108,11 @@ def fit_height_field(
 def mls_distance(points, normals, tree, k: int, queries, gradient: bool = True):
     """Implicit moving-least-squares distance (and its gradient) at ``queries`` ``(m, 3)``.
 
+    ``points`` and ``normals`` ``(n, 3)`` are the cloud and its unit normals
+    (as held by a reconstruction, not re-checked here), ``tree`` a
+    ``scipy.spatial.cKDTree`` over ``points`` (None builds one), ``k`` the
+    neighbour count (``2 <= k <= n``).
+
     ``F(q) = sum_i w_i (q - p_i) . n_i / sum_i w_i`` over the ``k`` nearest
     cloud points, with Wendland weights ``w_i = phi(|q - p_i| / D)``,
     ``phi(t) = (1 - t)^4 (4 t + 1)`` and ``D`` the distance to the ``k``-th
@@ -117,6 +122,8 @@ def mls_distance(points, normals, tree, k: int, queries, gradient: bool = True):
     Where every weight underflows (a query some ten thousand spacings away)
     ``F`` is the distance to the nearest point's tangent plane.
     """
+    if tree is None:
+        tree = kd_tree(points)
     d, idx = neighbours(tree, queries, k)
     r = queries[:, None, :] - points[idx]
     n = normals[idx]

@@ -33,6 +33,8 @@ def sample_curve(curve, n: int) -> np.ndarray:
     """
     from ..diffgeom.curves import equal_arc_length_parameters
 
+    if not all(hasattr(curve, a) for a in ("evaluate", "derivatives", "domain")):
+        raise ParameterError(f"curve must be a parametric curve (evaluate, derivatives, domain), got {type(curve).__name__}")
     n = _count(n, minimum=2)
     return np.asarray(curve.evaluate(equal_arc_length_parameters(curve, n)), dtype=np.float64)
 
@@ -119,7 +121,10 @@ def sample_surface(surface, n: int, rng=None, *, return_parameters: bool = False
 
 def _triangles(mesh):
     from ..mesh.geometry import triangulate
+    from ..mesh.polymesh import PolyMesh
 
+    if not isinstance(mesh, PolyMesh):
+        raise ParameterError(f"mesh must be a splinekit PolyMesh, got {type(mesh).__name__}")
     V = np.asarray(mesh.vertices, dtype=np.float64)
     if V.ndim != 2 or V.shape[1] != 3:
         raise ParameterError(f"the mesh must be 3-D, got vertices of shape {V.shape}")
@@ -183,8 +188,13 @@ def poisson_disk(source, radius: float, rng=None, *, oversampling: float = 8.0) 
         V, tris, _ = _triangles(source)
         A = V[tris]
         area = 0.5 * np.linalg.norm(np.cross(A[:, 1] - A[:, 0], A[:, 2] - A[:, 0]), axis=1).sum()
-        count = int(np.ceil(over * area / (np.pi * (0.5 * r) ** 2)))
-        P = sample_mesh(source, max(count, 1), rng)
+        with np.errstate(over="ignore", divide="ignore"):  # a tiny radius: refused below, not cast
+            count = float(np.ceil(over * area / (np.pi * (0.5 * r) ** 2)))
+        if not count <= MAX_SAMPLES:
+            raise ParameterError(
+                f"radius = {r!r} needs about {count:.3g} samples of the mesh, more than {MAX_SAMPLES}; use a larger radius"
+            )
+        P = sample_mesh(source, max(int(count), 1), rng)
     else:
         P = as_cloud(source, "source", dim=None)
     keep = _greedy_independent(P, r, rng)
