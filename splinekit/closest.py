@@ -41,6 +41,7 @@ geometry nearest to it, all points at once:
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -76,6 +77,15 @@ MAX_SAMPLES_PER_DIRECTION = 600
 
 MAX_PIECE_CROSSINGS = 4
 """How many creases (C0 knot lines) a seed's search may cross."""
+
+MAX_COORDINATE = 1e150
+"""Largest absolute coordinate of a query point, in units of the geometry's size
+when that exceeds ``LARGE`` (else in model units): squared distances (k-d tree,
+Newton residuals) must stay within the float range."""
+
+LARGE = 1e60
+"""Geometry larger than this, or smaller than its inverse (largest sample
+coordinate), is searched in scaled units."""
 
 CHUNK = 32768
 """Points projected together; bounds the memory of the batch arrays."""
@@ -117,13 +127,15 @@ def project(geometry, points, *, tolerance=None, seeds=None) -> Projection:
         ``domain = ((u0, u1), (v0, v1))`` or ``domain_u`` / ``domain_v``), or an
         implicit surface (callable on ``(n, dim)`` points, with ``gradient``).
     points : array_like, shape (n, dim) or (dim,)
-        Finite points of the geometry's dimension.
+        Finite points of the geometry's dimension, coordinates at most
+        ``MAX_COORDINATE`` (1e150) in size, or that times the geometry's
+        size for geometry larger than 1e60 or smaller than 1e-60.
     tolerance : float, optional
         Distance in model units. Newton stops once a step moves the closest
         point by less than this; an implicit's iteration stops once
         ``|F| <= tolerance``. Default: 1e-9 times the size of the geometry (its
-        largest absolute sample coordinate, at least 1; for an implicit, of the
-        points).
+        largest absolute sample coordinate, at least 1 unless it is below
+        1e-60; for an implicit, of the points).
     seeds : array_like, optional
         Starting parameters replacing the sampled seeds (a local search, e.g.
         to track points that move a little): curves ``(n,)`` or ``(n, k)``
@@ -138,7 +150,7 @@ def project(geometry, points, *, tolerance=None, seeds=None) -> Projection:
     Raises
     ------
     ParameterError
-        Non-finite points, a dimension that does not match the geometry, a
+        Non-finite or too large points, a dimension that does not match the geometry, a
         geometry of unknown kind, malformed seeds or tolerance.
     DomainError
         Seeds outside the parameter domain.
@@ -152,7 +164,7 @@ def project(geometry, points, *, tolerance=None, seeds=None) -> Projection:
         if seeds is not None:
             raise ParameterError("seeds are parameters of a curve or surface; an implicit surface takes none")
         return target.project(points, tolerance)
-    P, lead = _as_query_points(points, target.dim)
+    P, lead = _as_query_points(points, target.dim, target.unit)
     tol = target.tolerance(tolerance)
     k = target.n_params
     if P.shape[0] == 0:
@@ -180,11 +192,13 @@ def project(geometry, points, *, tolerance=None, seeds=None) -> Projection:
             i = start + int(np.flatnonzero(bad)[0])
             index = [int(j) for j in np.unravel_index(i, lead)] if lead else []
             raise ConvergenceError(
-                f"Newton did not converge for points{index} = {P[i].tolist()}: after {MAX_ITERATIONS} "
-                f"iterations the best candidate is at distance {float(dist[best[i - start]]):.6g} "
-                f"and not stationary (tolerance {tol:.3g})"
+                f"Newton did not converge for points{index} = {(P[i] * target.unit).tolist()}: after {MAX_ITERATIONS} "
+                f"iterations the best candidate is at distance {float(dist[best[i - start]]) * target.unit:.6g} "
+                f"and not stationary (tolerance {tol * target.unit:.3g})"
             )
         params[start:stop], points[start:stop], dists[start:stop] = x[best], S[best], dist[best]
+    points *= target.unit
+    dists *= target.unit
     params = params[:, 0] if k == 1 else params
     return Projection(
         _readonly(params.reshape(lead + params.shape[1:])),
@@ -209,8 +223,8 @@ def _readonly(arr):
     return arr
 
 
-def _as_query_points(points, dim: int):
-    """``points`` as a finite ``(n, dim)`` array and its leading shape."""
+def _as_query_points(points, dim: int, unit: float = 1.0):
+    """``points / unit`` as a finite ``(n, dim)`` array and its leading shape."""
     P = as_float_array(points, "points", ParameterError)
     if P.ndim == 0 or P.shape[-1] != dim:
         raise ParameterError(
@@ -223,7 +237,15 @@ def _as_query_points(points, dim: int):
         i = int(np.flatnonzero(bad)[0])
         index = tuple(int(j) for j in np.unravel_index(i, lead)) if lead else ()
         raise ParameterError(f"points{list(index)} = {P[i].tolist()} is not finite")
-    return np.ascontiguousarray(P), lead
+    far = np.abs(P).max(axis=1, initial=0.0) > MAX_COORDINATE * unit
+    if far.any():
+        i = int(np.flatnonzero(far)[0])
+        index = tuple(int(j) for j in np.unravel_index(i, lead)) if lead else ()
+        raise ParameterError(
+            f"points{list(index)} = {P[i].tolist()} has a coordinate beyond {MAX_COORDINATE * unit:g}: "
+            "squared distances would overflow"
+        )
+    return np.ascontiguousarray(P / unit), lead
 
 
 def _positive_tolerance(value) -> float:
@@ -303,7 +325,9 @@ def _crease_breaks(knots, degree: int, lo: float, hi: float) -> np.ndarray:
     >= ``degree``, where the geometry may be only C0."""
     if knots is None:
         return np.array([lo, hi])
-    values, counts = np.unique(np.asarray(knots, dtype=np.float64), return_counts=True)
+    from .basis.knots import distinct
+
+    values, counts = distinct(np.asarray(knots, dtype=np.float64))
     inner = values[(values > lo) & (values < hi) & (counts >= degree)]
     return np.concatenate([[lo], inner, [hi]])
 
@@ -326,10 +350,16 @@ class _Parametric:
         pts = np.asarray(pts, dtype=np.float64).reshape(params.shape[0], -1)
         if not np.isfinite(pts).all():
             raise ParameterError(f"the {type(self.geometry).__name__} evaluates to non-finite points")
+        extent = float(np.abs(pts).max())
+        # very large or very small geometry is searched in units of a power of two
+        # (exact): the Newton system multiplies squared lengths, which would
+        # overflow, or underflow to zero distances
+        far_scale = extent > LARGE or 0.0 < extent < 1.0 / LARGE
+        self.unit = 2.0 ** math.floor(math.log2(extent)) if far_scale else 1.0
         self.sample_params = params
-        self.sample_points = pts
+        self.sample_points = pts / self.unit
         self.dim = pts.shape[1]
-        self.size = max(1.0, float(np.abs(pts).max()))
+        self.size = max(1.0, extent / self.unit)
 
     def boxes(self, piece):
         """Lower and upper bounds ``(m, k)`` of the smooth pieces ``piece`` ``(m, k)``."""
@@ -338,9 +368,10 @@ class _Parametric:
         return lo, hi
 
     def tolerance(self, tolerance) -> float:
+        """The stopping distance in search units (model units / ``unit``)."""
         if tolerance is None:
             return 1e-9 * self.size
-        return _positive_tolerance(tolerance)
+        return _positive_tolerance(tolerance) / self.unit
 
     def _neighbour_offsets(self):
         """Flat-index offsets of the grid neighbours and a validity test per offset."""
@@ -430,12 +461,12 @@ class _Curve(_Parametric):
 
     def derivs(self, x):
         """``S (m, dim)``, ``J (m, dim, 1)``, second derivatives ``(m, dim, 1, 1)`` at ``x (m, 1)``."""
-        d = np.asarray(self.geometry.derivatives(x[:, 0], 2), dtype=np.float64)
+        d = np.asarray(self.geometry.derivatives(x[:, 0], 2), dtype=np.float64) / self.unit
         return d[0], d[1][..., None], d[2][..., None, None]
 
     def evaluate(self, x):
         """Points ``(m, dim)`` at ``x (m, 1)``."""
-        return np.asarray(self.geometry.evaluate(x[:, 0]), dtype=np.float64).reshape(x.shape[0], -1)
+        return np.asarray(self.geometry.evaluate(x[:, 0]), dtype=np.float64).reshape(x.shape[0], -1) / self.unit
 
 
 class _Surface(_Parametric):
@@ -484,14 +515,14 @@ class _Surface(_Parametric):
 
     def derivs(self, x):
         """``S (m, dim)``, ``J (m, dim, 2)``, second derivatives ``(m, dim, 2, 2)`` at ``x (m, 2)``."""
-        d = np.asarray(self.geometry.derivatives(x[:, 0], x[:, 1], 2), dtype=np.float64)
+        d = np.asarray(self.geometry.derivatives(x[:, 0], x[:, 1], 2), dtype=np.float64) / self.unit
         J = np.stack([d[1, 0], d[0, 1]], axis=-1)
         H = np.stack([np.stack([d[2, 0], d[1, 1]], axis=-1), np.stack([d[1, 1], d[0, 2]], axis=-1)], axis=-2)
         return d[0, 0], J, H
 
     def evaluate(self, x):
         """Points ``(m, dim)`` at ``x (m, 2)``."""
-        return np.asarray(self.geometry.evaluate(x[:, 0], x[:, 1]), dtype=np.float64).reshape(x.shape[0], -1)
+        return np.asarray(self.geometry.evaluate(x[:, 0], x[:, 1]), dtype=np.float64).reshape(x.shape[0], -1) / self.unit
 
 
 # --------------------------------------------------------------------------------------

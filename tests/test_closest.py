@@ -239,6 +239,25 @@ def test_nurbs_circle_closed_form():
     np.testing.assert_allclose(res.points, foot, atol=1e-9)
 
 
+@pytest.mark.parametrize("scale", [1e-200, 1e80, 1e140, 1e300])
+def test_closed_forms_at_extreme_scales(scale):
+    """Geometry far beyond 1e60 is searched in scaled units: the Newton system
+    multiplies squared lengths, which would overflow in model units."""
+    rng = np.random.default_rng(12)
+    R, center = 1.5 * scale, np.array([1.0, -2.0, 0.5]) * scale
+    c = nurbs_circle(center, R, np.eye(3))
+    Q = center + rng.normal(0, 2.0, (50, 3)) * scale
+    local = Q / scale - center / scale  # the closed forms in units of scale (no under/overflow)
+    rho, z, r = np.hypot(local[:, 0], local[:, 1]), local[:, 2], np.linalg.norm(local, axis=1)
+    res = project(c, Q)
+    assert np.isfinite(res.points).all()
+    np.testing.assert_allclose(res.distances / scale, np.hypot(rho - 1.5, z), rtol=0, atol=1e-10)
+    s = nurbs_sphere(center, R)
+    res = project(s, Q)
+    np.testing.assert_allclose(res.distances / scale, np.abs(r - 1.5), rtol=0, atol=1e-9)
+    np.testing.assert_allclose(res.points / scale - center / scale, local * (1.5 / r)[:, None], atol=1e-8)
+
+
 def test_circle_2d_near_seam():
     """A closed curve: points near the seam (u = 0 = 1) find the seam side that is nearer."""
     rng = np.random.default_rng(9)
@@ -516,6 +535,10 @@ def test_bad_input():
     for bad in ([np.nan, 0.0, 0.0], [0.0, 1.0]):
         with pytest.raises(SplineKitError):
             distance(c, [bad])
+    # squared distances of such points overflow: refused by name, not an IndexError from the k-d tree
+    for geometry in (c, s, SphereSDF([0, 0, 0], 1)):
+        with pytest.raises(ParameterError, match=r"points\[1\].*beyond"):
+            project(geometry, [[0, 0, 0], [1e300, 1e300, 0]])
 
 
 def test_newton_failure_raises_convergence_error(monkeypatch):

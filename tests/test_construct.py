@@ -226,6 +226,18 @@ def test_arc_through_points_matches_occ(seed):
     assert abs(a.arc_length() - length_occ) <= 1e-9 * length_occ
 
 
+@pytest.mark.parametrize("scale", [1e-200, 1e-60, 1.0, 1e60, 1e200, 1e300])
+def test_arc_through_points_at_extreme_scales(scale):
+    # three points of the circle of centre (1, 0, 0) and radius 1, scaled: closed form
+    p0, p1, p2 = (np.array(p) * scale for p in ([0.0, 0, 0], [1.0, 1, 0], [2.0, 0, 0]))
+    a = arc_through_points(p0, p1, p2)
+    P = a.evaluate(dense()) / scale
+    assert np.isfinite(P).all()
+    assert np.abs(np.linalg.norm(P - [1.0, 0.0, 0.0], axis=1) - 1.0).max() <= 1e-14 * 16
+    assert (P[:, 1] >= -1e-14).all()  # the upper half: the arc runs through p1
+    assert np.array_equal(a.evaluate(0.0), p0) and np.array_equal(a.evaluate(1.0), p2)
+
+
 def test_line_and_polyline():
     ln = line([0.0, 1.0, 2.0], [3.0, 5.0, 2.0])
     assert np.allclose(ln.evaluate(0.25), [0.75, 2.0, 2.0], rtol=0, atol=1e-15)
@@ -773,6 +785,16 @@ Z = [0.0, 0.0, 1.0]
         lambda: sweep(circle([0, 0], None, 1.0), line([0, 0, 0], [1, 1, 1]), n_sections=1),
         lambda: gordon([line([0, 0, 0], [1, 0, 0]), line([0, 1, 0], [1, 1, 0])],
                        [line([0, 0, 0], [0, 1, 0]), arc([0, 0, 0], Z, 1.0, 0, 1)]),
+        # overflow and malformed numbers: refused by name, never a RuntimeWarning or a numpy error
+        lambda: polyline([[0, 0], [1e308, 0], [-1e308, 0]]),
+        lambda: circle([1e308, 0, 0], Z, 1e308),
+        lambda: extrude(line([0, 0, 0], [1e308, 0, 0]), [1e308, 0, 0]),
+        lambda: sweep(circle([0, 0], None, 1.0), line([0, 0, 0], [1, 1, 1]), n_sections=10**9),
+        lambda: revolve(line([1, 0, 0], [1, 0, 1]), [1e308, 0, 0], [0, 1, 0]),
+        lambda: sweep(circle([0, 0], None, 1.0), line([0, 0, 0], [1, 1, 1]), tolerance="abc"),
+        lambda: sweep(circle([0, 0], None, 1.0), line([0, 0, 0], [1, 1, 1]), tolerance=float("nan")),
+        lambda: gordon([line([0, 0, 0], [1, 0, 0]), line([0, 1, 0], [1, 1, 0])],
+                       [line([0, 0, 0], [0, 1, 0]), line([1, 0, 0], [1, 1, 0])], u_parameters=["a", "b"]),
     ],
 )
 def test_bad_input_raises_splinekit_error(call):
@@ -794,6 +816,17 @@ def test_error_messages_name_the_problem():
         arc_through_points([0, 0], [1, 1], [2, 2])
     with pytest.raises(SplineKitError, match=r"points\[1\] and points\[2\]"):
         polyline([[0, 0], [1, 1], [1, 1]])
+
+
+def test_sweep_deviation_checks_its_samples():
+    profile, path = circle([0, 0], None, 0.2), line([0, 0, 0], [0, 0, 2])
+    S = sweep(profile, path, n_sections=4)
+    with pytest.raises(SplineKitError, match="samples"):
+        sweep_deviation(profile, path, S, samples=["a"])
+    with pytest.raises(SplineKitError, match="samples"):
+        sweep_deviation(profile, path, S, samples=[float("nan")])
+    with pytest.raises(SplineKitError, match="samples"):
+        sweep_deviation(profile, path, S, samples=[])
 
 
 def test_results_are_bezier_decomposable_and_immutable():

@@ -225,6 +225,17 @@ def test_rmf_bad_input():
         rotation_minimizing_frames(object(), [0.0, 1.0])
 
 
+def test_rmf_start_normal_of_any_length():
+    # only the direction of the start normal matters, down to subnormal and up to huge lengths
+    H = helix()
+    u = np.linspace(*H.domain, 9)
+    ref = rotation_minimizing_frames(H, u, normal=[1.0, 0.0, 0.2])
+    for scale in (1e-300, 1e300):
+        got = rotation_minimizing_frames(H, u, normal=np.array([1.0, 0.0, 0.2]) * scale)
+        for a, b in zip(ref, got):
+            assert np.abs(a - b).max() <= 1e-15
+
+
 # ------------------------------------------------------------------------------------------
 # ParametricCurve
 # ------------------------------------------------------------------------------------------
@@ -273,6 +284,23 @@ def test_parametric_curve_shapes():
 # ------------------------------------------------------------------------------------------
 # curvature, torsion, Frenet frame: closed forms
 # ------------------------------------------------------------------------------------------
+@pytest.mark.parametrize("scale", [1e60, 1e120, 1e200, 1e300])
+def test_helix_curvature_and_torsion_in_huge_units(scale):
+    # |C' x C''| and |C'|**3 overflow far below the float limit; closed forms scale as 1 / scale
+    a, b = 2.0 * scale, 0.5 * scale
+    H = helix(a, b)
+    u = np.linspace(*H.domain, 11)
+    c2 = (a / scale) ** 2 + (b / scale) ** 2
+    assert np.allclose(curvature(H, u) * scale, (a / scale) / c2, rtol=1e-12, atol=0)
+    assert np.allclose(torsion(H, u) * scale, (b / scale) / c2, rtol=1e-12, atol=0)
+    T, N, B = frenet_frame(H, u)
+    ref = frenet_frame(helix(a / scale, b / scale), u)
+    for got, want in zip((T, N, B), ref):
+        assert np.abs(got - want).max() <= 1e-14
+    circle_2d = ParametricCurve(lambda t: scale * np.stack([np.cos(t), np.sin(t)], -1), domain=(0.0, 6.0))
+    assert np.allclose(signed_curvature(circle_2d, u[:5]) * scale, 1.0, rtol=1e-6)
+
+
 @pytest.mark.parametrize("a, b", [(2.0, 0.5), (1.0, 3.0), (0.3, -0.7)])
 def test_helix_curvature_torsion_frenet(a, b):
     H = helix(a, b)
@@ -601,6 +629,8 @@ def test_bad_input():
         arc_length_parameters(H, [-1.0])
     with pytest.raises(ParameterError, match="n must be >= 2"):
         equal_arc_length_parameters(H, 1)
+    with pytest.raises(ParameterError, match="n = 1000000000000 exceeds"):
+        equal_arc_length_parameters(H, 10**12)  # 8 TB of output: refused, not a MemoryError
     with pytest.raises(ParameterError, match="n must be an integer"):
         equal_arc_length_parameters(H, 3.5)
     with pytest.raises(ParameterError, match="tol"):

@@ -22,7 +22,12 @@ from splinekit.diffgeom.protocol import (
     ParametricSurface,
     SubdivisionPatch,
 )
-from splinekit.errors import DomainError, ParameterError, SplineKitError
+from splinekit.errors import (
+    ConvergenceError,
+    DomainError,
+    ParameterError,
+    SplineKitError,
+)
 from splinekit.mesh.primitives import torus as torus_cage
 
 W = np.sqrt(0.5)
@@ -377,6 +382,36 @@ def test_bad_input():
         geodesic(s, [1, 0], [1, 3])
     with pytest.raises(DomainError, match="singular"):
         trace_geodesic(s, [1, 0], [0, 1], 3.0)  # runs into the pole
+    with pytest.raises(ParameterError, match="rtol"):
+        trace_geodesic(s, [1, 0], [1, 0], 1.0, rtol=0.0)  # below DOP853's floor (scipy would only warn)
+    with pytest.raises(ParameterError, match="samples"):
+        trace_geodesic(s, [1, 0], [1, 0], 1.0, samples=10**10)
+    with pytest.raises(ParameterError, match="samples"):
+        geodesic(s, [1, 0.1], [1.2, 0.3], samples=10**10)
+    with pytest.raises(ParameterError, match=r"\(2,\) and \(3,\)"):
+        curvature(s, [0.5, 0.6], [0.1, 0.2, 0.3])
+    with pytest.raises(ParameterError, match="needs both u and v"):
+        curvature(s, [0.5], grid=True)
+    with pytest.raises(ParameterError, match="shape"):
+        christoffel_symbols(np.zeros((2, 2)))
+    with pytest.raises(ParameterError, match="finite"):
+        christoffel_symbols(np.full((3, 3, 1, 3), np.nan))
+    line_like = np.zeros((3, 3, 1, 3))
+    line_like[1, 0, 0] = line_like[0, 1, 0] = [1.0, 0.0, 0.0]  # S_u parallel to S_v
+    with pytest.raises(ParameterError, match="singular at point"):
+        christoffel_symbols(line_like)
+
+
+def test_long_geodesics_are_bounded_not_hanging(monkeypatch):
+    import splinekit.diffgeom.geodesics as geo
+
+    s = trig_sphere(1.0)
+    # a great circle 1e300 long would never finish: the evaluation budget stops it
+    monkeypatch.setattr(geo, "MAX_EVALUATIONS", 500)
+    with pytest.raises(ConvergenceError, match="gave up after 500 evaluations"):
+        trace_geodesic(s, [1.0, 0.0], [1.0, 0.0], 1e300)  # the equator, round and round
+    with pytest.raises(ParameterError, match="grid"):
+        geodesic(s, [1, 0.1], [1.2, 0.3], grid=10**9)  # would need 1e18 nodes
 
 
 @pytest.mark.parametrize("kind", ["nurbs", "bspline", "sphere", "bezier"])

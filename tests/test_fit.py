@@ -614,7 +614,51 @@ def test_fit_surface_smoothing_fills_holes_and_tends_to_affine_fit():
     assert np.abs(F.evaluate(uv[:, 0], uv[:, 1]) - best_affine).max() <= 1e-4
 
 
+def test_fit_surface_matches_dense_normal_equations_with_empty_cells():
+    # the cell-block assembly of A^T A (only cells holding data) against a dense
+    # design matrix built row by row from the 1-D collocation matrices
+    from splinekit.basis import clamped_uniform
+    from splinekit.fit.scattered import thin_plate_energy
+
+    rng = np.random.default_rng(81)
+    uv = rng.uniform(0, 1, (400, 2))
+    uv = uv[(uv[:, 0] < 0.4) | (uv[:, 1] > 0.6)]  # a quarter of the square without data
+    Q = np.column_stack([uv, np.cos(2 * uv[:, 0]) * uv[:, 1]])
+    pu, pv, nu, nv, lam = 3, 2, 7, 6, 1e-4
+    Ku, Kv = clamped_uniform(pu, nu), clamped_uniform(pv, nv)
+    Au = design_matrix(pu, Ku, uv[:, 0]).toarray()
+    Av = design_matrix(pv, Kv, uv[:, 1]).toarray()
+    A = (Au[:, :, None] * Av[:, None, :]).reshape(len(uv), nu * nv)
+    E = thin_plate_energy(pu, pv, Ku, Kv).toarray()
+    M = A.T @ A
+    M = M + lam * np.trace(M) / np.trace(E) * E
+    expect = np.linalg.solve(M, A.T @ Q).reshape(nu, nv, 3)
+    F = fit_surface(Q, nu, nv, pu, pv, parameters=uv, smoothing=lam)
+    assert np.abs(F.control_points - expect).max() <= 1e-9 * np.abs(expect).max()
+
+
 # ---------------------------------------------------------------- bad input
+
+
+def test_bad_input_scattered_fit_sizes_and_knots():
+    from splinekit.fit.scattered import MAX_NET, thin_plate_energy
+
+    rng = np.random.default_rng(5)
+    Q = rng.normal(size=(50, 3))
+    with pytest.raises(FittingError, match="control points, more than"):
+        fit_surface(Q, 10**6, 10**6, smoothing=1.0)
+    assert MAX_NET < 10**12
+    with pytest.raises(SplineKitError, match=r"smoothing = 1e\+308 is too large"):
+        fit_surface(Q, 4, 4, smoothing=1e308)
+    with pytest.raises(SplineKitError, match="too large"):
+        fit_surface(Q, 4, 4, smoothing=1e13)
+    with pytest.raises(SplineKitError, match="knots_u"):
+        thin_plate_energy(3, 3, [0.0, 0.0, 1.0, 1.0], [0, 0, 0, 0, 1, 1, 1, 1])
+    with pytest.raises(SplineKitError, match=r"knots_v\[4\] = nan"):
+        thin_plate_energy(3, 3, [0, 0, 0, 0, 1, 1, 1, 1], [0, 0, 0, 0, np.nan, 1, 1, 1, 1])
+    with pytest.raises(SplineKitError, match="degree_u"):
+        thin_plate_energy(0, 3, [0, 1], [0, 0, 0, 0, 1, 1, 1, 1])
+
 
 
 def test_bad_input_coincident_points():
@@ -697,6 +741,8 @@ def test_bad_input_non_finite_and_out_of_range():
         approximate_curve(P, tolerance=-1e-3)
     with pytest.raises(SplineKitError, match="tolerance"):
         approximate_curve(P, tolerance=np.nan)
+    with pytest.raises(SplineKitError, match="correct_parameters = 1000000000 exceeds"):
+        approximate_curve(P, 5, correct_parameters=10**9)  # a billion refits: refused, not a hang
     with pytest.raises(SplineKitError, match="smoothing must be >= 0"):
         fit_surface(rng.normal(size=(100, 3)), 4, 4, smoothing=-1)
     with pytest.raises(SplineKitError, match="exceeds the number of points"):

@@ -75,7 +75,8 @@ def _center_and_frame(center, normal, x_axis, x_name="x_axis"):
 
 def _placed_arc(c, X, Y, rx, ry, start, end) -> NurbsCurve:
     knots, uv, w = unit_arc(start, end)
-    P = c + (rx * uv[:, :1]) * X + (ry * uv[:, 1:]) * Y
+    with np.errstate(over="ignore", invalid="ignore"):  # overflow is refused by NurbsCurve, naming it
+        P = c + (rx * uv[:, :1]) * X + (ry * uv[:, 1:]) * Y
     return NurbsCurve(2, knots, P, w)
 
 
@@ -106,8 +107,10 @@ def polyline(points) -> BSplineCurve:
     must differ.
     """
     P = as_points(points, "points", min_count=(2,))
-    chords = np.linalg.norm(np.diff(P, axis=0), axis=1)
-    if not np.isfinite(chords).all():
+    with np.errstate(over="ignore", invalid="ignore"):  # reported below, naming the problem
+        chords = np.linalg.norm(np.diff(P, axis=0), axis=1)
+        total = chords.sum()
+    if not (np.isfinite(chords).all() and np.isfinite(total)):
         raise ParameterError("points are so far apart that their distances overflow")
     zero = np.flatnonzero(chords == 0.0)
     if zero.size:
@@ -176,25 +179,30 @@ def arc_through_points(p0, p1, p2) -> NurbsCurve:
     if any(p.size != dim for p in pts):
         raise ParameterError(f"p0, p1, p2 must have the same dimension, got {[p.size for p in pts]}")
     a, b, c = (np.concatenate([p, np.zeros(3 - dim)]) for p in pts)
-    u, v = b - a, c - a
-    for (i, j), d in (((0, 1), u), ((0, 2), v), ((1, 2), c - b)):
-        if not np.any(d):
+    for (i, j), (x, y) in (((0, 1), (a, b)), ((0, 2), (a, c)), ((1, 2), (b, c))):
+        if np.array_equal(x, y):
             raise ParameterError(f"p{i} and p{j} coincide at {pts[i].tolist()}")
+    # work relative to p0 in units of the points' spread: the construction
+    # squares and cubes differences, which would overflow (or underflow) for
+    # points far apart (or very close) in absolute units
+    lo, hi = np.minimum(np.minimum(a, b), c), np.maximum(np.maximum(a, b), c)
+    scale = float((hi / 2 - lo / 2).max())  # halved first: no overflow near the float limit
+    u, v = (b / scale - a / scale), (c / scale - a / scale)
     w = np.cross(u, v)
     ww = float(np.dot(w, w))
     if not ww > (1e-12 * float(np.linalg.norm(u)) * float(np.linalg.norm(v))) ** 2:
         raise ParameterError(f"p0, p1, p2 are collinear ({pts[0].tolist()}, {pts[1].tolist()}, {pts[2].tolist()}): no circle passes through them")
-    center = a + np.cross(np.dot(u, u) * v - np.dot(v, v) * u, w) / (2.0 * ww)
+    offset = np.cross(np.dot(u, u) * v - np.dot(v, v) * u, w) / (2.0 * ww)  # center - p0, in units of scale
     normal = w / math.sqrt(ww)
-    X = a - center
-    r = float(np.linalg.norm(X))
-    X /= r
+    rel = float(np.linalg.norm(offset))
+    X = -offset / rel
     Y = np.cross(normal, X)
-    d2 = c - center
+    d2 = v - offset
     end = math.atan2(float(np.dot(d2, Y)), float(np.dot(d2, X)))
     if end <= 0.0:
         end += TWO_PI
     knots, uv, wts = unit_arc(0.0, end)
-    P = center + (r * uv[:, :1]) * X + (r * uv[:, 1:]) * Y
+    with np.errstate(over="ignore", invalid="ignore"):  # overflow is reported by NurbsCurve, naming it
+        P = a + scale * (offset + (rel * uv[:, :1]) * X + (rel * uv[:, 1:]) * Y)
     P[0], P[-1] = a, c
     return NurbsCurve(2, knots, P[:, :dim], wts)

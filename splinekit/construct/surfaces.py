@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .._validate import as_degree, as_real
+from .._validate import as_degree, as_float_array, as_real
 from ..errors import ControlPointError, FittingError, ParameterError, WeightError
 from ..surfaces import BSplineSurface
 from ..tolerances import geometric_tolerance
@@ -80,8 +80,9 @@ def extrude(curve, vector):
     if not np.any(d):
         raise ParameterError("vector has zero length; an extrusion needs a direction")
     C = _coefs(curve)
-    shift = np.concatenate([d, [0.0]]) * C[:, -1:] if curve.is_rational else d
-    net = np.stack([C, C + shift], axis=1)
+    with np.errstate(over="ignore", invalid="ignore"):  # overflow is refused by _surface, naming it
+        shift = np.concatenate([d, [0.0]]) * C[:, -1:] if curve.is_rational else d
+        net = np.stack([C, C + shift], axis=1)
     return _surface(curve.degree, 1, curve.knots, [0.0, 0.0, 1.0, 1.0], net, curve.is_rational)
 
 
@@ -125,13 +126,14 @@ def revolve(profile, axis_origin, axis_direction, angle=TWO_PI):
     knots, uv, wa = unit_arc(0.0, theta)
     P = profile.control_points
     w = profile.weights if profile.is_rational else np.ones(len(P))
-    foot = O + np.outer((P - O) @ a, a)  # projection of each control point on the axis
-    X = P - foot
-    X -= np.outer(X @ a, a)  # remove the rounding component along the axis
-    Y = np.cross(a, X)
-    pts = foot[None] + uv[:, 0, None, None] * X[None] + uv[:, 1, None, None] * Y[None]  # (nu, nv, 3)
-    weights = wa[:, None] * w[None, :]
-    net = np.concatenate([pts * weights[..., None], weights[..., None]], axis=-1)
+    with np.errstate(over="ignore", invalid="ignore"):  # overflow is reported by _surface, naming it
+        foot = O + np.outer((P - O) @ a, a)  # projection of each control point on the axis
+        X = P - foot
+        X -= np.outer(X @ a, a)  # remove the rounding component along the axis
+        Y = np.cross(a, X)
+        pts = foot[None] + uv[:, 0, None, None] * X[None] + uv[:, 1, None, None] * Y[None]  # (nu, nv, 3)
+        weights = wa[:, None] * w[None, :]
+        net = np.concatenate([pts * weights[..., None], weights[..., None]], axis=-1)
     return _surface(2, profile.degree, knots, profile.knots, net, True)
 
 
@@ -414,38 +416,17 @@ def _match(got, want, tol, got_name, want_name):
 
 
 # -- Gordon surfaces -------------------------------------------------------------------------------
-def _closest_parameters(curve, points, samples_per_span=64, iterations=12):
-    """Parameters of the points of ``curve`` closest to ``points`` ``(k, dim)``.
-
-    Dense sampling (per knot span) for the start, then Newton steps on
-    ``(C(t) - x) . C'(t) = 0`` clipped to the domain; vectorized over the points.
-    """
-    br = curve.bezier_breakpoints()
-    s = np.linspace(0.0, 1.0, samples_per_span + 1)[:-1]
-    grid = np.concatenate([(br[:-1, None] + np.diff(br)[:, None] * s).ravel(), br[-1:]])
-    pts = curve.evaluate(grid)
-    dist = np.linalg.norm(pts[None, :, :] - points[:, None, :], axis=-1)
-    t = grid[np.argmin(dist, axis=1)]
-    a, b = curve.domain
-    for _ in range(iterations):
-        der = curve.derivatives(t, 2)
-        r = der[0] - points
-        f = np.einsum("ij,ij->i", r, der[1])
-        df = np.einsum("ij,ij->i", der[1], der[1]) + np.einsum("ij,ij->i", r, der[2])
-        step = np.divide(f, df, out=np.zeros_like(f), where=df > 0)
-        t = np.clip(t - step, a, b)
-    return t
-
-
 def _network_parameters(given, first_curve, others_start, name, domain):
     """Parameters where the crossing curves meet ``first_curve``: given (validated) or estimated."""
     k = len(others_start)
     lo, hi = domain
     if given is None:
-        t = _closest_parameters(first_curve, others_start)
+        from ..closest import project
+
+        t = np.array(project(first_curve, others_start).parameters, dtype=np.float64).reshape(k)
         t[0], t[-1] = lo, hi
     else:
-        t = np.asarray(given, dtype=np.float64) if not isinstance(given, str) else np.zeros(0)
+        t = as_float_array(given, name)
         if t.shape != (k,) or not np.isfinite(t).all():
             raise ParameterError(f"{name} must be {k} finite numbers (one per crossing curve), got {given!r}")
         t = t.copy()

@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .._validate import as_degree, as_int
+from .._validate import as_degree, as_int, as_params, as_real
 from ..basis import design_matrix
 from ..errors import ConvergenceError, ParameterError
 from ._checks import as_curve
@@ -24,6 +24,7 @@ _SUBSTEPS = 4  # frame steps per sample interval: the frames' own error is O(h**
 _CHECKS = 3  # deviation check points inside every station interval
 _SAFETY = 0.5  # the measured deviation must be within this fraction of the tolerance
 _MAX_STATIONS = 2049
+_MAX_SECTIONS = 100_000  # explicit n_sections: each station is a placed profile in the skinning solve
 _DEFAULT_RELATIVE_TOLERANCE = 1e-6
 
 
@@ -74,7 +75,7 @@ def sweep(profile, path, *, n_sections=None, tolerance=None, normal=None, degree
         Number of stations, spread equally over each knot span of the path:
         the path's knots are always stations and every span gets the same
         number ``k >= degree`` of intervals, so the count is rounded up to
-        ``n_spans * k + 1``. Default: adaptive, see ``tolerance``.
+        ``n_spans * k + 1``; at most 100000. Default: adaptive, see ``tolerance``.
     tolerance : float, optional
         Target distance (model units) between the skin and the exact sweep.
         Default ``1e-6`` times the largest absolute control-point coordinate
@@ -119,14 +120,13 @@ def sweep(profile, path, *, n_sections=None, tolerance=None, normal=None, degree
     if tolerance is None:
         tol = _DEFAULT_RELATIVE_TOLERANCE * _size(path.control_points, profile.control_points)
     else:
-        try:
-            tol = float(tolerance)
-        except (TypeError, ValueError):
-            raise ParameterError(f"tolerance must be a number, got {tolerance!r}") from None
-        if not (np.isfinite(tol) and tol > 0):
+        tol = as_real(tolerance, "tolerance")
+        if not tol > 0:
             raise ParameterError(f"tolerance must be finite and > 0, got {tolerance!r}")
     if n_sections is not None:
         count = as_int(n_sections, "n_sections", minimum=2)
+        if count > _MAX_SECTIONS:
+            raise ParameterError(f"n_sections = {count} exceeds the largest supported count {_MAX_SECTIONS}")
         per_span = max(q, -(-(count - 1) // n_spans))
         surface, _ = _sweep_once(profile, path, per_span, normal, q)
         return surface
@@ -149,7 +149,9 @@ def sweep_deviation(profile, path, surface, *, normal=None, samples=None):
     profile = as_curve(profile, "profile")
     path = as_curve(path, "path")
     a, b = path.domain
-    v = np.linspace(a, b, 257) if samples is None else np.sort(np.asarray(samples, dtype=np.float64))
+    v = np.linspace(a, b, 257) if samples is None else np.sort(as_params(samples, (a, b), "samples").ravel())
+    if v.size == 0:
+        raise ParameterError("samples is empty: sweep_deviation needs at least one parameter")
     local = _local_coordinates(profile, path, normal)
     # the frames propagate from the path start, whatever the samples
     frames = _frames(path, np.concatenate([[a], v]), normal)[1:]

@@ -209,6 +209,8 @@ def curvature(surface, u, v=None, *, grid: bool = False):
         return _implicit_curvature(surface, u)
     as_surface(surface)
     if grid:
+        if v is None:
+            raise ParameterError("curvature(surface, u, v, grid=True) needs both u and v")
         us = as_float_array(u, "u").ravel()
         vs = as_float_array(v, "v").ravel()
         fast = _compiled_grid(surface, us, vs)
@@ -223,7 +225,13 @@ def curvature(surface, u, v=None, *, grid: bool = False):
     else:
         if v is None:
             raise ParameterError("curvature(surface, u, v) needs both u and v for a parametric surface")
-        U, V = np.broadcast_arrays(as_float_array(u, "u"), as_float_array(v, "v"))
+        u_arr, v_arr = as_float_array(u, "u"), as_float_array(v, "v")
+        try:
+            U, V = np.broadcast_arrays(u_arr, v_arr)
+        except ValueError:
+            raise ParameterError(
+                f"u and v must have one shape (or broadcast to one), got {u_arr.shape} and {v_arr.shape}"
+            ) from None
         ders = surface.derivatives(U, V, 2)
     shape = U.shape
     S, Su, Sv, Suu, Suv, Svv = _flat_partials(ders)

@@ -360,6 +360,19 @@ def tangent(curve, u) -> np.ndarray:
     return T.reshape(u.shape + (d1.shape[-1],))
 
 
+def _per_point_unit(d1: np.ndarray) -> np.ndarray:
+    """A power of two ``(n,)`` near ``|C'|`` at each point (1 where ``C'`` vanishes).
+
+    Curvature and torsion are homogeneous of degree -1 in the derivatives:
+    dividing the derivatives by the same power of two (exactly) before the
+    products keeps squared and cubed lengths inside the float range, whatever
+    the units; the result is then divided by it.
+    """
+    peak = np.abs(d1).max(axis=-1)
+    exponent = np.frexp(np.where(peak > 0, peak, 1.0))[1]
+    return np.ldexp(1.0, exponent)
+
+
 def _perp_second(d1: np.ndarray, d2: np.ndarray):
     """``C''`` minus its component along ``C'``, and ``|C'|``: ``(n, dim)``, ``(n,)``."""
     speed = _norm(d1)
@@ -381,13 +394,16 @@ def curvature(curve, u) -> np.ndarray:
     size, length = _scales(curve)
     speed = _norm(d[1])
     _require_regular(speed > _ZERO_DERIVATIVE * size / length, flat, "the curvature")
+    unit = _per_point_unit(d[1])
+    d = d / unit[:, None]
+    speed = _norm(d[1])
     if d.shape[-1] == 3:
         num = _norm(_cross(d[1], d[2])) / speed
     elif d.shape[-1] == 2:
         num = np.abs(d[1, :, 0] * d[2, :, 1] - d[1, :, 1] * d[2, :, 0]) / speed
     else:
         num = _norm(_perp_second(d[1], d[2])[0])
-    return (num / speed**2).reshape(u.shape)
+    return (num / speed**2 / unit).reshape(u.shape)
 
 
 def signed_curvature(curve, u) -> np.ndarray:
@@ -401,8 +417,11 @@ def signed_curvature(curve, u) -> np.ndarray:
     size, length = _scales(curve)
     speed = _norm(d[1])
     _require_regular(speed > _ZERO_DERIVATIVE * size / length, flat, "the curvature")
+    unit = _per_point_unit(d[1])
+    d = d / unit[:, None]
+    speed = _norm(d[1])
     cross = d[1, :, 0] * d[2, :, 1] - d[1, :, 1] * d[2, :, 0]
-    return (cross / speed**3).reshape(u.shape)
+    return (cross / speed**3 / unit).reshape(u.shape)
 
 
 def _straight(perp: np.ndarray, d1: np.ndarray, d2: np.ndarray, size: float) -> np.ndarray:
@@ -426,12 +445,14 @@ def torsion(curve, u) -> np.ndarray:
     size, length = _scales(curve)
     speed = _norm(d[1])
     _require_regular(speed > _ZERO_DERIVATIVE * size / length, flat, "the torsion")
+    unit = _per_point_unit(d[1])
+    d = d / unit[:, None]
+    straight = _straight(_perp_second(d[1], d[2])[0], d[1], d[2], size / unit)
     cross = _cross(d[1], d[2])
     c2 = _dot(cross, cross)
-    straight = _straight(_perp_second(d[1], d[2])[0], d[1], d[2], size)
     det = _dot(cross, d[3])
     out = np.divide(det, c2, out=np.zeros_like(det), where=~straight & (c2 > 0))
-    return out.reshape(u.shape)
+    return (out / unit).reshape(u.shape)
 
 
 # ----------------------------------------------------------------------------------------
@@ -454,10 +475,12 @@ def frenet_frame(curve, u):
     d = _ders(curve, flat, 2)
     size, length = _scales(curve)
     d1, d2 = _as_3d(d[1], "frenet_frame"), _as_3d(d[2], "frenet_frame")
+    _require_regular(_norm(d1) > _ZERO_DERIVATIVE * size / length, flat, "the Frenet frame")
+    unit = _per_point_unit(d1)  # the frame is invariant under this scaling; squares stay in range
+    d1, d2 = d1 / unit[:, None], d2 / unit[:, None]
     perp, speed = _perp_second(d1, d2)
-    _require_regular(speed > _ZERO_DERIVATIVE * size / length, flat, "the Frenet frame")
     T = _unit(d1, speed)
-    straight = _straight(perp, d1, d2, size)
+    straight = _straight(perp, d1, d2, size / unit)
     N = _unit(perp)
     if straight.any():
         N[straight] = _carried_normals(flat, T, N, straight)
@@ -555,6 +578,9 @@ def _start_normal(t0: np.ndarray, normal) -> np.ndarray:
     v = as_float_array(normal, "normal")
     if v.shape != (3,) or not np.isfinite(v).all():
         raise ParameterError(f"normal must be 3 finite numbers, got {np.asarray(normal).tolist()!r}")
+    peak = float(np.abs(v).max())
+    if peak > 0:
+        v = v / peak  # only the direction matters; scaled first so that no product overflows
     norm = float(np.linalg.norm(v))
     w = v - float(v @ t0) * t0
     wn = float(np.linalg.norm(w))
@@ -780,10 +806,16 @@ def arc_length_parameters(curve, s, tol: float = 1e-12) -> np.ndarray:
     return table.parameters_at(s.ravel(), tol).reshape(s.shape)
 
 
+MAX_PARAMETERS = 10**7
+"""Most parameters :func:`equal_arc_length_parameters` returns (each costs a Newton solve)."""
+
+
 def equal_arc_length_parameters(curve, n: int, tol: float = 1e-12) -> np.ndarray:
     """``n >= 2`` parameters ``(n,)`` cutting the curve into ``n - 1`` pieces of equal length,
-    starting and ending at the domain ends."""
+    starting and ending at the domain ends; ``n <= 10**7``."""
     n = as_int(n, "n", minimum=2)
+    if n > MAX_PARAMETERS:
+        raise ParameterError(f"n = {n} exceeds the largest supported count {MAX_PARAMETERS}")
     table = _ArcLengthTable(curve, _tolerance(tol))
     u = table.parameters_at(np.linspace(0.0, table.length, n), tol)
     u[0], u[-1] = table.a, table.b

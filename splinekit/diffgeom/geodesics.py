@@ -48,14 +48,33 @@ class Geodesic:
 
 def christoffel_symbols(derivatives: np.ndarray) -> np.ndarray:
     """``Gamma[..., k, i, j]`` (``(..., 2, 2, 2)``) from surface partials
-    ``(3, 3, ..., dim)`` (as returned by ``surface.derivatives(u, v, 2)``)."""
-    d = derivatives
+    ``(3, 3, ..., dim)`` (as returned by ``surface.derivatives(u, v, 2)``; a
+    larger leading ``(order + 1, order + 1)`` block is accepted).
+
+    Raises :class:`ParameterError` for another shape, non-finite partials or a
+    singular first fundamental form (``S_u`` and ``S_v`` parallel).
+    """
+    d = as_float_array(derivatives, "derivatives")
+    if d.ndim < 3 or d.shape[0] < 3 or d.shape[1] < 3 or d.shape[-1] < 2:
+        raise ParameterError(
+            f"derivatives must have shape (3, 3, ..., dim) with dim >= 2 (partials up to order 2), got {d.shape}"
+        )
+    d = d[:3, :3]
+    if not np.isfinite(d).all():
+        raise ParameterError("derivatives must be finite")
     J = np.stack([d[1, 0], d[0, 1]], -2)  # (..., 2, dim): rows S_u, S_v
     second = np.stack([np.stack([d[2, 0], d[1, 1]], -2), np.stack([d[1, 1], d[0, 2]], -2)], -3)  # (..., 2, 2, dim)
     first = J @ np.swapaxes(J, -1, -2)  # (..., 2, 2): [[E, F], [F, G]]
     proj = np.einsum("...ld,...ijd->...lij", J, second)  # S_l . S_ij
     det = first[..., 0, 0] * first[..., 1, 1] - first[..., 0, 1] ** 2
     inv = np.stack([np.stack([first[..., 1, 1], -first[..., 0, 1]], -1), np.stack([-first[..., 1, 0], first[..., 0, 0]], -1)], -2)
+    bad = ~(det > 0)
+    if bad.any():
+        index = [int(i) for i in np.argwhere(bad)[0]]
+        raise ParameterError(
+            f"the first fundamental form is singular at point {index} (S_u and S_v parallel): "
+            "the Christoffel symbols are undefined there"
+        )
     inv = inv / det[..., None, None]
     return np.einsum("...kl,...lij->...kij", inv, proj)
 
@@ -141,6 +160,26 @@ def _boundary_event(axis: int, bound: float):
     return event
 
 
+MAX_SAMPLES = 10**7
+"""Most sample points a geodesic result may hold."""
+
+MAX_EVALUATIONS = 200_000
+"""Budget of right-hand-side evaluations of :func:`trace_geodesic` (about a minute)."""
+
+MAX_GRID = 1024
+"""Largest route-finding grid of :func:`geodesic` (``grid**2`` nodes, 8 edges each)."""
+
+MIN_RTOL = 100 * np.finfo(float).eps
+"""Smallest relative tolerance the DOP853 integrator honours."""
+
+
+def _as_samples(value) -> int:
+    n = as_int(value, "samples", minimum=2)
+    if n > MAX_SAMPLES:
+        raise ParameterError(f"samples = {n} exceeds the largest supported count {MAX_SAMPLES}")
+    return n
+
+
 def _as_uv(value, name):
     uv = as_float_array(value, name).ravel()
     if uv.shape != (2,) or not np.isfinite(uv).all():
@@ -161,7 +200,9 @@ def trace_geodesic(surface, start_uv, direction, length, *, samples: int = 201, 
     the tangent plane) or in parameters (2 components, ``(du, dv)``); only its
     direction matters. Integrated by arc length with DOP853 at relative
     tolerance ``rtol``; sampled at ``samples`` points equally spaced in arc
-    length. A path reaching a boundary of the domain that is not closed stops
+    length. At most ``MAX_EVALUATIONS`` (200000) evaluations of the geodesic
+    equation are spent (ConvergenceError beyond: a bound, not a hang, for long
+    paths on closed surfaces). A path reaching a boundary of the domain that is not closed stops
     there (``stopped=True``, ``length`` then the length travelled).
     """
     per = _Periodic(surface)
@@ -170,7 +211,10 @@ def trace_geodesic(surface, start_uv, direction, length, *, samples: int = 201, 
     length = as_real(length, "length")
     if not length > 0:
         raise ParameterError(f"length must be positive, got {length!r}")
-    samples = as_int(samples, "samples", minimum=2)
+    samples = _as_samples(samples)
+    rtol = as_real(rtol, "rtol")
+    if not MIN_RTOL <= rtol < 1:
+        raise ParameterError(f"rtol must lie in [{MIN_RTOL:.3g}, 1) (the integrator's limit), got {rtol!r}")
     from scipy.integrate import solve_ivp  # imported here: keeps `import splinekit` fast
 
     d = per.derivatives(uv0[None], 1)
@@ -187,7 +231,16 @@ def trace_geodesic(surface, start_uv, direction, length, *, samples: int = 201, 
         raise ParameterError(f"direction {vec.tolist()} has no component in the tangent plane at {uv0.tolist()}")
     y0 = np.concatenate([uv0, w / speed])
 
-    def rhs(_s, y):
+    calls = [0]
+
+    def rhs(s, y):
+        # a bound on the work, not a hang, for a long path on a closed surface
+        calls[0] += 1
+        if calls[0] > MAX_EVALUATIONS:
+            raise ConvergenceError(
+                f"trace_geodesic gave up after {MAX_EVALUATIONS} evaluations at arc length {float(s):.6g} of the "
+                f"requested length {length!r}; ask for a shorter path or a larger rtol"
+            )
         return np.concatenate([y[2:], _rhs_acceleration(per, y[None, :2], y[None, 2:])[0]])
 
     events = [_boundary_event(k, bound) for k in (0, 1) if not per.closed[k] for bound in (per.lo[k], per.lo[k] + per.period[k])]
@@ -262,7 +315,7 @@ def _grid_path(per: _Periodic, a: np.ndarray, b: np.ndarray, n: int) -> np.ndarr
 def geodesic(surface, start_uv, end_uv, *, samples: int = 201, tol: float = 1e-6, grid: int = 48) -> Geodesic:
     """The shortest path on ``surface`` between two parameter pairs.
 
-    A shortest path in a graph on a ``grid x grid`` parameter grid picks the
+    A shortest path in a graph on a ``grid x grid`` parameter grid (``4 <= grid <= 1024``) picks the
     route; a boundary value problem on the geodesic equation
     (``solve_bvp``, residual tolerance ``tol``) makes it a geodesic. The length
     integrates ``|S_u u' + S_v v'|`` over the solution (Gauss-Legendre); being
@@ -279,8 +332,10 @@ def geodesic(surface, start_uv, end_uv, *, samples: int = 201, tol: float = 1e-6
     a, b = _as_uv(start_uv, "start_uv"), _as_uv(end_uv, "end_uv")
     _check_in_domain(per, a, "start_uv")
     _check_in_domain(per, b, "end_uv")
-    samples = as_int(samples, "samples", minimum=2)
+    samples = _as_samples(samples)
     grid = as_int(grid, "grid", minimum=4)
+    if grid > MAX_GRID:
+        raise ParameterError(f"grid = {grid} exceeds the largest supported route grid {MAX_GRID} (x {MAX_GRID} nodes)")
     tol = as_real(tol, "tol")
     if not 0 < tol < 1:
         raise ParameterError(f"tol must lie in (0, 1), got {tol!r}")

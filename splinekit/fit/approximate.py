@@ -33,6 +33,9 @@ __all__ = ["approximate_curve", "approximate_surface"]
 ROUNDING = 1e-13
 """Errors below this (relative to the half-size of the data) are rounding: they meet any tolerance."""
 
+MAX_CORRECTIONS = 100
+"""Most parameter-correction passes accepted (each is a full refit; more never helps)."""
+
 NEWTON_STEPS = 8
 """Newton iterations per parameter-correction pass (each step is vectorized over all points)."""
 
@@ -229,7 +232,7 @@ def approximate_curve(
     correct_parameters : int
         Number of parameter-correction passes after each fit: every data
         parameter moves to (a local) closest curve point by Newton steps, then
-        the fit is redone (The NURBS Book 9.4.1, "parameter correction").
+        the fit is redone (The NURBS Book 9.4.1, "parameter correction"); at most 100.
 
     Returns
     -------
@@ -243,6 +246,10 @@ def approximate_curve(
             f"too few points for the degree: a degree-{p} fit needs at least {p + 1} points, got {m}; lower the degree"
         )
     passes = as_int(correct_parameters, "correct_parameters", minimum=0)
+    if passes > MAX_CORRECTIONS:
+        raise ParameterError(
+            f"correct_parameters = {passes} exceeds {MAX_CORRECTIONS}; parameter correction converges in a few passes"
+        )
     tol = None
     if tolerance is not None:
         tol = as_real(tolerance, "tolerance")
