@@ -6,8 +6,7 @@ quads each, and a handle of square section that leaves the outer wall at one
 face and comes back at another (so the surface is a torus: Euler
 characteristic 0). The two rim rings carry semi-sharp crease sharpness
 ``sharpness`` (0 is smooth; the rim stays sharp for that many subdivision
-steps, then smooths out; the range stops at 4 because converting a surface
-with sharpness s to patches refines it about s times, fourfold per step).
+steps, then smooths out; 10 is OpenSubdiv's "infinitely sharp").
 
 The cage is subdivided ``levels`` times uniformly (creases carried along),
 then ``SubdivisionSurface.to_bsplines(0)`` turns every face of the refined
@@ -34,7 +33,7 @@ NAME = "mug"
 PARAMETERS = (
     Parameter("size", 90.0, "mm", 30.0, 300.0, "height of the cage (the limit surface is a little smaller)"),
     Parameter("handle", 0.32, "", 0.15, 0.6, "how far the handle reaches out, as a fraction of size"),
-    Parameter("sharpness", 2.0, "", 0.0, 4.0, "Catmull-Clark crease sharpness of the two rim rings"),
+    Parameter("sharpness", 2.0, "", 0.0, 10.0, "Catmull-Clark crease sharpness of the two rim rings"),
     Parameter("levels", 1, "", 0, 2, "uniform subdivision steps before the conversion to patches", kind=int),
 )
 
