@@ -149,6 +149,14 @@ def as_real(value, name: str, error=ParameterError) -> float:
     return x
 
 
+def as_positive(value, name: str, allow_zero: bool = False) -> float:
+    """A finite real ``> 0`` (or ``>= 0`` with ``allow_zero``): sizes, radii, tolerances."""
+    x = as_real(value, name)
+    if not (x > 0 or (allow_zero and x == 0)):
+        raise ParameterError(f"{name} must be {'>= 0' if allow_zero else '> 0'}, got {x!r}")
+    return x
+
+
 def as_order(value, name: str = "order") -> int:
     """A derivative order: an integer in ``[0, MAX_DEGREE]``."""
     order = as_int(value, name, minimum=0)

@@ -46,7 +46,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ._validate import as_float_array, as_params, as_real
+from ._validate import as_float_array, as_params, as_positive
 from .errors import ConvergenceError, ParameterError
 
 __all__ = ["Projection", "distance", "project"]
@@ -249,10 +249,7 @@ def _as_query_points(points, dim: int, unit: float = 1.0):
 
 
 def _positive_tolerance(value) -> float:
-    tol = as_real(value, "tolerance")
-    if tol <= 0:
-        raise ParameterError(f"tolerance must be > 0, got {tol!r}")
-    return tol
+    return as_positive(value, "tolerance")
 
 
 def _domain_pair(value, name: str):

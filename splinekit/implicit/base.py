@@ -55,7 +55,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .._validate import as_float_array, as_int, as_real
+from .._validate import as_float_array, as_int, as_positive
 from ..diffgeom.protocol import ImplicitSurface, _nonzero_norm
 from ..errors import ConvergenceError, DomainError, ParameterError, SplineKitError
 
@@ -111,12 +111,7 @@ def check_bounds(bounds, name: str = "bounds"):
     return lo, hi
 
 
-def positive(value, name: str, allow_zero: bool = False) -> float:
-    """A finite real > 0 (or >= 0), else a ParameterError naming ``name``."""
-    x = as_real(value, name)
-    if not (x > 0 or (allow_zero and x == 0)):
-        raise ParameterError(f"{name} must be {'>= 0' if allow_zero else '> 0'}, got {x!r}")
-    return x
+positive = as_positive  # the shared validator, under the name the implicit modules use
 
 
 class Implicit(ImplicitSurface):

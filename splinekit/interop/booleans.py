@@ -47,7 +47,7 @@ import weakref
 
 import numpy as np
 
-from .._validate import as_real
+from .._validate import as_positive
 from ..errors import (
     BackendError,
     MeshTopologyError,
@@ -181,10 +181,7 @@ def _build(V: np.ndarray, T: np.ndarray, name: str):
 def _check_tolerance(tolerance):
     if tolerance is None:
         return None
-    tol = as_real(tolerance, "tolerance")
-    if not tol > 0.0:
-        raise ParameterError(f"tolerance must be a finite number > 0, got {tolerance!r}")
-    return tol
+    return as_positive(tolerance, "tolerance")
 
 
 def _as_mesh(obj, tolerance, name: str):

@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .._validate import as_real
+from .._validate import as_positive
 from ..errors import BackendError, MissingDependencyError, ParameterError, SplineKitError
 
 __all__ = ["to_occ", "from_occ", "to_shape", "to_build123d", "to_cadquery", "require_ocp"]
@@ -416,10 +416,7 @@ def _free_edges(shape) -> list:
 
 
 def _tolerance(tolerance) -> float:
-    tol = as_real(tolerance, "tolerance")
-    if not tol > 0:
-        raise ParameterError(f"tolerance must be positive, got {tol!r}")
-    return tol
+    return as_positive(tolerance, "tolerance")
 
 
 def _is_curve(obj) -> bool:

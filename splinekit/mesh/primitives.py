@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .._validate import as_float_array, as_int
+from .._validate import as_float_array, as_int, as_positive
 from ..errors import ParameterError
 from .polymesh import PolyMesh
 from .topology import Topology
@@ -21,10 +21,7 @@ MAX_ICOSPHERE_SUBDIVISIONS = 10
 
 
 def _positive(value, name):
-    arr = as_float_array(value, name)
-    if arr.ndim != 0 or not np.isfinite(arr) or arr <= 0:
-        raise ParameterError(f"{name} must be a finite number > 0, got {value!r}")
-    return float(arr)
+    return as_positive(value, name)
 
 
 def _vector3(value, name, positive=False):

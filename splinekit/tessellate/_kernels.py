@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
 from numba import njit
 
 
@@ -142,3 +143,105 @@ def measure_grid(H, Hu, Hv, C1, C2, rational, ri, ci, tol2, weld2, check_collaps
                           + N[g, i, j, 2] * N[g, i + 1, j + 1, 2])
                     if cs >= 0.0 and cs < err[g, r, s, 5]:
                         err[g, r, s, 5] = cs
+
+
+@njit(cache=True, nogil=True)
+def close_pairs(X, r, sweep, limit):
+    """``(k, 2)`` index pairs of the points ``X`` ``(n, 3)`` at most ``r`` apart (each pair
+    once, in no particular order): a sweep along the unit direction ``sweep`` ``(3,)``.
+    Returns ``(pairs, ok)``; ``ok`` is False (and ``pairs`` empty) when the sweep would
+    test more than ``limit`` candidate pairs, for the caller's k-d tree to answer."""
+    n = X.shape[0]
+    proj = np.empty(n)
+    for i in range(n):
+        proj[i] = X[i, 0] * sweep[0] + X[i, 1] * sweep[1] + X[i, 2] * sweep[2]
+    order = np.argsort(proj)
+    ps = proj[order]
+    eps4 = 4.0 * np.finfo(np.float64).eps
+    # the window's margin covers rounding of the projections; the exact test follows
+    ends = np.empty(n, dtype=np.int64)
+    total = 0
+    j = 0
+    for i in range(n):
+        top = ps[i] + r * (1.0 + 1e-6) + eps4 * abs(ps[i])
+        if j < i + 1:
+            j = i + 1
+        while j < n and ps[j] <= top:
+            j += 1
+        ends[i] = j
+        total += j - i - 1
+    if total > limit:
+        return np.zeros((0, 2), dtype=np.int64), False
+    out = np.empty((total, 2), dtype=np.int64)
+    k = 0
+    r2 = r * r
+    for i in range(n):
+        a = order[i]
+        for jj in range(i + 1, ends[i]):
+            b = order[jj]
+            d0 = X[a, 0] - X[b, 0]
+            d1 = X[a, 1] - X[b, 1]
+            d2 = X[a, 2] - X[b, 2]
+            if d0 * d0 + d1 * d1 + d2 * d2 <= r2:
+                out[k, 0] = a
+                out[k, 1] = b
+                k += 1
+    return out[:k].copy(), True
+
+
+@njit(cache=True, nogil=True)
+def _root(parent, x):
+    while parent[x] != x:
+        parent[x] = parent[parent[x]]
+        x = parent[x]
+    return x
+
+
+@njit(cache=True, nogil=True)
+def components(n, a, b):
+    """``(n,)`` label of each of ``n`` nodes linked by the edges ``a[k] - b[k]``: the smallest
+    node of its connected component (union-find, the larger root always hooked under the
+    smaller one, so every root is its component's smallest node)."""
+    parent = np.arange(n)
+    for k in range(a.size):
+        x = _root(parent, a[k])
+        y = _root(parent, b[k])
+        if x < y:
+            parent[y] = x
+        elif y < x:
+            parent[x] = y
+    for i in range(n):
+        parent[i] = _root(parent, i)
+    return parent
+
+
+@njit(cache=True, nogil=True)
+def clearly_positive_volume(V, F):
+    """True when the signed volume of the triangles ``F`` ``(f, 3)`` over the vertices
+    ``V`` ``(n, 3)``, about the bounding-box centre, is positive by a margin far above
+    rounding (``1e-9`` of the sum of the absolute tetrahedron volumes)."""
+    if V.shape[0] == 0:
+        return False
+    lo = V[0].copy()
+    hi = V[0].copy()
+    for i in range(1, V.shape[0]):
+        for d in range(3):
+            x = V[i, d]
+            if x < lo[d]:
+                lo[d] = x
+            if x > hi[d]:
+                hi[d] = x
+    c0 = 0.5 * (lo[0] + hi[0])
+    c1 = 0.5 * (lo[1] + hi[1])
+    c2 = 0.5 * (lo[2] + hi[2])
+    s = 0.0
+    sa = 0.0
+    for f in range(F.shape[0]):
+        i, j, k = F[f, 0], F[f, 1], F[f, 2]
+        a0, a1, a2 = V[i, 0] - c0, V[i, 1] - c1, V[i, 2] - c2
+        b0, b1, b2 = V[j, 0] - c0, V[j, 1] - c1, V[j, 2] - c2
+        e0, e1, e2 = V[k, 0] - c0, V[k, 1] - c1, V[k, 2] - c2
+        det = a0 * (b1 * e2 - b2 * e1) + a1 * (b2 * e0 - b0 * e2) + a2 * (b0 * e1 - b1 * e0)
+        s += det
+        sa += abs(det)
+    return s > 1e-9 * sa

@@ -401,6 +401,14 @@ def _close_pairs(X, r):
     n = len(X)
     if n < 2:
         return np.zeros((0, 2), dtype=np.int64)
+    jit = _kernels()
+    if jit is not None:
+        pairs, ok = jit.close_pairs(np.ascontiguousarray(X, dtype=np.float64), float(r), _SWEEP, 16 * n + 1000)
+        if ok:
+            return pairs
+        from scipy.spatial import cKDTree
+
+        return cKDTree(X).query_pairs(r=r, output_type="ndarray")
     proj = X @ _SWEEP
     order = np.argsort(proj, kind="stable")
     ps = proj[order]
@@ -424,7 +432,11 @@ def _components(n, a, b):
     """``(n,)`` label of each of ``n`` nodes linked by the edges ``a[k] - b[k]``: the smallest
     node of its connected component. Roots hook onto the smallest root they are linked
     to, then every node jumps to its root; a few rounds of whole-array operations, far
-    cheaper than building a sparse graph for the small graphs of a tessellation."""
+    cheaper than building a sparse graph for the small graphs of a tessellation (or
+    a compiled union-find with the same labels)."""
+    jit = _kernels()
+    if jit is not None:
+        return jit.components(int(n), np.ascontiguousarray(a, dtype=np.int64), np.ascontiguousarray(b, dtype=np.int64))
     lab = np.arange(n)
     while a.size:
         la, lb = lab[a], lab[b]
@@ -728,6 +740,10 @@ def _clearly_positive_volume(vertices, triangles) -> bool:
     """True when the signed volume about the bounding-box centre is positive by a margin
     far above rounding (then ``mesh.volume``, the same sum, is positive if the mesh is
     closed, and an open mesh is left as it is anyway)."""
+    jit = _kernels()
+    if jit is not None:
+        return bool(jit.clearly_positive_volume(np.ascontiguousarray(vertices, dtype=np.float64),
+                                                np.ascontiguousarray(triangles, dtype=np.int64)))  # fmt: skip
     X = np.array(vertices.T, order="C")  # (3, n) copy: rows are fast to reduce and gather
     X -= 0.5 * (X.min(axis=1) + X.max(axis=1))[:, None]
     F = triangles
