@@ -570,3 +570,121 @@ def test_open_patch_keeps_the_winding_of_its_parametrization(flip):
     exact = s.normal(c[:, 0], c[:, 1])
     assert (np.einsum("ij,ij->i", face_n, exact) > 0).all()
     assert ((exact[:, 2] < 0) == flip).all()  # the swapped cap really faces down
+
+
+# -- compiled assembly and weld kernels against references and the numpy path ------------------
+@pytest.fixture(params=["0", "1"], ids=["numpy", "numba"])
+def kernel_path(request, monkeypatch):
+    """Runs a test once on the numpy path and once on the compiled kernels."""
+    if request.param == "1":
+        pytest.importorskip("numba")
+    monkeypatch.setenv("SPLINEKIT_NUMBA", request.param)
+    return request.param
+
+
+def test_weld_helpers_match_their_references_on_both_paths(kernel_path):
+    test_close_pairs_match_a_kd_tree()
+    test_components_match_scipy_connected_components()
+
+
+def _weld_reference(E0, FE, rep, NI):
+    """Plain-loop reference of the post-weld triangle remap (one triangle at a time)."""
+    seen, tris, faces, pre = set(), [], [], []
+    for f, tri in enumerate(E0.tolist()):
+        t = [x if x < NI else NI + int(rep[x - NI]) for x in tri]
+        if len(set(t)) < 3:
+            continue
+        k = t.index(min(t))
+        canon = tuple(t[k:] + t[:k])
+        if canon in seen:
+            continue
+        seen.add(canon)
+        tris.append(t)
+        faces.append(int(FE[f]))
+        pre.append(tri)
+    kept = sorted({x - NI for t in tris for x in t if x >= NI})
+    new = {r: NI + i for i, r in enumerate(kept)}
+    tris = [[x if x < NI else new[x - NI] for x in t] for t in tris]
+    return np.array(tris, dtype=np.int64).reshape(-1, 3), np.array(faces, dtype=np.int64), np.array(pre).reshape(-1, 3), np.array(kept)
+
+
+def test_weld_triangles_match_a_plain_loop_reference(kernel_path):
+    """Random ring triangles with merged vertices (collapsed and repeated triangles in
+    both windings): the survivors, their patches, their pre-weld corners and the kept
+    ring vertices are those of a one-triangle-at-a-time reference."""
+    from splinekit.tessellate import surfaces
+
+    rng = np.random.default_rng(11)
+    for NI, NR, t in [(0, 3, 1), (5, 8, 40), (20, 30, 200), (0, 50, 300), (100, 6, 50)]:
+        E0 = np.column_stack([rng.integers(0, NI + NR, t) for _ in range(3)]).astype(np.int64)
+        E0 = np.concatenate([E0, E0[: t // 4], E0[: t // 4, ::-1], np.roll(E0[: t // 5], 1, axis=1)])
+        FE = rng.integers(0, 7, len(E0)).astype(np.int64)
+        rep = np.arange(NR)
+        merged = rng.random(NR) < 0.4
+        rep[merged] = rng.integers(0, NR, merged.sum())
+        rep = rep[rep]  # (representatives of representatives: any map into the ring)
+        n_in = 9
+        T = np.full((n_in + len(E0), 3), -7, dtype=np.int64)
+        FP = np.full(n_in + len(E0), -7, dtype=np.int64)
+        jit = surfaces._kernels()
+        if jit is None:
+            T, FP, pre, kept = surfaces._weld_triangles(E0, FE, rep, NI, NR, T, FP, n_in)
+        else:
+            count, pre, kept = jit.weld_triangles(E0, FE, rep, NI, NR, T[n_in:], FP[n_in:])
+            T, FP = T[: n_in + count], FP[: n_in + count]
+        want_T, want_F, want_pre, want_kept = _weld_reference(E0, FE, rep, NI)
+        assert (T[:n_in] == -7).all() and (FP[:n_in] == -7).all()  # rows before n_in untouched
+        assert np.array_equal(T[n_in:], want_T)
+        assert np.array_equal(FP[n_in:], want_F)
+        assert np.array_equal(pre, want_pre)
+        assert np.array_equal(kept, want_kept)
+
+
+def test_volume_sign_test_on_both_paths(kernel_path):
+    """The cheap orientation test: a closed outward sphere (volume about 4/3 pi) is clearly
+    positive; the same mesh with every triangle flipped is not, nor is a flat mesh of zero
+    volume."""
+    from splinekit.tessellate.surfaces import _clearly_positive_volume
+
+    mesh = tessellate(sphere_patches(), 1e-3)
+    V, F = np.array(mesh.vertices), np.array(mesh.faces)
+    assert mesh.volume == pytest.approx(4 / 3 * np.pi, rel=1e-2)
+    assert _clearly_positive_volume(V, F)
+    assert not _clearly_positive_volume(V, F[:, ::-1])
+    # a flat (zero-volume) pair of opposite triangles: no clear sign
+    assert not _clearly_positive_volume(np.eye(3), np.array([[0, 1, 2], [0, 2, 1]]))
+
+
+def test_rational_second_derivative_bounds_agree_on_both_paths(monkeypatch):
+    """The compiled sampler of |S_uu|, |S_uv|, |S_vv| of rational cells reproduces the
+    numpy one bit for bit (the sample counts derive from it)."""
+    pytest.importorskip("numba")
+    from splinekit.tessellate.cells import _sampled_second_derivatives, cells_of_patches
+
+    patches = [random_surface(s, rational=True) for s in range(6)] + sphere_patches()
+    for cs in cells_of_patches(patches):
+        nets = cs.nets[cs.rational]
+        got = []
+        for env in ("0", "1"):
+            monkeypatch.setenv("SPLINEKIT_NUMBA", env)
+            got.append(np.stack(_sampled_second_derivatives(nets, cs.p, cs.q)))
+        assert np.array_equal(got[0], got[1])
+        assert np.isfinite(got[1]).all() and (got[1] >= 0).all()
+
+
+def test_pole_normals_are_exact_and_equal_on_both_paths(monkeypatch):
+    """The limit normals at the sphere's poles (collapsed patch edges) are (0, 0, +-1) on
+    both paths, bit for bit the same; every other mesh array also agrees exactly."""
+    pytest.importorskip("numba")
+    meshes = []
+    for env in ("0", "1"):
+        monkeypatch.setenv("SPLINEKIT_NUMBA", env)
+        meshes.append(tessellate(sphere_patches(), 1e-3))
+    a, b = meshes
+    for name in ("faces", "vertices", "uv", "corner_uv", "face_patch", "vertex_patch"):
+        assert np.array_equal(np.asarray(getattr(a, name)), np.asarray(getattr(b, name))), name
+    assert a.max_deviation == b.max_deviation
+    poles = np.flatnonzero(np.abs(np.abs(a.vertices[:, 2]) - 1.0) < 1e-12)
+    assert poles.size >= 2
+    assert np.array_equal(a.normals[poles], b.normals[poles])
+    assert np.allclose(a.normals[poles], a.vertices[poles], atol=1e-12)

@@ -1,8 +1,12 @@
-"""Compiled (numba) kernel of the tessellator: one fused pass over an evaluated grid.
+"""Compiled (numba) kernels of the tessellator: one fused pass over an evaluated grid,
+and the fixed per-call work of small models (a-priori bounds of rational cells, the
+weld sweep and its components, vertex gathering, the post-weld triangle remap, pole
+normals and the orientation test).
 
 Imported lazily through :func:`splinekit.basis.jit._load` (never by ``import
 splinekit``); :mod:`splinekit.tessellate.surfaces` keeps a numpy path with the
-same results for when numba is absent or ``SPLINEKIT_NUMBA=0``.
+same results (bit for bit, except the rounding of the fused pass's normals) for when
+numba is absent or ``SPLINEKIT_NUMBA=0``.
 """
 
 from __future__ import annotations
@@ -164,8 +168,7 @@ def close_pairs(X, r, sweep, limit):
     j = 0
     for i in range(n):
         top = ps[i] + r * (1.0 + 1e-6) + eps4 * abs(ps[i])
-        if j < i + 1:
-            j = i + 1
+        j = max(j, i + 1)
         while j < n and ps[j] <= top:
             j += 1
         ends[i] = j
@@ -226,11 +229,8 @@ def clearly_positive_volume(V, F):
     hi = V[0].copy()
     for i in range(1, V.shape[0]):
         for d in range(3):
-            x = V[i, d]
-            if x < lo[d]:
-                lo[d] = x
-            if x > hi[d]:
-                hi[d] = x
+            lo[d] = min(lo[d], V[i, d])
+            hi[d] = max(hi[d], V[i, d])
     c0 = 0.5 * (lo[0] + hi[0])
     c1 = 0.5 * (lo[1] + hi[1])
     c2 = 0.5 * (lo[2] + hi[2])
@@ -245,3 +245,194 @@ def clearly_positive_volume(V, F):
         s += det
         sa += abs(det)
     return s > 1e-9 * sa
+
+
+@njit(cache=True, nogil=True)
+def sampled_second_derivatives(nets, Bu, Bv):
+    """``(c, 3)`` maxima of ``|S_uu|``, ``|S_uv|``, ``|S_vv|`` of rational Bézier cells
+    ``nets`` ``(c, p + 1, q + 1, 4)`` (homogeneous) over a sample grid, from the
+    Bernstein values and derivatives ``Bu`` ``(3, p + 1, s)``, ``Bv`` ``(3, q + 1, s)``
+    (quotient rule)."""
+    c, p1, q1 = nets.shape[0], nets.shape[1], nets.shape[2]
+    su, sv = Bu.shape[2], Bv.shape[2]
+    out = np.zeros((c, 3))
+    T = np.empty((3, q1, 4))
+    A = np.empty((3, 3, 4))
+    D = np.empty((3, 3))
+    for g in range(c):
+        for s in range(su):
+            # T[a, j] = d^a/du^a of the homogeneous column j at u sample s
+            for a in range(3):
+                for j in range(q1):
+                    for k in range(4):
+                        acc = 0.0
+                        for i in range(p1):
+                            acc += Bu[a, i, s] * nets[g, i, j, k]
+                        T[a, j, k] = acc
+            for t in range(sv):
+                for a in range(3):
+                    for b in range(3 - a):
+                        for k in range(4):
+                            acc = 0.0
+                            for j in range(q1):
+                                acc += Bv[b, j, t] * T[a, j, k]
+                            A[a, b, k] = acc
+                w = A[0, 0, 3]
+                for d in range(3):
+                    S = A[0, 0, d] / w
+                    Su = (A[1, 0, d] - A[1, 0, 3] * S) / w
+                    Sv = (A[0, 1, d] - A[0, 1, 3] * S) / w
+                    D[0, d] = (A[2, 0, d] - 2 * A[1, 0, 3] * Su - A[2, 0, 3] * S) / w
+                    D[1, d] = (A[1, 1, d] - A[1, 0, 3] * Sv - A[0, 1, 3] * Su - A[1, 1, 3] * S) / w
+                    D[2, d] = (A[0, 2, d] - 2 * A[0, 1, 3] * Sv - A[0, 2, 3] * S) / w
+                for e in range(3):
+                    # summed in the order numpy's einsum uses, so the numpy path's counts are matched bit for bit
+                    x2 = (D[e, 0] * D[e, 0] + D[e, 2] * D[e, 2]) + D[e, 1] * D[e, 1]
+                    r = math.sqrt(x2)
+                    if r > out[g, e] or math.isnan(r):  # (a NaN sticks, as in numpy's max)
+                        out[g, e] = r
+    return out
+
+
+@njit(cache=True, nogil=True)
+def _homogeneous_partials(Bu, Bv, net, k, A):
+    """``A[a, b]`` ``(2, 2, 4)``: d^a/du^a d^b/dv^b of the homogeneous cell ``net``
+    ``(p + 1, q + 1, 4)`` at point ``k`` of the Bernstein tables ``Bu`` ``(2, p + 1, K)``,
+    ``Bv`` ``(2, q + 1, K)``."""
+    for a in range(2):
+        for b in range(2):
+            for c in range(4):
+                acc = 0.0
+                for i in range(net.shape[0]):
+                    for j in range(net.shape[1]):
+                        acc += Bu[a, i, k] * Bv[b, j, k] * net[i, j, c]
+                A[a, b, c] = acc
+
+
+@njit(cache=True, nogil=True)
+def _partials(A, S, Su, Sv, Suv):
+    """Cartesian ``S``, ``Su``, ``Sv``, ``Suv`` ``(3,)`` from homogeneous partials ``A``."""
+    w = A[0, 0, 3]
+    for d in range(3):
+        S[d] = A[0, 0, d] / w
+    for d in range(3):
+        Su[d] = (A[1, 0, d] - A[1, 0, 3] * S[d]) / w
+        Sv[d] = (A[0, 1, d] - A[0, 1, 3] * S[d]) / w
+    for d in range(3):
+        Suv[d] = (A[1, 1, d] - A[1, 0, 3] * Sv[d] - A[0, 1, 3] * Su[d] - A[1, 1, 3] * S[d]) / w
+
+
+@njit(cache=True, nogil=True)
+def limit_normals(nets, Bu, Bv):
+    """``(h, 3)`` unit limit normals at collapsed edges: ``Su x Suv + Suv x Sv`` of the cells
+    ``nets`` ``(h, p + 1, q + 1, 4)`` at the first ``h`` points of the Bernstein tables
+    ``Bu`` ``(2, p + 1, 2 h)``, ``Bv`` ``(2, q + 1, 2 h)`` (values, first derivatives),
+    oriented like ``Su x Sv`` at the last ``h`` points (slightly inside the cells), which
+    also stands in where the limit direction vanishes."""
+    h = nets.shape[0]
+    out = np.empty((h, 3))
+    A = np.empty((2, 2, 4))
+    S, Su, Sv, Suv = np.empty(3), np.empty(3), np.empty(3), np.empty(3)
+    alt, ref = np.empty(3), np.empty(3)
+    for k in range(h):
+        _homogeneous_partials(Bu, Bv, nets[k], k, A)
+        _partials(A, S, Su, Sv, Suv)
+        alt[0] = (Su[1] * Suv[2] - Su[2] * Suv[1]) + (Suv[1] * Sv[2] - Suv[2] * Sv[1])
+        alt[1] = (Su[2] * Suv[0] - Su[0] * Suv[2]) + (Suv[2] * Sv[0] - Suv[0] * Sv[2])
+        alt[2] = (Su[0] * Suv[1] - Su[1] * Suv[0]) + (Suv[0] * Sv[1] - Suv[1] * Sv[0])
+        _homogeneous_partials(Bu, Bv, nets[k], h + k, A)
+        _partials(A, S, Su, Sv, Suv)
+        ref[0] = Su[1] * Sv[2] - Su[2] * Sv[1]
+        ref[1] = Su[2] * Sv[0] - Su[0] * Sv[2]
+        ref[2] = Su[0] * Sv[1] - Su[1] * Sv[0]
+        if alt[0] * ref[0] + alt[1] * ref[1] + alt[2] * ref[2] < 0:
+            for d in range(3):
+                alt[d] *= -1.0
+        size = math.sqrt(alt[0] * alt[0] + alt[1] * alt[1] + alt[2] * alt[2])
+        if size <= 1e-14 * (math.sqrt(ref[0] * ref[0] + ref[1] * ref[1] + ref[2] * ref[2]) + 1e-300):
+            for d in range(3):
+                alt[d] = ref[d]
+        size = max(math.sqrt(alt[0] * alt[0] + alt[1] * alt[1] + alt[2] * alt[2]), 1e-300)
+        for d in range(3):
+            out[k, d] = alt[d] / size
+    return out
+
+
+@njit(cache=True, nogil=True)
+def gather_piece(Vp, Np, Kp, U, W, pid, Li, Lr, m, int_at, ring_at, V, N, WK, UV, VP):
+    """Copy one grid's vertex data into the mesh arrays: the interior local vertices ``Li``
+    of its ``c`` cells from row ``int_at`` on, the ring ones ``Lr`` from ``ring_at``.
+    ``Vp``, ``Np`` ``(c, per, 3)``, ``Kp`` ``(c, per)`` weak flags, ``U`` ``(c, n + 1)``,
+    ``W`` ``(c, m + 1)`` grid parameters, ``pid`` ``(c,)`` patches; ``m + 1`` columns."""
+    c = Vp.shape[0]
+    for L, at in ((Li, int_at), (Lr, ring_at)):
+        row = at
+        for g in range(c):
+            for k in range(L.size):
+                v = L[k]
+                for d in range(3):
+                    V[row, d] = Vp[g, v, d]
+                    N[row, d] = Np[g, v, d]
+                WK[row] = Kp[g, v]
+                UV[row, 0] = U[g, v // (m + 1)]
+                UV[row, 1] = W[g, v % (m + 1)]
+                VP[row] = pid[g]
+                row += 1
+
+
+@njit(cache=True, nogil=True)
+def weld_triangles(E0, FE, rep, NI, NR, T, FP):
+    """Remap the triangles ``E0`` ``(t, 3)`` (patches ``FE``) that touch a grid ring after
+    welding: ring vertex ``NI + r`` becomes ``NI + rep[r]``; triangles that collapse are
+    dropped, and so are repeats (same corners in the same cyclic order: the first is
+    kept); the ring vertices still in use are renumbered ``NI, NI + 1, ...`` in their
+    order. The survivors are written, in their order, to ``T`` ``(>= t, 3)`` and ``FP``.
+    Returns ``(count, E0 of the survivors, kept ring vertices (ascending))``; needs
+    ``(NI + NR)^3`` to fit an int64 (the dedup key)."""
+    n = E0.shape[0]
+    nv = NI + NR
+    E = np.empty((n, 3), dtype=np.int64)
+    good = np.zeros(n, dtype=np.bool_)
+    key = np.empty(n, dtype=np.int64)
+    for f in range(n):
+        for d in range(3):
+            x = E0[f, d]
+            E[f, d] = x if x < NI else NI + rep[x - NI]
+        a, b, c = E[f, 0], E[f, 1], E[f, 2]
+        if a != b and b != c and a != c:
+            good[f] = True
+            # the rotation that starts at the smallest corner has the smallest key
+            key[f] = min((a * nv + b) * nv + c, min((b * nv + c) * nv + a, (c * nv + a) * nv + b))
+    idx = np.flatnonzero(good)
+    order = idx[np.argsort(key[idx], kind="mergesort")]  # stable: equal keys by triangle order
+    for k in range(1, order.size):
+        if key[order[k]] == key[order[k - 1]]:
+            good[order[k]] = False
+    new_ring = np.full(NR, -1, dtype=np.int64)
+    count = 0
+    for f in range(n):
+        if good[f]:
+            count += 1
+            for d in range(3):
+                if E[f, d] >= NI:
+                    new_ring[E[f, d] - NI] = 0
+    kept_n = 0
+    for r in range(NR):
+        if new_ring[r] == 0:
+            new_ring[r] = NI + kept_n
+            kept_n += 1
+    kept = np.empty(kept_n, dtype=np.int64)
+    for r in range(NR):
+        if new_ring[r] >= 0:
+            kept[new_ring[r] - NI] = r
+    E0_kept = np.empty((count, 3), dtype=np.int64)
+    row = 0
+    for f in range(n):
+        if good[f]:
+            for d in range(3):
+                x = E[f, d]
+                T[row, d] = x if x < NI else new_ring[x - NI]
+                E0_kept[row, d] = E0[f, d]
+            FP[row] = FE[f]
+            row += 1
+    return count, E0_kept, kept

@@ -14,7 +14,7 @@ import functools
 
 import numpy as np
 
-from ..basis import algebra
+from ..basis import algebra, jit
 from ..basis.bernstein import all_bernstein
 
 __all__ = ["CellSet", "cells_of_patches", "edge_samples", "second_derivative_bounds"]
@@ -157,6 +157,10 @@ def _sampled_second_derivatives(nets, p, q, samples: int = 6):
     """Max of ``|S_uu|``, ``|S_uv|``, ``|S_vv|`` of rational cells on a ``samples^2`` grid."""
     Bu = _bernstein_table(p, samples, 2)  # (3, p + 1, s)
     Bv = _bernstein_table(q, samples, 2)
+    kernels = jit._load("splinekit.tessellate._kernels") if jit._enabled() else None
+    if kernels is not None:
+        M = kernels.sampled_second_derivatives(np.ascontiguousarray(nets), np.ascontiguousarray(Bu), np.ascontiguousarray(Bv))
+        return M[:, 0], M[:, 1], M[:, 2]
     # A[a, b] = d^a/du^a d^b/dv^b of the homogeneous patch: (c, s, s, 4)
     A = {}
     for a in range(3):

@@ -38,7 +38,10 @@ triangles):
 
 Small models spend most of their time in fixed per-call work rather than in
 evaluation, so the bookkeeping avoids sorts, sparse matrices and per-patch
-Python work where a cached table or one whole-array operation does.
+Python work where a cached table or one whole-array operation does; with numba,
+the weld, the triangle remap, the vertex gathering, the pole normals and the
+rational a-priori bounds run as compiled kernels (:mod:`._kernels`) that give the
+numpy path's results bit for bit.
 """
 
 from __future__ import annotations
@@ -752,6 +755,55 @@ def _clearly_positive_volume(vertices, triangles) -> bool:
     return bool(det.sum() > 1e-9 * np.abs(det).sum())
 
 
+def _gather(pieces):
+    """``(V, N, WK, UV, VP)`` vertex data of the pieces: interior vertices of every
+    piece, then ring vertices."""
+    V = np.concatenate([p.V[:, p.Li].reshape(-1, 3) for p in pieces] + [p.V[:, p.Lr].reshape(-1, 3) for p in pieces])
+    N = np.concatenate([p.N[:, p.Li].reshape(-1, 3) for p in pieces] + [p.N[:, p.Lr].reshape(-1, 3) for p in pieces])
+    WK = np.concatenate([p.weak[:, p.Li].ravel() for p in pieces] + [p.weak[:, p.Lr].ravel() for p in pieces])
+    UV = np.concatenate([p.uv(p.Li).reshape(-1, 2) for p in pieces] + [p.uv(p.Lr).reshape(-1, 2) for p in pieces])
+    VP = np.concatenate([np.repeat(p.pid, p.Li.size) for p in pieces] + [np.repeat(p.pid, p.Lr.size) for p in pieces])
+    return V, N, WK, UV, VP
+
+
+def _weld_triangles(E0, FE, rep, NI, NR, T, FP, n_in):
+    """The triangles ``E0`` (patches ``FE``) touching a grid ring remapped after welding
+    (ring vertex ``NI + r`` becomes ``NI + rep[r]``), without those that collapse or
+    repeat, the ring vertices still in use renumbered after the interior ones, written
+    into ``T``, ``FP`` from row ``n_in`` on. Returns ``(T, FP, E0, kept)``: the arrays
+    cut to size, the survivors' pre-weld corners and the kept ring vertices."""
+    full = np.concatenate([np.arange(NI), NI + rep])
+    E = full[E0]
+    good = (E[:, 0] != E[:, 1]) & (E[:, 1] != E[:, 2]) & (E[:, 0] != E[:, 2])
+    E, FE, E0 = E[good], FE[good], E0[good]
+    # drop exact duplicates (same corners in the same cyclic order) made by welding
+    if len(E):
+        nv = NI + NR
+        if nv < 2_000_000:  # one int64 key per triangle: a 1-D sort instead of a row sort
+            # the rotation that starts at the smallest corner has the smallest key
+            a, b, c = E[:, 0], E[:, 1], E[:, 2]
+            key = np.minimum(np.minimum((a * nv + b) * nv + c, (b * nv + c) * nv + a), (c * nv + a) * nv + b)
+            _, first_idx = np.unique(key, return_index=True)
+        else:
+            rot = np.argmin(E, axis=1)
+            canon = np.take_along_axis(E, (rot[:, None] + np.arange(3)) % 3, axis=1)
+            _, first_idx = np.unique(canon, axis=0, return_index=True)
+        if first_idx.size != len(E):
+            first_idx.sort()
+            E, FE, E0 = E[first_idx], FE[first_idx], E0[first_idx]
+    # keep the ring vertices still in use, renumbered after the interior ones
+    used = np.zeros(NR, dtype=bool)
+    ring_refs = E[E >= NI] - NI
+    used[ring_refs] = True
+    kept = np.flatnonzero(used)
+    new_ring = np.full(NR, -1, dtype=np.int64)
+    new_ring[kept] = NI + np.arange(kept.size)
+    E = np.where(E >= NI, new_ring[np.maximum(E - NI, 0)], E)
+    T[n_in : n_in + len(E)], FP[n_in : n_in + len(E)] = E, FE
+    T, FP = T[: n_in + len(E)], FP[: n_in + len(E)]
+    return T, FP, E0, kept
+
+
 def _assemble(grids, record, collapsed, span_of, cell_index, tol, weld_tol):
     """Concatenate the latest evaluation of every cell, weld and triangulate.
 
@@ -774,11 +826,15 @@ def _assemble(grids, record, collapsed, span_of, cell_index, tol, weld_tol):
     ring_base = NI + np.concatenate([[0], np.cumsum(n_ring)]).astype(np.int64)
     NR = int(ring_base[-1]) - NI
     # vertex data: interior vertices of every piece, then ring vertices
-    V = np.concatenate([p.V[:, p.Li].reshape(-1, 3) for p in pieces] + [p.V[:, p.Lr].reshape(-1, 3) for p in pieces])
-    N = np.concatenate([p.N[:, p.Li].reshape(-1, 3) for p in pieces] + [p.N[:, p.Lr].reshape(-1, 3) for p in pieces])
-    WK = np.concatenate([p.weak[:, p.Li].ravel() for p in pieces] + [p.weak[:, p.Lr].ravel() for p in pieces])
-    UV = np.concatenate([p.uv(p.Li).reshape(-1, 2) for p in pieces] + [p.uv(p.Lr).reshape(-1, 2) for p in pieces])
-    VP = np.concatenate([np.repeat(p.pid, p.Li.size) for p in pieces] + [np.repeat(p.pid, p.Lr.size) for p in pieces])
+    jit = _kernels()
+    if jit is not None:
+        V, N, UV = np.empty((NI + NR, 3)), np.empty((NI + NR, 3)), np.empty((NI + NR, 2))
+        WK, VP = np.empty(NI + NR, dtype=np.bool_), np.empty(NI + NR, dtype=np.int64)
+        for k, p in enumerate(pieces):
+            jit.gather_piece(p.V, p.N, p.weak, p.U, p.W, p.pid, p.Li, p.Lr, p.m, int_base[k], ring_base[k],
+                             V, N, WK, UV, VP)  # fmt: skip
+    else:
+        V, N, WK, UV, VP = _gather(pieces)
     # triangles: those touching the ring go last (only they can change); the interior
     # ones are written once, straight into the final array
     n_in = sum(p.c * len(p.tmpl_in) for p in pieces)
@@ -811,35 +867,11 @@ def _assemble(grids, record, collapsed, span_of, cell_index, tol, weld_tol):
         remap = np.arange(NR)
         remap[cand] = cand[lab]
         rep = remap[rep]
-    full = np.concatenate([np.arange(NI), NI + rep])
-    E = full[E0]
-    good = (E[:, 0] != E[:, 1]) & (E[:, 1] != E[:, 2]) & (E[:, 0] != E[:, 2])
-    E, FE, E0 = E[good], FE[good], E0[good]
-    # drop exact duplicates (same corners in the same cyclic order) made by welding
-    if len(E):
-        nv = NI + NR
-        if nv < 2_000_000:  # one int64 key per triangle: a 1-D sort instead of a row sort
-            # the rotation that starts at the smallest corner has the smallest key
-            a, b, c = E[:, 0], E[:, 1], E[:, 2]
-            key = np.minimum(np.minimum((a * nv + b) * nv + c, (b * nv + c) * nv + a), (c * nv + a) * nv + b)
-            _, first_idx = np.unique(key, return_index=True)
-        else:
-            rot = np.argmin(E, axis=1)
-            canon = np.take_along_axis(E, (rot[:, None] + np.arange(3)) % 3, axis=1)
-            _, first_idx = np.unique(canon, axis=0, return_index=True)
-        if first_idx.size != len(E):
-            first_idx.sort()
-            E, FE, E0 = E[first_idx], FE[first_idx], E0[first_idx]
-    # keep the ring vertices still in use, renumbered after the interior ones
-    used = np.zeros(NR, dtype=bool)
-    ring_refs = E[E >= NI] - NI
-    used[ring_refs] = True
-    kept = np.flatnonzero(used)
-    new_ring = np.full(NR, -1, dtype=np.int64)
-    new_ring[kept] = NI + np.arange(kept.size)
-    E = np.where(E >= NI, new_ring[np.maximum(E - NI, 0)], E)
-    T[n_in : n_in + len(E)], FP[n_in : n_in + len(E)] = E, FE
-    T, FP = T[: n_in + len(E)], FP[: n_in + len(E)]
+    if jit is not None and NI + NR < 2_000_000:
+        count, E0, kept = jit.weld_triangles(E0, FE, rep, NI, NR, T[n_in:], FP[n_in:])
+        T, FP = T[: n_in + count], FP[: n_in + count]
+    else:
+        T, FP, E0, kept = _weld_triangles(E0, FE, rep, NI, NR, T, FP, n_in)
     UV_pre = UV
     if kept.size != NR:
         # move the kept ring vertices down over the dropped ones (interior ones stay put)
@@ -879,15 +911,19 @@ class _CellIndex:
         return g, (u - box[:, 0]) / (box[:, 1] - box[:, 0]), (v - box[:, 2]) / (box[:, 3] - box[:, 2])
 
 
+def _partial_tables(s, t, p, q):
+    """Bernstein values and first derivatives ``(2, p + 1, k)``, ``(2, q + 1, k)`` at the
+    local parameters ``s``, ``t`` ``(k,)``."""
+    if p == q:  # one table for both directions (values are per point)
+        B = all_bernstein(p, np.concatenate([s, t]), 1)  # (2, p + 1, 2 k)
+        return B[..., : s.size], B[..., s.size :]
+    return all_bernstein(p, s, 1), all_bernstein(q, t, 1)
+
+
 def _cell_partials(nets, s, t, p, q):
     """``(S, Su, Sv, Suv)`` ``(k, 3)`` of Bézier cells ``nets`` ``(k, p + 1, q + 1, 4)`` at
     local parameters ``s, t`` ``(k,)`` (rational quotient rule)."""
-    if p == q:  # one table for both directions (values are per point)
-        B = all_bernstein(p, np.concatenate([s, t]), 1)  # (2, p + 1, 2 k)
-        Bu, Bv = B[..., : s.size], B[..., s.size :]
-    else:
-        Bu = all_bernstein(p, s, 1)  # (2, p + 1, k)
-        Bv = all_bernstein(q, t, 1)
+    Bu, Bv = _partial_tables(s, t, p, q)
     A = [[np.einsum("ik,jk,kijc->kc", Bu[a], Bv[b], nets) for b in range(2)] for a in range(2)]
     w = A[0][0][:, 3:]
     S = A[0][0][:, :3] / w
@@ -913,11 +949,16 @@ def _fix_weak_normals(N, weak, UV, VP, cells: _CellIndex):
     idx = np.flatnonzero(weak)
     g, s, t = cells.locate(VP[idx], UV[idx, 0], UV[idx, 1])
     sets = cells.set_of[g]
+    jit = _kernels()
     for k in np.unique(sets):
         sel = np.flatnonzero(sets == k)
         cs = cells.cellsets[k]
         nets = cs.nets[g[sel] - cells.offsets[k]]
         s_in, t_in = s[sel] + 1e-3 * (0.5 - s[sel]), t[sel] + 1e-3 * (0.5 - t[sel])
+        if jit is not None:
+            Bu, Bv = _partial_tables(np.concatenate([s[sel], s_in]), np.concatenate([t[sel], t_in]), cs.p, cs.q)
+            N[idx[sel]] = jit.limit_normals(nets, np.ascontiguousarray(Bu), np.ascontiguousarray(Bv))
+            continue
         # the points and the points slightly inside, in one evaluation
         _, Su, Sv, Suv = _cell_partials(np.concatenate([nets, nets]), np.concatenate([s[sel], s_in]),
                                         np.concatenate([t[sel], t_in]), cs.p, cs.q)  # fmt: skip
