@@ -242,8 +242,8 @@ def test_flat_box_of_six_patches():
 def test_catmull_clark_torus_limit_surface():
     cage = torus(8, 6, R=2.0, r=0.7)
     surface = sk.SubdivisionSurface(cage, "catmull-clark")
-    patches, _ = surface.to_bsplines()
-    mesh = tessellate(surface, 1e-3, relative=True)
+    patches, _ = surface.to_bsplines(0)
+    mesh = tessellate(surface, 1e-3, relative=True, levels=0)
     assert len(np.unique(mesh.face_patch)) == len(patches) == 48
     assert_closed_manifold(mesh, genus=1)
     assert mesh.max_deviation <= mesh.tolerance
@@ -688,3 +688,18 @@ def test_pole_normals_are_exact_and_equal_on_both_paths(monkeypatch):
     assert poles.size >= 2
     assert np.array_equal(a.normals[poles], b.normals[poles])
     assert np.allclose(a.normals[poles], a.vertices[poles], atol=1e-12)
+
+
+@pytest.mark.parametrize("levels", [0, 1, 2])
+def test_subdivision_surface_with_extraordinary_vertices_tessellates_closed(levels):
+    """The mug's Catmull-Clark cage (genus 1, extraordinary vertices next to
+    regular faces, a creased rim): refining only around irregular faces would
+    leave T-junctions; tessellate refines uniformly, so the mesh is closed at
+    every level and the limit surface's genus survives."""
+    import models.mug
+
+    cage, rim = models.mug.cage()
+    surface = sk.SubdivisionSurface(cage, "catmull-clark", creases=(rim, np.full(len(rim), 2.0)))
+    m = sk.tessellate(surface, 1e-3, relative=True, levels=levels)
+    assert m.max_deviation <= m.tolerance
+    assert_closed_manifold(m, genus=1)

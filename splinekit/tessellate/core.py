@@ -31,7 +31,7 @@ def _patches(obj, levels):
     if isinstance(obj, (BezierSurface, SplineSurface)):
         obj = [obj]
     elif isinstance(obj, SubdivisionSurface):
-        obj = obj.to_bsplines(levels)[0]
+        obj = _subdivision_patches(obj, levels)
     elif isinstance(obj, (str, bytes)) or not hasattr(obj, "__iter__"):
         raise ParameterError(
             "tessellate takes a curve, a surface, a list of surfaces or a SubdivisionSurface, "
@@ -49,6 +49,27 @@ def _patches(obj, levels):
     if not items:
         raise ParameterError("tessellate got an empty list of surfaces")
     return "surfaces", items
+
+
+def _subdivision_patches(surface, levels: int):
+    """B-spline patches of a Catmull-Clark limit surface, from its cage refined
+    uniformly ``levels`` times (creases, corners and their remaining sharpness
+    carried along: the same limit surface) and converted without further local
+    refinement. Every face then meets its neighbours edge to edge, so the patch
+    set has no T-junctions and tessellates watertight; ``to_bsplines(levels)``
+    refines only around irregular faces, which leaves T-junctions that patch
+    stitching cannot close."""
+    from ..mesh import PolyMesh
+    from ..subdiv.surface import SubdivisionSurface
+
+    if levels == 0:
+        return surface.to_bsplines(0)[0]
+    r = surface.refinement(levels)
+    fine = PolyMesh.from_topology(r.apply(surface.mesh.vertices), r.topology)
+    options = surface._options
+    finer = SubdivisionSurface(fine, surface.scheme, creases=r.edge_sharpness[-1], corners=r.vertex_sharpness[-1],
+                               boundary=options["boundary"], crease_method=options["crease_method"])  # fmt: skip
+    return finer.to_bsplines(0)[0]
 
 
 def _diagonal(points) -> float:
@@ -82,7 +103,10 @@ def tessellate(obj, tolerance=None, *, angle_tolerance=DEFAULT_ANGLE_TOLERANCE, 
     relative : bool
         Read ``tolerance`` as a fraction of the model size.
     levels : int
-        Refinement levels of ``SubdivisionSurface.to_bsplines`` (irregular faces only).
+        For a ``SubdivisionSurface``: how many times the cage is refined
+        uniformly before its faces become B-spline patches (regular faces
+        exactly, faces at extraordinary vertices as Coons patches whose
+        distance from the limit surface shrinks with each level). Default 2.
 
     Returns
     -------
