@@ -380,6 +380,23 @@ def _perp_second(d1: np.ndarray, d2: np.ndarray):
     return d2 - _dot(d2, T)[:, None] * T, speed
 
 
+def _regular_derivatives(curve, u, order: int, what: str, dim: int | None = None, hint: str = ""):
+    """``(u, d, unit, size)``: parameters, the derivatives ``(order + 1, n, dim)``
+    at the flattened ``u`` divided point by point by the power of two ``unit``
+    (:func:`_per_point_unit`, so products of derivatives cannot overflow), and
+    the curve's size. Raises where ``C'`` vanishes (``what`` names the
+    quantity) and, with ``dim``, for curves of another dimension."""
+    u = _params(u)
+    flat = u.ravel()
+    d = _ders(curve, flat, order)
+    if dim is not None and d.shape[-1] != dim:
+        raise ParameterError(f"{what} needs a {dim}-D curve, got dim={d.shape[-1]}{hint}")
+    size, length = _scales(curve)
+    _require_regular(_norm(d[1]) > _ZERO_DERIVATIVE * size / length, flat, what)
+    unit = _per_point_unit(d[1])
+    return u, d / unit[:, None], unit, size
+
+
 def curvature(curve, u) -> np.ndarray:
     """Curvature ``u.shape`` (>= 0, in 1 / length) of a curve of any dimension.
 
@@ -388,14 +405,7 @@ def curvature(curve, u) -> np.ndarray:
     3-D, ``|C' x C''| / |C'|**3``, without the cancellation of the Gram
     determinant. Raises :class:`DomainError` where ``C'`` vanishes.
     """
-    u = _params(u)
-    flat = u.ravel()
-    d = _ders(curve, flat, 2)
-    size, length = _scales(curve)
-    speed = _norm(d[1])
-    _require_regular(speed > _ZERO_DERIVATIVE * size / length, flat, "the curvature")
-    unit = _per_point_unit(d[1])
-    d = d / unit[:, None]
+    u, d, unit, _ = _regular_derivatives(curve, u, 2, "the curvature")
     speed = _norm(d[1])
     if d.shape[-1] == 3:
         num = _norm(_cross(d[1], d[2])) / speed
@@ -409,16 +419,7 @@ def curvature(curve, u) -> np.ndarray:
 def signed_curvature(curve, u) -> np.ndarray:
     """Signed curvature ``u.shape`` of a planar (2-D) curve: ``(x' y'' - y' x'') / |C'|**3``,
     positive where the curve turns counter-clockwise."""
-    u = _params(u)
-    flat = u.ravel()
-    d = _ders(curve, flat, 2)
-    if d.shape[-1] != 2:
-        raise ParameterError(f"signed_curvature needs a 2-D curve, got dim={d.shape[-1]} (use curvature)")
-    size, length = _scales(curve)
-    speed = _norm(d[1])
-    _require_regular(speed > _ZERO_DERIVATIVE * size / length, flat, "the curvature")
-    unit = _per_point_unit(d[1])
-    d = d / unit[:, None]
+    u, d, unit, _ = _regular_derivatives(curve, u, 2, "the signed curvature", dim=2, hint=" (use curvature)")
     speed = _norm(d[1])
     cross = d[1, :, 0] * d[2, :, 1] - d[1, :, 1] * d[2, :, 0]
     return (cross / speed**3 / unit).reshape(u.shape)
@@ -437,16 +438,7 @@ def torsion(curve, u) -> np.ndarray:
     pieces, inflections) the torsion is defined as 0. Raises
     :class:`DomainError` where ``C'`` vanishes.
     """
-    u = _params(u)
-    flat = u.ravel()
-    d = _ders(curve, flat, 3)
-    if d.shape[-1] != 3:
-        raise ParameterError(f"torsion needs a 3-D curve, got dim={d.shape[-1]}")
-    size, length = _scales(curve)
-    speed = _norm(d[1])
-    _require_regular(speed > _ZERO_DERIVATIVE * size / length, flat, "the torsion")
-    unit = _per_point_unit(d[1])
-    d = d / unit[:, None]
+    u, d, unit, size = _regular_derivatives(curve, u, 3, "the torsion", dim=3)
     straight = _straight(_perp_second(d[1], d[2])[0], d[1], d[2], size / unit)
     cross = _cross(d[1], d[2])
     c2 = _dot(cross, cross)
