@@ -402,3 +402,12 @@ def import_mesh(path, format=None):
     readers = {"stl": stl.import_stl, "obj": obj.import_obj, "ply": ply.import_ply,
                "3mf": threemf.import_3mf, "glb": gltf.import_glb}
     return readers[format_of(path, format)](path)
+
+
+def is_float(token: bytes) -> bool:
+    """Whether a text token parses as a float (to name a bad token in error messages)."""
+    try:
+        float(token)
+    except ValueError:
+        return False
+    return True

@@ -134,7 +134,7 @@ def import_obj(path):
     try:
         V = V.astype(np.float64)
     except ValueError:
-        ok = np.array([_is_float(t) for t in V.ravel().tolist()]).reshape(-1, 3).all(axis=1)  # error path only
+        ok = np.array([_meshio.is_float(t) for t in V.ravel().tolist()]).reshape(-1, 3).all(axis=1)  # error path only
         i = int(np.flatnonzero(~ok)[0])
         raise FileFormatError(
             f"{what}: vertex {i} (line {_line_number(text, b'v', i)}) has a non-numeric coordinate in {b' '.join(coords[i]).decode('latin-1')!r}"
@@ -184,9 +184,3 @@ def _partition(tokens: np.ndarray):
     return parts[:, 0], parts[:, 1], parts[:, 2]
 
 
-def _is_float(token: bytes) -> bool:
-    try:
-        float(token)
-    except ValueError:
-        return False
-    return True

@@ -163,7 +163,7 @@ class _Stream:
             try:
                 self.tokens = np.array(tokens, dtype=bytes).astype(np.float64) if tokens else np.zeros(0)
             except ValueError:
-                bad = next(i for i, t in enumerate(tokens) if not _is_float(t))
+                bad = next(i for i, t in enumerate(tokens) if not _meshio.is_float(t))
                 raise FileFormatError(f"{what}: ASCII PLY value {bad} after the header is not a number: {tokens[bad]!r}") from None
             self.size = self.tokens.size
 
@@ -310,9 +310,3 @@ def import_ply(path):
     return _meshio.build_mesh(V, idx, offsets, what)
 
 
-def _is_float(token: bytes) -> bool:
-    try:
-        float(token)
-    except ValueError:
-        return False
-    return True

@@ -160,19 +160,11 @@ def _read_ascii(data: bytes, what: str) -> np.ndarray:
     try:
         P = tokens.astype(np.float64)
     except ValueError:
-        bad = next(i for i, row in enumerate(facets) for t in row if not _is_float(t))
+        bad = next(i for i, row in enumerate(facets) for t in row if not _meshio.is_float(t))
         raise FileFormatError(
             f"{what}: ASCII STL facet {bad} has a non-numeric vertex coordinate in {b' '.join(facets[bad]).decode('latin-1')!r}"
         ) from None
     return P.reshape(-1, 3, 3)
-
-
-def _is_float(token: bytes) -> bool:
-    try:
-        float(token)
-    except ValueError:
-        return False
-    return True
 
 
 def _read_binary(data: bytes, what: str) -> np.ndarray:
