@@ -7,7 +7,7 @@ booleans import manifold3d the same way.
 
 import sys as _sys
 
-from . import errors
+from . import errors, limits
 from .basis import bernstein, design_matrix
 from .curves import BezierCurve, BSplineCurve, NurbsCurve, SplineCurve
 from .errors import SplineKitError

@@ -24,6 +24,7 @@ __all__ = [
     "NotManifoldError",
     "FileFormatError",
     "ExportError",
+    "ResourceLimitError",
 ]
 
 
@@ -102,3 +103,9 @@ class FileFormatError(SplineKitError):
 class ExportError(SplineKitError, OSError):
     """A file cannot be written (unwritable folder, a writer failure); the
     target is left untouched."""
+
+
+class ResourceLimitError(SplineKitError, MemoryError):
+    """An operation would allocate more than the memory budget
+    (:mod:`splinekit.limits`). Raised before the allocation; the message names
+    the estimate, the budget and how to raise it."""
