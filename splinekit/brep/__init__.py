@@ -1,0 +1,11 @@
+"""Boundary representation: trimmed faces, shells and solids (numpy/scipy only).
+
+A :class:`TrimmedFace` is a splinekit surface bounded by trimming loops in its ``(u, v)`` plane;
+a :class:`Shell` is faces sharing edges; a :class:`Solid` is closed shells, outer first.
+"""
+
+from .edge import Edge
+from .face import TrimmedFace
+from .shell import Shell, Solid
+
+__all__ = ["Edge", "Shell", "Solid", "TrimmedFace"]

@@ -1,0 +1,98 @@
+"""Shells (faces sharing edges) and solids (closed shells, outer first)."""
+
+from __future__ import annotations
+
+from ..errors import ParameterError
+from .face import TrimmedFace
+
+__all__ = ["Shell", "Solid"]
+
+
+class Shell:
+    """Connected trimmed faces that share edges.
+
+    Parameters
+    ----------
+    faces : list of TrimmedFace
+        The faces, oriented consistently (outward normals on a closed shell).
+    name : str, optional
+        A label (STEP product names).
+
+    Edges are paired by their ``key`` where both uses carry one; uses without a key are paired
+    geometrically (end points and mid point within the edges' tolerance).
+    """
+
+    __slots__ = ("_faces", "_name", "_cache")
+
+    def __init__(self, faces, *, name: str | None = None):
+        if isinstance(faces, TrimmedFace):
+            faces = [faces]
+        try:
+            faces = tuple(faces)
+        except TypeError:
+            raise ParameterError(f"faces must be a list of TrimmedFace, got {type(faces).__name__}") from None
+        if not faces:
+            raise ParameterError("a shell needs at least one face")
+        for i, f in enumerate(faces):
+            if not isinstance(f, TrimmedFace):
+                raise ParameterError(f"face {i} is a {type(f).__name__}, not a TrimmedFace")
+        object.__setattr__(self, "_faces", faces)
+        object.__setattr__(self, "_name", None if name is None else str(name))
+        object.__setattr__(self, "_cache", {})
+
+    def __setattr__(self, name, value):
+        raise AttributeError("Shell is immutable")
+
+    faces = property(lambda self: self._faces, doc="Tuple of TrimmedFace.")
+    name = property(lambda self: self._name, doc="Optional label.")
+
+    def __len__(self) -> int:
+        return len(self._faces)
+
+    def __repr__(self):
+        return f"Shell({len(self._faces)} faces{f', name={self._name!r}' if self._name else ''})"
+
+
+class Solid:
+    """A solid bounded by closed shells: the outer shell first, then the voids' shells.
+
+    Parameters
+    ----------
+    shells : Shell or list of Shell
+        Closed, consistently oriented shells (outward normals; a void's shell points into the void).
+    name : str, optional
+        A label (STEP product names).
+    """
+
+    __slots__ = ("_shells", "_name", "_cache")
+
+    def __init__(self, shells, *, name: str | None = None):
+        if isinstance(shells, Shell):
+            shells = [shells]
+        try:
+            shells = tuple(shells)
+        except TypeError:
+            raise ParameterError(f"shells must be a Shell or a list of Shell, got {type(shells).__name__}") from None
+        if not shells:
+            raise ParameterError("a solid needs at least one shell")
+        for i, s in enumerate(shells):
+            if not isinstance(s, Shell):
+                raise ParameterError(f"shell {i} is a {type(s).__name__}, not a Shell")
+        object.__setattr__(self, "_shells", shells)
+        object.__setattr__(self, "_name", None if name is None else str(name))
+        object.__setattr__(self, "_cache", {})
+
+    def __setattr__(self, name, value):
+        raise AttributeError("Solid is immutable")
+
+    shells = property(lambda self: self._shells, doc="Tuple of Shell, outer first.")
+    outer_shell = property(lambda self: self._shells[0], doc="The outer shell.")
+    name = property(lambda self: self._name, doc="Optional label.")
+
+    @property
+    def faces(self) -> tuple[TrimmedFace, ...]:
+        """Every face of every shell."""
+        return tuple(f for s in self._shells for f in s.faces)
+
+    def __repr__(self):
+        return f"Solid({len(self._shells)} shell(s), {len(self.faces)} faces{f', name={self._name!r}' if self._name else ''})"
