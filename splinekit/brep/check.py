@@ -33,7 +33,8 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from ..errors import BRepError, TrimError
-from .classify import OUTSIDE, _classify_uv, _face_mesh, surface_points, trim_pieces, uv_tolerance
+from .classify import OUTSIDE, _classify_uv, _face_mesh, trim_pieces, uv_tolerance
+from .topology import surface_points
 
 __all__ = ["Problem", "Checkable", "check_face", "check_shell", "check_solid", "FACE_KINDS"]
 

@@ -36,6 +36,7 @@ from scipy.spatial import Delaunay, cKDTree
 from .. import limits
 from .._validate import as_float_array
 from ..errors import ParameterError
+from .topology import surface_points
 
 __all__ = ["Location", "INSIDE", "ON", "OUTSIDE", "contains_uv", "contains", "uv_tolerance"]
 
@@ -54,14 +55,6 @@ _MAX_LEVELS = 64  # halvings of a trim piece: far below any tolerance of a unit-
 
 
 # -- faces ----------------------------------------------------------------------------------------
-def surface_points(face, uv) -> np.ndarray:
-    """The face's surface at ``uv`` ``(n, 2)`` clamped into its domain (a trim of an invalid face
-    may leave the domain; :mod:`check` reports that): ``(n, 3)``."""
-    (u0, u1), (v0, v1) = face.domain
-    uv = np.asarray(uv, dtype=np.float64)
-    return face.surface.evaluate(np.clip(uv[:, 0], u0, u1), np.clip(uv[:, 1], v0, v1))
-
-
 def uv_tolerance(face, tolerance: float | None = None) -> float:
     """The ``(u, v)`` distance that is at most ``tolerance`` (default the face's) in 3-D:
     ``tolerance / max(|Su|, |Sv|)`` over a grid of the surface's domain (cached per face)."""
