@@ -7,8 +7,12 @@ a :class:`Shell` is faces sharing edges; a :class:`Solid` is closed shells, oute
 from .edge import Edge
 from .face import TrimmedFace
 from .shell import Shell, Solid
+from .primitives import box, box_with_hole, cone, cylinder, plate_with_holes, sphere, torus
 
-__all__ = ["Edge", "Shell", "Solid", "TrimmedFace"]
+__all__ = [
+    "Edge", "Shell", "Solid", "TrimmedFace",
+    "box", "box_with_hole", "cone", "cylinder", "plate_with_holes", "sphere", "torus",
+]
 
 # Exact booleans and blends run in OpenCascade, which only splinekit.interop may import, and
 # interop sits above brep in the layer order: resolve these names on first use instead of
