@@ -116,15 +116,18 @@ class Model:
         One name per body (STEP product names).
     mesh : PolyMesh or None
         The result of models that only exist as a mesh (booleans); else None.
+    solids : list of splinekit.brep.Solid
+        Exact B-rep solids of trimmed faces (models made with exact booleans
+        and fillets); written to STEP as they are, tessellated for meshes.
     closed : bool
-        Whether every body (or the mesh) bounds a solid.
+        Whether every body (or the mesh, or every solid) bounds a solid.
     checks : dict
         ``name -> (expected, tolerance)``: reference values computed without
         OCC (closed forms, Green's theorem on profiles, Gauss-Legendre
         quadrature of the exact patches) that the measures of the sewn bodies
         (or of the mesh) must match within ``tolerance`` (absolute, in the
         quantity's unit). Names used: ``"volume"`` (mm^3, the sum over the
-        bodies, or the mesh's volume), ``"area"`` (mm^2), ``"faces"`` (face
+        bodies or solids, or the mesh's volume), ``"area"`` (mm^2), ``"faces"`` (face
         count of the sewn bodies), ``"euler_characteristic"`` (V - E + F of the
         sewn topology or of the mesh). Volume and area tolerances are 1e-6
         relative for exact bodies: compare with OCC's adaptive integration
@@ -137,6 +140,7 @@ class Model:
     bodies: list = field(default_factory=list)
     body_names: list = field(default_factory=list)
     mesh: object = None
+    solids: list = field(default_factory=list)
     closed: bool = False
     checks: dict = field(default_factory=dict)
 

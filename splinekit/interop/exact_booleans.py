@@ -92,7 +92,8 @@ def _solids(shape) -> list:
 def boolean_shape(a, b, operation: str, *, fuzzy: float | None = None, simplify: bool = True):
     """The OCC result (a ``TopoDS_Shape``, checked valid) of ``a <operation> b``.
 
-    ``a`` and ``b`` are ``TopoDS_Shape`` solids; ``operation`` is ``"fuse"``,
+    ``a`` is a ``TopoDS_Shape`` solid, ``b`` one or a list of them (the tools,
+    all applied in one run: ``cut(a, [b1, b2])`` is ``a - b1 - b2``); ``operation`` is ``"fuse"``,
     ``"cut"`` or ``"common"``. ``fuzzy`` (model units) is OCC's fuzzy value:
     sub-shapes closer than that are treated as touching. ``simplify`` merges
     faces that the operation split but that lie on one surface
@@ -102,9 +103,10 @@ def boolean_shape(a, b, operation: str, *, fuzzy: float | None = None, simplify:
     """
     BOPAlgo, TopTools = _ocp("BOPAlgo", "TopTools")
     what = f"exact {operation}"
+    tools = list(b) if isinstance(b, (list, tuple)) else [b]
     args = TopTools.TopTools_ListOfShape()
-    args.Append(a)
-    args.Append(b)
+    for shape in [a] + tools:
+        args.Append(shape)
     filler = BOPAlgo.BOPAlgo_PaveFiller()
     filler.SetArguments(args)
     filler.SetRunParallel(False)  # the machines are shared; OCC's threads do not pay on small parts
@@ -118,7 +120,8 @@ def boolean_shape(a, b, operation: str, *, fuzzy: float | None = None, simplify:
         raise BackendError(f"the {what} failed while intersecting the operands: OCC reports {_alerts(filler)}")
     bop = BOPAlgo.BOPAlgo_BOP()
     bop.AddArgument(a)
-    bop.AddTool(b)
+    for tool in tools:
+        bop.AddTool(tool)
     bop.SetOperation(getattr(BOPAlgo.BOPAlgo_Operation, _OPERATIONS[operation]))
     bop.SetRunParallel(False)
     try:
@@ -170,10 +173,17 @@ def _exact(a, b, operation: str, fuzzy, simplify, pieces):
 
         fuzzy = as_positive(fuzzy, "fuzzy")
     sa = occ_solid(a, f"the first operand of the exact {operation}")
-    sb = occ_solid(b, f"the second operand of the exact {operation}")
-    for shape, which in ((sa, "first"), (sb, "second")):
+    if not _solids(sa):
+        raise ParameterError(f"the first operand of the exact {operation} holds no solid")
+    if isinstance(b, (list, tuple)):
+        if not b:
+            raise ParameterError(f"the second operand of the exact {operation} is an empty list of solids")
+        sb = [occ_solid(t, f"solid {i} of the second operand of the exact {operation}") for i, t in enumerate(b)]
+    else:
+        sb = [occ_solid(b, f"the second operand of the exact {operation}")]
+    for i, shape in enumerate(sb):
         if not _solids(shape):
-            raise ParameterError(f"the {which} operand of the exact {operation} holds no solid")
+            raise ParameterError(f"the second operand of the exact {operation} (solid {i}) holds no solid")
     result = boolean_shape(sa, sb, operation, fuzzy=fuzzy, simplify=bool(simplify))
     return _result_solids(result, f"exact {operation}", bool(pieces))
 
@@ -183,8 +193,12 @@ def fuse(a, b, *, fuzzy=None, simplify=True, pieces=False):
 
     Parameters
     ----------
-    a, b : Solid (or an OCC / build123d / cadquery solid)
-        Closed, valid solids in one length unit.
+    a : Solid (or an OCC / build123d / cadquery solid)
+        A closed, valid solid.
+    b : Solid, or a list of Solids
+        The other operand(s), in the same length unit; a list is applied in one
+        OCC run (``fuse(a, [b1, b2])`` is ``a ∪ b1 ∪ b2``, ``cut(a, [b1, b2])``
+        is ``a \\ b1 \\ b2``, ``common(a, [b1, b2])`` is ``a ∩ (b1 ∪ b2)``).
     fuzzy : float, optional
         OCC's fuzzy value (length units): faces closer than this count as touching.
     simplify : bool
