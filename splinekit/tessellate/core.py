@@ -18,12 +18,39 @@ DEFAULT_ANGLE_TOLERANCE = 0.5
 triangle edge (tangents of a polyline segment); OpenCascade's BRepMesh default."""
 
 
+def _brep_faces(obj):
+    """The trimmed faces of a TrimmedFace, Shell, Solid or a list of them, or None when ``obj``
+    is none of these."""
+    from ..brep import Shell, Solid, TrimmedFace
+
+    kinds = (TrimmedFace, Shell, Solid)
+    if isinstance(obj, kinds):
+        obj = [obj]
+    elif isinstance(obj, (str, bytes)) or not isinstance(obj, (list, tuple)) or not obj:
+        return None
+    if not any(isinstance(o, kinds) for o in obj):
+        return None
+    faces = []
+    for i, o in enumerate(obj):
+        if isinstance(o, TrimmedFace):
+            faces.append(o)
+        elif isinstance(o, (Shell, Solid)):
+            faces.extend(o.faces)
+        else:
+            raise ParameterError(f"item {i} is a {type(o).__name__}; a list to tessellate holds TrimmedFace, Shell and Solid objects, or surfaces, not both")
+    return faces
+
+
 def _patches(obj, levels):
-    """``(kind, items)``: ``("curve", curve)`` or ``("surfaces", [SplineSurface, ...])``."""
+    """``(kind, items)``: ``("curve", curve)``, ``("faces", [TrimmedFace, ...])`` or
+    ``("surfaces", [SplineSurface, ...])``."""
     from ..curves import BezierCurve, SplineCurve
     from ..subdiv.surface import SubdivisionSurface
     from ..surfaces import BezierSurface, SplineSurface
 
+    faces = _brep_faces(obj)
+    if faces is not None:
+        return "faces", faces
     if isinstance(obj, BezierCurve):
         return "curve", obj.to_bspline()
     if isinstance(obj, SplineCurve):
@@ -146,6 +173,8 @@ def tessellate(obj, tolerance=None, *, angle_tolerance=DEFAULT_ANGLE_TOLERANCE, 
     kind, item = _patches(obj, levels)
     if kind == "curve":
         size = _diagonal(np.asarray(item.control_points))
+    elif kind == "faces":
+        size = _diagonal(np.concatenate([np.asarray(f.surface.control_points).reshape(-1, 3) for f in item]))
     else:
         size = _diagonal(np.concatenate([np.asarray(s.control_points).reshape(-1, 3) for s in item]))
     if not np.isfinite(size):
@@ -162,6 +191,10 @@ def tessellate(obj, tolerance=None, *, angle_tolerance=DEFAULT_ANGLE_TOLERANCE, 
         from .curves import tessellate_curve
 
         return tessellate_curve(item, tol, angle_tolerance)
+    if kind == "faces":
+        from .trimmed import tessellate_faces
+
+        return tessellate_faces(item, tol, angle_tolerance, size)
     from .surfaces import tessellate_patches
 
     return tessellate_patches(item, tol, angle_tolerance, size)

@@ -1,0 +1,401 @@
+"""Watertight tessellation of trimmed faces, shells and solids.
+
+Design (whole-array work; Python loops run over faces, edges and refinement rounds, never over
+points or triangles):
+
+1. Interior grid. Each face's surface is cut into Bézier cells (:mod:`.cells`); the same a-priori
+   bounds on the second derivatives that size the untrimmed patch grids give each cell its
+   ``nu x nv`` steps, and a knot span row (column) takes the largest count of its cells: one
+   tensor grid of parameters per face.
+2. Scaled parameter plane. Each face is triangulated in ``(u, v)`` scaled by
+   ``(steps in u / range of u, steps in v / range of v)``: there the grid's step is about one in
+   both directions, i.e. lengths measure the local chordal error, so Delaunay triangles that are
+   well shaped in this plane are the ones that spend the fewest triangles on the tolerance
+   (a cylinder's long, thin triangles along its rulings; square ones on a sphere).
+3. Edges (:mod:`.edges`): every edge is sampled once in 3-D, to the tolerance, and every face
+   that uses it gets the ``(u, v)`` images of the same points, so the mesh is watertight by
+   construction: shared vertices are shared indices, not welded copies. Loop corners are the
+   edge end points, welded once.
+4. Constrained Delaunay triangulation of every face at once (Shewchuk's Triangle, through the
+   ``triangle`` package): the faces' scaled planes are laid side by side, the trims are the
+   segments, grid points within half a step of a trim are dropped (no slivers). Triangles are
+   kept or dropped by region: a triangle whose edge runs along a trim in the trim's direction
+   lies on the material side (loops keep the material on their left), and the label spreads
+   over the triangles connected without crossing a trim (one sparse connected-components pass).
+5. Measure and refine: the deviation is measured at every triangle's centre and every edge's
+   midpoint (the surface at the barycentric ``(u, v)`` against the flat triangle's point); the
+   midpoints of interior edges over the tolerance (and the centres of triangles over it whose
+   edges are fine) are added to the point set and the faces triangulated again, for a few rounds.
+6. Orientation: triangles run counter-clockwise in ``(u, v)``, so their normals follow
+   ``Su x Sv``; a reversed face's triangles are flipped. Triangles that collapse in 3-D (two
+   corners on one pole) are dropped.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..errors import ParameterError
+from .cells import cells_of_patches
+from .edges import _face_name, group_uses, sample_groups
+from .result import Tessellation
+
+__all__ = ["tessellate_faces"]
+
+MAX_ROUNDS = 8
+"""Largest number of measure-and-refine rounds."""
+MAX_TRIANGLES = 50_000_000
+"""Largest mesh built; a smaller tolerance raises ParameterError."""
+GRID_FRACTION = 0.75
+"""The a-priori grid steps are bounds over whole cells; the interior grid starts at this
+fraction of them and the measured refinement adds points where the bound was needed."""
+CLEARANCE = 0.5
+"""Grid points closer than this (in scaled grid steps) to a trim are dropped."""
+WELD = 1e-8
+"""Weld distance of edge end points, relative to the model's bounding-box diagonal (or the
+edges' own tolerances where larger)."""
+
+
+def _triangulator():
+    try:
+        import triangle
+    except ImportError as exc:  # pragma: no cover - a core dependency
+        from ..errors import BackendError
+
+        raise BackendError("tessellating trimmed faces needs the 'triangle' package: pip install triangle") from exc
+    return triangle
+
+
+class _FaceGrid:
+    """A face's interior parameter grid ``us`` x ``vs`` and its scale (steps per parameter unit)."""
+
+    __slots__ = ("us", "vs", "scale")
+
+
+def _face_grid(surface, tol, angle_tol):
+    from .surfaces import _initial_counts, _span_params
+
+    cellsets = cells_of_patches([surface])
+    nu, nv = _initial_counts(cellsets, tol, angle_tol)
+    box = np.concatenate([cs.box for cs in cellsets])
+    span = np.concatenate([cs.span for cs in cellsets])
+    # cells of the one patch are in (iu, iv) order, iu major (one degree pair: one cell set)
+    nsv = int(span[:, 1].max()) + 1
+    shape = (len(box) // nsv, nsv)
+    cu = np.maximum(np.ceil(nu.reshape(shape).max(axis=1) * GRID_FRACTION), 1)
+    cv = np.maximum(np.ceil(nv.reshape(shape).max(axis=0) * GRID_FRACTION), 1)
+    bu = np.append(box[:: shape[1], 0], box[-1, 1])
+    bv = np.append(box[: shape[1], 2], box[-1, 3])
+    g = _FaceGrid()
+    g.us, _ = _span_params(bu, cu.astype(np.int64))
+    g.vs, _ = _span_params(bv, cv.astype(np.int64))
+    g.scale = np.array([cu.sum() / (bu[-1] - bu[0]), cv.sum() / (bv[-1] - bv[0])])
+    return g
+
+
+class _Points:
+    """The growing point set of the triangulation: per point its face, ``(u, v)``, 3-D position
+    and mesh vertex (boundary points of several faces share a mesh vertex)."""
+
+    def __init__(self):
+        self.face, self.uv, self.xyz, self.vid = [], [], [], []
+
+    def add(self, face, uv, xyz, vid):
+        self.face.append(np.broadcast_to(np.asarray(face, dtype=np.int64), (len(uv),)))
+        self.uv.append(np.asarray(uv, dtype=np.float64).reshape(-1, 2))
+        self.xyz.append(np.asarray(xyz, dtype=np.float64).reshape(-1, 3))
+        self.vid.append(np.asarray(vid, dtype=np.int64).reshape(-1))
+
+    def arrays(self):
+        return (np.concatenate(self.face), np.concatenate(self.uv), np.concatenate(self.xyz), np.concatenate(self.vid))
+
+
+def _evaluate(faces, fidx, uv):
+    """``(k, 3)`` surface points of ``(u, v)`` ``(k, 2)`` on faces ``fidx`` ``(k,)`` (one
+    evaluation per face)."""
+    out = np.empty((len(uv), 3))
+    if len(uv) == 0:
+        return out
+    order = np.argsort(fidx, kind="stable")
+    fs = fidx[order]
+    cuts = np.flatnonzero(np.diff(fs)) + 1
+    for part in np.split(order, cuts):
+        s = faces[int(fidx[part[0]])].surface
+        out[part] = s.evaluate(uv[part, 0], uv[part, 1])
+    return out
+
+
+
+def _loops(faces, uses, groups, samples, vid_of_group):
+    """Per face, its loops as ``(uv (k, 2), xyz (k, 3), vid (k,))`` closed polygons (last point
+    not repeated), checked: closed in 3-D and in ``(u, v)``, inside the surface's domain, the
+    outer loop counter-clockwise and the inner loops clockwise."""
+    group_of = np.empty(len(uses), dtype=np.int64)
+    for g, group in enumerate(groups):
+        group_of[group] = g
+    out = [[] for _ in faces]
+    k = 0
+    for f, face in enumerate(faces):
+        name = _face_name(face, f)
+        (u0, u1), (v0, v1) = face.domain
+        span = np.array([u1 - u0, v1 - v0])
+        for l, loop in enumerate(face.boundary_loops()):
+            uvs, xyzs, vids = [], [], []
+            for _ in loop:
+                g = group_of[k]
+                smp = samples[g]
+                uv, vid = smp.uv[k], vid_of_group[g]
+                xyz = np.broadcast_to(smp.points[:1], (len(uv), 3)) if smp.degenerate else smp.points
+                s = smp.params[k]
+                if s[-1] < s[0]:  # this use runs against the group's samples
+                    uv, vid, xyz = uv[::-1], vid[::-1], xyz[::-1]
+                uvs.append(uv)
+                xyzs.append(xyz)
+                vids.append(vid)
+                k += 1
+            # closure: each edge must end where the next one starts, in 3-D and in (u, v)
+            for j in range(len(uvs)):
+                nxt = (j + 1) % len(uvs)
+                if vids[j][-1] != vids[nxt][0]:
+                    gap = float(np.linalg.norm(xyzs[j][-1] - xyzs[nxt][0]))
+                    raise ParameterError(f"{name}: loop {l} is not closed: edge {j} ends {gap:.3g} away from where edge {nxt} starts")
+                if (np.abs(uvs[j][-1] - uvs[nxt][0]) > 1e-6 * span).any():
+                    raise ParameterError(
+                        f"{name}: loop {l} is not closed in (u, v): edge {j} ends at {uvs[j][-1].tolist()}, "
+                        f"edge {nxt} starts at {uvs[nxt][0].tolist()}")
+            uv = np.concatenate([x[:-1] for x in uvs])
+            xyz = np.concatenate([x[:-1] for x in xyzs])
+            vid = np.concatenate([x[:-1] for x in vids])
+            lo, hi = uv.min(axis=0), uv.max(axis=0)
+            margin = 1e-7 * span
+            if (lo < np.array([u0, v0]) - margin).any() or (hi > np.array([u1, v1]) + margin).any():
+                raise ParameterError(
+                    f"{name}: loop {l} leaves the surface's domain [{u0:g}, {u1:g}] x [{v0:g}, {v1:g}] "
+                    f"(it spans [{lo[0]:g}, {hi[0]:g}] x [{lo[1]:g}, {hi[1]:g}])")
+            if len(uv) < 2 + (len(uvs) == 1):
+                raise ParameterError(f"{name}: loop {l} encloses no area")
+            area = 0.5 * np.sum(uv[:, 0] * np.roll(uv[:, 1], -1) - np.roll(uv[:, 0], -1) * uv[:, 1])
+            if (area <= 0) if l == 0 else (area >= 0):
+                want = "counter-clockwise (outer loop)" if l == 0 else "clockwise (inner loop)"
+                raise ParameterError(f"{name}: loop {l} faces the wrong way: it must run {want} in (u, v), material on its left")
+            out[f].append((uv, xyz, vid))
+    return out
+
+
+def _edge_vertices(samples, size, tolerance):
+    """Mesh vertices of the edge samples: end points welded (within the weld distance), inner
+    samples numbered after them. Returns ``(vid_of_group, xyz (n, 3))``."""
+    from .surfaces import _close_pairs, _components
+
+    ends = np.concatenate([[s.points[0], s.points[-1]] for s in samples]) if samples else np.zeros((0, 3))
+    pairs = _close_pairs(ends, max(WELD * size, 10.0 * tolerance))
+    lab = _components(len(ends), pairs[:, 0], pairs[:, 1]) if len(pairs) else np.arange(len(ends))
+    first, end_vid = np.unique(lab, return_index=True, return_inverse=True)[1:]
+    end_vid = end_vid.reshape(-1, 2)
+    xyz = [ends[first]]
+    n = len(first)
+    vid_of_group = []
+    for g, s in enumerate(samples):
+        if s.degenerate:
+            m = len(next(iter(s.uv.values())))
+            vid_of_group.append(np.full(m, end_vid[g, 0]))
+            continue
+        m = len(s.points)
+        vid_of_group.append(np.concatenate([[end_vid[g, 0]], np.arange(n, n + m - 2), [end_vid[g, 1]]]))
+        xyz.append(s.points[1:-1])
+        n += m - 2
+    return vid_of_group, np.concatenate(xyz)
+
+
+def _grid_points(grids, layout, dense):
+    """Interior grid points of every face (scaled, laid out) at least :data:`CLEARANCE` from the
+    trims (``dense``: the trims' polylines densified, scaled, laid out). Returns ``(face, uv)``."""
+    from scipy.spatial import cKDTree
+
+    fs, uvs = [], []
+    for f, g in enumerate(grids):
+        lo, hi = layout.lo[f], layout.hi[f]
+        margin = CLEARANCE / g.scale
+        us = g.us[(g.us > lo[0] + margin[0]) & (g.us < hi[0] - margin[0])]
+        vs = g.vs[(g.vs > lo[1] + margin[1]) & (g.vs < hi[1] - margin[1])]
+        if us.size and vs.size:
+            U, V = np.meshgrid(us, vs, indexing="ij")
+            uvs.append(np.column_stack([U.ravel(), V.ravel()]))
+            fs.append(np.full(U.size, f))
+    if not uvs:
+        return np.zeros(0, dtype=np.int64), np.zeros((0, 2))
+    fidx, uv = np.concatenate(fs), np.concatenate(uvs)
+    d, _ = cKDTree(dense).query(layout.place(fidx, uv), distance_upper_bound=CLEARANCE)
+    keep = ~np.isfinite(d)
+    return fidx[keep], uv[keep]
+
+
+class _Layout:
+    """The faces' scaled parameter planes side by side: face ``f``'s point ``uv`` sits at
+    ``(uv - lo[f]) * scale[f] + (x0[f], 0)``."""
+
+    GAP = 4.0
+
+    def __init__(self, loops, scales):
+        self.scale = scales
+        self.lo = np.stack([lp[0][0].min(axis=0) for lp in loops])
+        self.hi = np.stack([lp[0][0].max(axis=0) for lp in loops])
+        width = (self.hi[:, 0] - self.lo[:, 0]) * scales[:, 0]
+        self.x0 = np.concatenate([[0.0], np.cumsum(width + self.GAP)[:-1]])
+
+    def place(self, fidx, uv):
+        out = (uv - self.lo[fidx]) * self.scale[fidx]
+        out[:, 0] += self.x0[fidx]
+        return out
+
+
+def _densify(P, segs, step):
+    """Points every ``step`` or closer along the segments ``P[segs]``."""
+    a, b = P[segs[:, 0]], P[segs[:, 1]]
+    n = np.maximum(np.ceil(np.linalg.norm(b - a, axis=1) / step), 1).astype(np.int64)
+    seg = np.repeat(np.arange(len(segs)), n)
+    frac = (np.arange(n.sum()) - np.repeat(np.cumsum(n) - n, n)) / n[seg]
+    return a[seg] + (b - a)[seg] * frac[:, None]
+
+
+def _keep_inside(T, segkey, nP):
+    """Which triangles ``T`` ``(t, 3)`` (counter-clockwise) lie on the material side of the
+    directed segments (``segkey``: sorted ``a * nP + b``): a triangle with an edge running along
+    a segment lies to its left, inside; one running against it lies outside; the label spreads
+    over triangles connected across non-segment edges. Returns ``(keep (t,) bool, conflict)``:
+    ``conflict`` is a triangle whose region is both inside and outside (loops that overlap or
+    nest wrongly), or -1."""
+    from .surfaces import _components
+
+    a = T.ravel()
+    b = T[:, [1, 2, 0]].ravel()
+    fwd = np.isin(a * nP + b, segkey)
+    rev = np.isin(b * nP + a, segkey)
+    und = np.minimum(a, b) * nP + np.maximum(a, b)
+    order = np.argsort(und, kind="stable")
+    su = und[order]
+    twin = np.flatnonzero(su[1:] == su[:-1])
+    h0, h1 = order[twin], order[twin + 1]
+    link = ~(fwd[h0] | rev[h0])
+    lab = _components(len(T), h0[link] // 3, h1[link] // 3)
+    inside = np.zeros(len(T), dtype=bool)
+    outside = np.zeros(len(T), dtype=bool)
+    inside[lab[np.flatnonzero(fwd) // 3]] = True
+    outside[lab[np.flatnonzero(rev) // 3]] = True
+    both = np.flatnonzero(inside & outside)
+    return inside[lab], (int(np.flatnonzero(np.isin(lab, both))[0]) if both.size else -1)
+
+
+def tessellate_faces(faces, tol: float, angle_tol, size: float) -> Tessellation:
+    """Tessellate :class:`~splinekit.brep.TrimmedFace` objects as one watertight mesh (see
+    :func:`splinekit.tessellate.tessellate`). ``tol``: absolute chordal tolerance;
+    ``angle_tol``: radians or None; ``size``: model size (bounding-box diagonal)."""
+    triangle = _triangulator()
+    grids = [_face_grid(face.surface, tol, angle_tol) for face in faces]
+    scales = np.stack([g.scale for g in grids])
+    edge_tol = max((e.tolerance for face in faces for e in face.edges), default=0.0)
+    uses, groups = group_uses(faces, max(WELD * size, 2.0 * edge_tol))
+    samples = sample_groups(uses, groups, scales, tol, angle_tol)
+    vid_of_group, edge_xyz = _edge_vertices(samples, size, edge_tol)
+    loops = _loops(faces, uses, groups, samples, vid_of_group)
+    layout = _Layout(loops, scales)
+
+    # boundary points and segments (each loop closed on itself)
+    pts = _Points()
+    segs = []
+    n = 0
+    for f, face_loops in enumerate(loops):
+        for uv, xyz, vid in face_loops:
+            k = len(uv)
+            idx = np.arange(n, n + k)
+            segs.append(np.column_stack([idx, np.roll(idx, -1)]))
+            pts.add(f, uv, xyz, vid)
+            n += k
+    segs = np.concatenate(segs)
+    pface, puv, pxyz, pvid = pts.arrays()
+    nb = len(pface)
+    dense = _densify(layout.place(pface, puv), segs, 0.5 * CLEARANCE)
+    gf, guv = _grid_points(grids, layout, dense)
+    n_vid = len(edge_xyz)
+    pface = np.concatenate([pface, gf])
+    puv = np.concatenate([puv, guv])
+    pxyz = np.concatenate([pxyz, _evaluate(faces, gf, guv)])
+    pvid = np.concatenate([pvid, np.arange(n_vid, n_vid + len(gf))])
+    n_vid += len(gf)
+
+    max_dev = 0.0
+    for round_ in range(MAX_ROUNDS):
+        nP = len(pface)
+        if 2 * nP > MAX_TRIANGLES:
+            raise ParameterError(f"tolerance {tol:.3g} needs more than {MAX_TRIANGLES:,} triangles; use a larger tolerance")
+        P = layout.place(pface, puv)
+        r = triangle.triangulate({"vertices": P, "segments": segs}, "pQ")
+        if len(r["vertices"]) != nP:  # Triangle split crossing segments at new points
+            x = r["vertices"][nP, 0]
+            f = int(np.searchsorted(layout.x0, x, side="right") - 1)
+            raise ParameterError(f"{_face_name(faces[f], f)}: its trimming loops cross each other (or themselves)")
+        T = np.asarray(r["triangles"], dtype=np.int64)
+        T = T[(pface[T[:, 0]] == pface[T[:, 1]]) & (pface[T[:, 0]] == pface[T[:, 2]])]
+        keep, conflict = _keep_inside(T, np.sort(segs[:, 0] * nP + segs[:, 1]), nP)
+        if conflict >= 0:
+            f = int(pface[T[conflict, 0]])
+            raise ParameterError(f"{_face_name(faces[f], f)}: its trimming loops overlap or nest wrongly (a hole outside the outer loop?)")
+        T = T[keep]
+        V = pvid[T]
+        T = T[(V[:, 0] != V[:, 1]) & (V[:, 1] != V[:, 2]) & (V[:, 2] != V[:, 0])]  # collapsed at a pole
+        # measure: triangle centres and edge midpoints (each edge once)
+        a, b = T.ravel(), T[:, [1, 2, 0]].ravel()
+        und = np.minimum(a, b) * nP + np.maximum(a, b)
+        ukey, first, inv = np.unique(und, return_index=True, return_inverse=True)
+        ea, eb = a[first], b[first]
+        is_seg = np.isin(ukey, np.sort(np.minimum(segs[:, 0], segs[:, 1]) * nP + np.maximum(segs[:, 0], segs[:, 1])))
+        fid = np.concatenate([pface[ea], pface[T[:, 0]]])
+        uv = np.concatenate([0.5 * (puv[ea] + puv[eb]), puv[T].mean(axis=1)])
+        flat = np.concatenate([0.5 * (pxyz[ea] + pxyz[eb]), pxyz[T].mean(axis=1)])
+        exact = _evaluate(faces, fid, uv)
+        dev = np.linalg.norm(exact - flat, axis=1)
+        max_dev = float(dev.max()) if dev.size else 0.0
+        ne = len(ukey)
+        bad_edge = (dev[:ne] > tol) & ~is_seg
+        bad_tri = (dev[ne:] > tol) & ~bad_edge[inv.reshape(-1, 3)].any(axis=1)
+        new = np.concatenate([np.flatnonzero(bad_edge), ne + np.flatnonzero(bad_tri)])
+        if new.size == 0 or round_ == MAX_ROUNDS - 1:
+            break
+        pface = np.concatenate([pface, fid[new]])
+        puv = np.concatenate([puv, uv[new]])
+        pxyz = np.concatenate([pxyz, exact[new]])
+        pvid = np.concatenate([pvid, np.arange(n_vid, n_vid + new.size)])
+        n_vid += new.size
+    return _assemble(faces, T, pface, puv, pxyz, pvid, n_vid, max_dev, tol)
+
+
+def _assemble(faces, T, pface, puv, pxyz, pvid, n_vid, max_dev, tol):
+    """The :class:`Tessellation` of the final triangles ``T`` (point indices)."""
+    flip = np.array([face.reversed for face in faces])[pface[T[:, 0]]]
+    T = np.where(flip[:, None], T[:, [0, 2, 1]], T)
+    used = np.zeros(n_vid, dtype=bool)
+    used[pvid[T]] = True
+    new_id = np.cumsum(used) - 1
+    tri = new_id[pvid[T]]
+    # one representative point per vertex (its face, (u, v) and position)
+    rep = np.full(n_vid, -1, dtype=np.int64)
+    rep[pvid[::-1]] = np.arange(len(pvid))[::-1]
+    rep = rep[used]
+    V = pxyz[rep]
+    UV = puv[rep]
+    VP = pface[rep]
+    N = np.empty_like(V)
+    order = np.argsort(VP, kind="stable")
+    for part in np.split(order, np.flatnonzero(np.diff(VP[order])) + 1):
+        if part.size:
+            N[part] = faces[int(VP[part[0]])].normals(UV[part, 0], UV[part, 1])
+    weak = np.linalg.norm(N, axis=1) < 0.5
+    if weak.any():  # collapsed points (poles): the mean of the adjacent triangles' normals
+        X = V[tri]
+        fn = np.cross(X[:, 1] - X[:, 0], X[:, 2] - X[:, 0])
+        acc = np.zeros_like(V)
+        for k in range(3):
+            np.add.at(acc, tri[:, k], fn)
+        length = np.linalg.norm(acc, axis=1, keepdims=True)
+        N[weak] = (acc / np.where(length > 0, length, 1.0))[weak]
+    return Tessellation._build(V, tri, N, UV, VP, pface[T[:, 0]], puv[T], max_dev, tol)
