@@ -4,11 +4,12 @@ from __future__ import annotations
 
 from ..errors import ParameterError
 from .face import TrimmedFace
+from .topology import TopologyQueries, shell_topology
 
 __all__ = ["Shell", "Solid"]
 
 
-class Shell:
+class Shell(TopologyQueries):
     """Connected trimmed faces that share edges.
 
     Parameters
@@ -76,11 +77,21 @@ class Shell:
         from .mass import mass_properties
         return mass_properties(self, tol)
 
+    def _topologies(self):
+        if "topology" not in self._cache:
+            self._cache["topology"] = shell_topology(self._faces)
+        return (self._cache["topology"],)
+
+    @property
+    def edges(self) -> tuple:
+        """The shell's edges as :class:`~splinekit.brep.topology.EdgeGroup` (the uses that are one edge)."""
+        return self.topology.edges
+
     def __repr__(self):
         return f"Shell({len(self._faces)} faces{f', name={self._name!r}' if self._name else ''})"
 
 
-class Solid:
+class Solid(TopologyQueries):
     """A solid bounded by closed shells: the outer shell first, then the voids' shells.
 
     Parameters
@@ -147,6 +158,21 @@ class Solid:
         (:class:`splinekit.brep.mass.MassProperties`)."""
         from .mass import mass_properties
         return mass_properties(self, tol)
+
+    def _topologies(self):
+        return tuple(s.topology for s in self._shells)
+
+    def contains(self, points, tolerance: float | None = None):
+        """Classify ``(n, 3)`` points: ``int8`` codes ``1`` inside, ``0`` on the boundary (within
+        ``tolerance``), ``-1`` outside (:func:`splinekit.brep.classify.contains`)."""
+        from .classify import contains
+
+        return contains(self, points, tolerance)
+
+    @property
+    def edges(self) -> tuple:
+        """Every shell's edges (:class:`~splinekit.brep.topology.EdgeGroup`, face indices per shell)."""
+        return tuple(g for s in self._shells for g in s.edges)
 
     def __repr__(self):
         return f"Solid({len(self._shells)} shell(s), {len(self.faces)} faces{f', name={self._name!r}' if self._name else ''})"
