@@ -36,6 +36,7 @@ from scipy.spatial import Delaunay, cKDTree
 from .. import limits
 from .._validate import as_float_array
 from ..errors import ParameterError
+from .topology import surface_points
 
 __all__ = ["Location", "INSIDE", "ON", "OUTSIDE", "contains_uv", "contains", "uv_tolerance"]
 
@@ -69,27 +70,29 @@ def uv_tolerance(face, tolerance: float | None = None) -> float:
     return tol / face._cache["speed"]
 
 
-def trim_pieces(face) -> dict:
-    """The face's trims as homogeneous Bézier pieces grouped by degree: ``{p: (m, p + 1, 3)}``
-    with rows ``(w u, w v, w)``. Each loop is closed exactly: an edge's first point is moved onto
-    the previous edge's last (gaps beyond tolerance are :mod:`check`'s business). Cached."""
-    if "trim_pieces" in face._cache:
-        return face._cache["trim_pieces"]
+def trim_pieces(face, loop: int | None = None) -> dict:
+    """The face's trims (or loop ``loop`` alone) as homogeneous Bézier pieces grouped by degree:
+    ``{p: (m, p + 1, 3)}`` with rows ``(w u, w v, w)``. Each loop is closed exactly: an edge's
+    first point is moved onto the previous edge's last (gaps beyond tolerance are
+    :mod:`check`'s business). Cached on the face."""
+    key = ("trim_pieces", loop)
+    if key in face._cache:
+        return face._cache[key]
+    loops = face.boundary_loops()
     groups: dict[int, list] = {}
-    for loop in face.boundary_loops():
-        prev_end = loop[-1].end_uv
-        for edge in loop:
+    for lp in (loops if loop is None else [loops[loop]]):
+        prev_end = lp[-1].end_uv
+        for edge in lp:
             pieces = edge.pcurve.to_bezier()
             for k, b in enumerate(pieces):
                 P = np.array(b.control_points, dtype=np.float64)
                 w = np.ones(len(P)) if b.weights is None else np.array(b.weights, dtype=np.float64)
                 if k == 0:
                     P[0] = prev_end
-                H = np.concatenate([P * w[:, None], w[:, None]], axis=1)
-                groups.setdefault(b.degree, []).append(H)
+                groups.setdefault(b.degree, []).append(np.concatenate([P * w[:, None], w[:, None]], axis=1))
             prev_end = pieces[-1].control_points[-1]
     out = {p: np.array(hs) for p, hs in groups.items()}
-    face._cache["trim_pieces"] = out
+    face._cache[key] = out
     return out
 
 
@@ -257,14 +260,14 @@ def _face_mesh(face, per_span: int = 8):
     tri = np.where(ccw[:, None], tri, tri[:, [0, 2, 1]])
     if face.reversed:
         tri = tri[:, [0, 2, 1]]
-    P = s.evaluate(pts2[:, 0], pts2[:, 1])
+    P = surface_points(face, pts2)
     # deviation: the surface at the (u, v) mid points of triangle edges against the 3-D chords'
     # mid points, and the trims' mid points against their chords
     e = np.concatenate([tri[:, [0, 1]], tri[:, [1, 2]], tri[:, [2, 0]]])
     mid_uv = 0.5 * (pts2[e[:, 0]] + pts2[e[:, 1]])
-    dev = np.linalg.norm(s.evaluate(mid_uv[:, 0], mid_uv[:, 1]) - 0.5 * (P[e[:, 0]] + P[e[:, 1]]), axis=1)
+    dev = np.linalg.norm(surface_points(face, mid_uv) - 0.5 * (P[e[:, 0]] + P[e[:, 1]]), axis=1)
     a2, b2, m2 = (np.concatenate(x) for x in zip(*trim_mid))
-    S = [s.evaluate(x[:, 0], x[:, 1]) for x in (a2, b2, m2)]
+    S = [surface_points(face, x) for x in (a2, b2, m2)]
     dev_trim = np.linalg.norm(S[2] - 0.5 * (S[0] + S[1]), axis=1)
     out = (P, tri, float(max(dev.max(initial=0.0), dev_trim.max(initial=0.0))))
     face._cache["mesh"] = out

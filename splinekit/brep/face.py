@@ -9,6 +9,7 @@ from ..errors import ParameterError
 from ..surfaces import BezierSurface, SplineSurface
 from .._validate import as_positive
 from .edge import DEFAULT_TOLERANCE, Edge
+from .check import Checkable, check_face
 from .topology import TopologyQueries, shell_topology
 
 __all__ = ["TrimmedFace", "as_surface"]
@@ -46,7 +47,7 @@ def _as_loop(loop, index: int, tolerance: float) -> tuple[Edge, ...]:
     return tuple(edges)
 
 
-class TrimmedFace(TopologyQueries):
+class TrimmedFace(TopologyQueries, Checkable):
     """A bounded piece of a surface: one outer trimming loop and any number of inner ones (holes).
 
     Parameters
@@ -151,6 +152,9 @@ class TrimmedFace(TopologyQueries):
         from .classify import contains_uv
 
         return contains_uv(self, uv, tolerance)
+
+    def _problems(self):
+        return check_face(self)
 
     def _topologies(self):
         # the face alone as a one-face shell: its seams pair up, its other edges are free

@@ -4,12 +4,13 @@ from __future__ import annotations
 
 from ..errors import ParameterError
 from .face import TrimmedFace
+from .check import Checkable, check_shell, check_solid
 from .topology import TopologyQueries, shell_topology
 
 __all__ = ["Shell", "Solid"]
 
 
-class Shell(TopologyQueries):
+class Shell(TopologyQueries, Checkable):
     """Connected trimmed faces that share edges.
 
     Parameters
@@ -77,6 +78,9 @@ class Shell(TopologyQueries):
         from .mass import mass_properties
         return mass_properties(self, tol)
 
+    def _problems(self):
+        return check_shell(self)
+
     def _topologies(self):
         if "topology" not in self._cache:
             self._cache["topology"] = shell_topology(self._faces)
@@ -91,7 +95,7 @@ class Shell(TopologyQueries):
         return f"Shell({len(self._faces)} faces{f', name={self._name!r}' if self._name else ''})"
 
 
-class Solid(TopologyQueries):
+class Solid(TopologyQueries, Checkable):
     """A solid bounded by closed shells: the outer shell first, then the voids' shells.
 
     Parameters
@@ -161,6 +165,9 @@ class Solid(TopologyQueries):
 
     def _topologies(self):
         return tuple(s.topology for s in self._shells)
+
+    def _problems(self):
+        return check_solid(self)
 
     def contains(self, points, tolerance: float | None = None):
         """Classify ``(n, 3)`` points: ``int8`` codes ``1`` inside, ``0`` on the boundary (within

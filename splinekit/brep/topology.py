@@ -26,7 +26,7 @@ from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
 
-__all__ = ["EdgeGroup", "ShellTopology", "TopologyQueries", "edge_points", "shell_topology"]
+__all__ = ["EdgeGroup", "ShellTopology", "TopologyQueries", "edge_points", "shell_topology", "surface_points"]
 
 _SAMPLES = 33
 """Points per edge use for its mid point and direction (the mid point only tells edges apart)."""
@@ -37,14 +37,21 @@ arc-length mid point is found on a polyline, and two different edges with the sa
 points much further apart."""
 
 
+def surface_points(face, uv) -> np.ndarray:
+    """The face's surface at ``uv`` ``(n, 2)`` clamped into its domain (a trim of an invalid face
+    may leave the domain; :mod:`check` reports that): ``(n, 3)``."""
+    (u0, u1), (v0, v1) = face.domain
+    uv = np.asarray(uv, dtype=np.float64)
+    return face.surface.evaluate(np.clip(uv[:, 0], u0, u1), np.clip(uv[:, 1], v0, v1))
+
+
 def edge_points(face, edge, t) -> np.ndarray:
     """3-D points ``(n, 3)`` of ``edge`` (a use on ``face``) at parameters ``t`` ``(n,)``: its 3-D
     curve where it has one, else the surface at the pcurve's points."""
     t = np.asarray(t, dtype=np.float64)
     if edge.curve is not None:
         return edge.curve.evaluate(t)
-    uv = edge.pcurve.evaluate(t)
-    return face.surface.evaluate(uv[:, 0], uv[:, 1])
+    return surface_points(face, edge.pcurve.evaluate(t))
 
 
 @dataclass(frozen=True)

@@ -12,8 +12,8 @@ Edges are chosen by where they are, since the OCC edges of a converted solid
 are new objects: ``edges`` is ``"all"``, an ``(n, 3)`` array of points (each
 picks the edge nearest to it, which must pass within ``tolerance``), or
 :class:`splinekit.brep.Edge` uses (each picks the edge through the mid point
-of its 3-D image). A point that lies on no edge raises ParameterError naming
-its index and distance.
+of its 3-D image). A point that lies on no edge, or on several (a vertex),
+raises ParameterError naming its index.
 
 Accuracy: on B-spline faces (what a splinekit solid becomes in OCC) the
 fillet surfaces are OCC's approximations of the rolling-ball surface; on a
@@ -100,6 +100,12 @@ def _select(shape, edges, tolerance: float) -> list:
             ext = BRepExtrema.BRepExtrema_DistShapeShape(vertex, e)
             dists.append(ext.Value() if ext.IsDone() else np.inf)
         k = int(np.argmin(dists))
+        near = np.flatnonzero(np.asarray(dists) <= tolerance)
+        if len(near) > 1:
+            raise ParameterError(
+                f"edge point {i} {np.round(p, 9).tolist()} lies on {len(near)} edges (a vertex where they "
+                "meet): choose a point inside the edge you mean"
+            )
         if dists[k] > tolerance:
             raise ParameterError(
                 f"edge point {i} {np.round(p, 9).tolist()} lies on no edge of the solid: the nearest edge "

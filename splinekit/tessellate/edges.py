@@ -6,8 +6,8 @@ both faces of an edge must meet at the same points, so the uses are first groupe
 ``key``; uses without a key by geometry: the same 3-D points at 0, 1/4, 1/2, 3/4 and 1 of the
 edge, either direction), then each group is sampled once:
 
-* the parameters start from the 3-D curve's adaptive polyline (:func:`.curves.tessellate_curve`,
-  the same chordal bounds as every curve) or, without a 3-D curve, from the pcurve's knot spans;
+* the parameters start from the 3-D curve's a-priori counts per Bézier span (the bounds of
+  :mod:`.curves`, as for every curve) or, without a 3-D curve, a few steps per pcurve span;
 * every segment is then measured, for the 3-D curve and for every use: the distance between the
   exact point at the segment's parametric midpoint and the chord's midpoint (for a use: the
   surface at the midpoint of the two samples' ``(u, v)``, the same yardstick the face triangles
@@ -15,6 +15,9 @@ edge, either direction), then each group is sampled once:
 * each use maps the group's parameters onto its own pcurve (affinely, same or opposite
   direction; Gauss-Newton onto the use's curve where the affine map is off), so both faces carry
   ``(u, v)`` images of the very same 3-D points.
+
+All groups are sampled together: curves and surfaces are evaluated through :mod:`.batch`, one
+call per round for every edge.
 
 Degenerate uses (a pole: the 3-D image is one point) are not shared: their pcurve is sampled
 uniformly at the spacing of the face's interior grid, and every sample is the same 3-D vertex.
@@ -25,9 +28,8 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import ParameterError
-from .curves import tessellate_curve
 
-__all__ = ["EdgeUse", "group_uses", "sample_groups"]
+__all__ = ["EdgeUse", "check_domains", "edge_uses", "group_uses", "sample_groups"]
 
 EDGE_FRACTIONS = np.array([0.0, 0.25, 0.5, 0.75, 1.0])
 """Where along an edge the geometric pairing compares uses."""
@@ -58,20 +60,46 @@ def _face_name(face, f):
     return f"face {f}" + (f" ({face.name!r})" if face.name else "")
 
 
-def group_uses(faces, weld: float):
-    """All edge uses of ``faces`` and their groups.
+def edge_uses(faces):
+    """Every edge use of ``faces`` (face after face, loop after loop) as :class:`EdgeUse`."""
+    return [EdgeUse(f, l, k, e, face)
+            for f, face in enumerate(faces) for l, loop in enumerate(face.boundary_loops()) for k, e in enumerate(loop)]  # fmt: skip
 
-    Returns ``(uses, groups)``: ``uses`` a list of :class:`EdgeUse` (face after face, loop after
-    loop), ``groups`` a list of lists of use indices. Uses with equal keys form a group; keyless,
-    non-degenerate uses are paired geometrically (the five points of :data:`EDGE_FRACTIONS` within
-    ``weld`` of each other, in the same or the opposite direction); degenerate uses stay alone.
-    This is the tessellator's own pairing; :mod:`splinekit.brep` topology may supply the pairing
-    of a shell instead.
+
+def check_domains(uses, pcurves, samples: int = 33):
+    """Raise ParameterError naming the face, loop and edge of the first pcurve that leaves its
+    surface's parameter domain (checked at ``samples`` points per pcurve)."""
+    if not uses:
+        return
+    dom = np.array([u.edge.domain for u in uses])
+    r = np.linspace(0.0, 1.0, samples)
+    t = (dom[:, :1] + (dom[:, 1:] - dom[:, :1]) * r).ravel()
+    uv = pcurves.evaluate(np.repeat(np.arange(len(uses)), samples), t).reshape(len(uses), samples, 2)
+    box = np.array([u.face.domain for u in uses])  # (U, 2, 2): (u0, u1), (v0, v1)
+    lo, hi = box[:, :, 0], box[:, :, 1]
+    slack = 1e-7 * (hi - lo)
+    bad = ((uv < (lo - slack)[:, None]) | (uv > (hi + slack)[:, None])).any(axis=(1, 2))
+    if bad.any():
+        i = int(np.flatnonzero(bad)[0])
+        u = uses[i]
+        (u0, u1), (v0, v1) = u.face.domain
+        a, b = uv[i].min(axis=0), uv[i].max(axis=0)
+        raise ParameterError(
+            f"{_face_name(u.face, u.f)}: loop {u.loop} leaves the surface's domain [{u0:g}, {u1:g}] x [{v0:g}, {v1:g}]: "
+            f"edge {u.pos} spans [{a[0]:g}, {b[0]:g}] x [{a[1]:g}, {b[1]:g}]")
+
+
+def group_uses(uses, weld: float, pcurves, surfaces):
+    """Groups of the uses that are one edge: lists of use indices.
+
+    Uses with equal keys form a group; keyless, non-degenerate uses are paired geometrically
+    (the five points of :data:`EDGE_FRACTIONS` within ``weld`` of each other, in the same or the
+    opposite direction); degenerate uses stay alone. This is the tessellator's own pairing
+    (``pcurves``, ``surfaces``: :mod:`.batch` evaluators of the uses' pcurves and the faces'
+    surfaces); :mod:`splinekit.brep` topology may supply the pairing of a shell instead.
     """
     from .surfaces import _close_pairs, _components
 
-    uses = [EdgeUse(f, l, k, e, face)
-            for f, face in enumerate(faces) for l, loop in enumerate(face.boundary_loops()) for k, e in enumerate(loop)]  # fmt: skip
     by_key: dict = {}
     loose = []
     singles = []
@@ -84,7 +112,13 @@ def group_uses(faces, weld: float):
             loose.append(i)
     groups = list(by_key.values()) + singles
     if loose:
-        pts = np.stack([_probe(uses[i]) for i in loose])  # (k, 5, 3)
+        loose_a = np.asarray(loose)
+        dom = np.array([uses[i].edge.domain for i in loose])
+        t = (dom[:, :1] + (dom[:, 1:] - dom[:, :1]) * EDGE_FRACTIONS).ravel()
+        k = np.repeat(loose_a, EDGE_FRACTIONS.size)
+        uv = pcurves.evaluate(k, t)
+        face = np.array([uses[i].f for i in loose])
+        pts = surfaces.evaluate(np.repeat(face, EDGE_FRACTIONS.size), uv[:, 0], uv[:, 1]).reshape(len(loose), -1, 3)
         lab = np.arange(len(loose))
         pairs = _close_pairs(pts[:, 2], weld)
         if len(pairs):
@@ -96,15 +130,7 @@ def group_uses(faces, weld: float):
         order = np.argsort(lab, kind="stable")
         cuts = np.flatnonzero(np.diff(lab[order])) + 1
         groups += [[loose[j] for j in part] for part in np.split(order, cuts)]
-    return uses, groups
-
-
-def _probe(use):
-    """``(5, 3)`` points of a use at :data:`EDGE_FRACTIONS` of its domain."""
-    a, b = use.edge.domain
-    if use.edge.curve is not None:
-        return use.edge.curve.evaluate(a + (b - a) * EDGE_FRACTIONS)
-    return use.on_surface(a + (b - a) * EDGE_FRACTIONS)[1]
+    return groups
 
 
 class SampledGroup:
@@ -113,7 +139,8 @@ class SampledGroup:
     Attributes
     ----------
     points : (m + 1, 3) the shared 3-D points (one point for a degenerate use)
-    params : dict use index -> (m + 1,) the use's own pcurve parameters, in the use's direction
+    params : dict use index -> (m + 1,) the use's own pcurve parameters, in the group's order
+        (decreasing for a use that runs against the representative)
     uv : dict use index -> (m + 1, 2) the use's ``(u, v)`` at those parameters
     degenerate : bool
     """
@@ -121,93 +148,171 @@ class SampledGroup:
     __slots__ = ("points", "params", "uv", "degenerate")
 
 
-def sample_groups(uses, groups, scales, tol, angle_tol):
-    """Sample every group (see the module docstring). ``scales`` ``(F, 2)`` per face: parameter
-    units -> interior grid steps in u and v. Returns a list of :class:`SampledGroup`."""
-    return [_sample(uses, g, scales, tol, angle_tol) for g in groups]
+def _subdivide(owner, a, b, n):
+    """Split pieces ``[a, b]`` (sorted by ``owner``, consecutive pieces of an owner sharing
+    ends) into ``n`` equal steps each. Returns ``(t, owner_of_t)``: the steps' starts, each
+    owner's last end appended after its pieces."""
+    n = np.asarray(n, dtype=np.int64)
+    P = len(n)
+    last = np.flatnonzero(np.append(owner[1:] != owner[:-1], True))  # each owner's last piece
+    rank = np.cumsum(np.concatenate([[0], owner[1:] != owner[:-1]]))  # owners before (dense)
+    start = np.concatenate([[0], np.cumsum(n)[:-1]]) + rank
+    total = int(n.sum()) + last.size
+    t = np.empty(total)
+    who = np.empty(total, dtype=np.int64)
+    piece = np.repeat(np.arange(P), n)
+    j = np.arange(piece.size) - np.repeat(np.cumsum(n) - n, n)
+    pos = start[piece] + j
+    t[pos] = a[piece] + (b - a)[piece] * (j / n[piece])
+    who[pos] = owner[piece]
+    end = start[last] + n[last]
+    t[end] = b[last]
+    who[end] = owner[last]
+    return t, who
 
 
-def _sample(uses, group, scales, tol, angle_tol):
-    out = SampledGroup()
-    first = uses[group[0]]
-    if first.edge.degenerate:
-        a, b = first.edge.domain
-        uv_ab = first.edge.pcurve.evaluate(np.array([a, b]))
-        steps = np.abs(np.diff(uv_ab, axis=0)[0]) * scales[first.f]
-        n = int(np.clip(np.ceil(np.hypot(*steps)), 1, MAX_SEGMENTS))
-        t = np.linspace(a, b, n + 1)
-        uv, X = first.on_surface(t)
-        out.points, out.params, out.uv, out.degenerate = X[:1], {group[0]: t}, {group[0]: uv}, True
+def sample_groups(uses, groups, scales, tol, angle_tol, surfaces, pc):
+    """Sample every group (see the module docstring), all groups at once.
+
+    ``scales`` ``(F, 2)`` per face: parameter units -> interior grid steps in u and v;
+    ``surfaces``: a :class:`.batch.SurfaceBatch` of the faces' surfaces (in face order);
+    ``pc``: a :class:`.batch.CurveBatch` of the uses' pcurves.
+    Returns a list of :class:`SampledGroup`, one per group.
+    """
+    from ..mesh.topology import ranges
+    from .batch import CurveBatch
+    from .curves import _span_bounds
+
+    U = len(uses)
+    face = np.array([u.f for u in uses], dtype=np.int64)
+    pdom = np.array([u.edge.domain for u in uses])
+    G = len(groups)
+    degenerate = np.array([uses[g[0]].edge.degenerate for g in groups], dtype=bool)
+    group_of = np.empty(U, dtype=np.int64)
+    for g, members in enumerate(groups):
+        group_of[members] = g
+    out = [SampledGroup() for _ in range(G)]
+
+    # degenerate uses: uniform samples at the face grid's spacing, one 3-D point
+    dg = np.flatnonzero(degenerate)
+    if dg.size:
+        ui = np.array([groups[g][0] for g in dg])
+        a, b = pdom[ui, 0], pdom[ui, 1]
+        ends = pc.evaluate(np.repeat(ui, 2), np.column_stack([a, b]).ravel()).reshape(-1, 2, 2)
+        steps = np.abs(ends[:, 1] - ends[:, 0]) * scales[face[ui]]
+        n = np.clip(np.ceil(np.hypot(steps[:, 0], steps[:, 1])), 1, MAX_SEGMENTS).astype(np.int64)
+        t, who = _subdivide(np.arange(dg.size), a, b, n)
+        uv = pc.evaluate(ui[who], t)
+        pole = surfaces.evaluate(face[ui], ends[:, 0, 0], ends[:, 0, 1])
+        cut = np.flatnonzero(np.diff(who)) + 1
+        for k, (tk, uvk) in enumerate(zip(np.split(t, cut), np.split(uv, cut))):
+            o = out[dg[k]]
+            o.points, o.params, o.uv, o.degenerate = pole[k : k + 1], {int(ui[k]): tk}, {int(ui[k]): uvk}, True
+
+    live = np.flatnonzero(~degenerate)
+    if live.size == 0:
         return out
-    rep_i = next((i for i in group if uses[i].edge.curve is not None), group[0])
-    rep = uses[rep_i]
-    a, b = rep.edge.domain
-    if rep.edge.curve is not None:
-        curve = rep.edge.curve
+    # the representative of each group: a use with a 3-D curve if there is one
+    rep = np.array([next((i for i in groups[g] if uses[i].edge.curve is not None), groups[g][0]) for g in live])
+    has_curve = np.array([uses[i].edge.curve is not None for i in rep], dtype=bool)
+    curve_of = np.full(live.size, -1, dtype=np.int64)
+    curve_of[has_curve] = np.arange(int(has_curve.sum()))
+    c3 = CurveBatch([uses[i].edge.curve for i in rep[has_curve]])
+    dom = pdom[rep].copy()
+    if has_curve.any():
+        dom[has_curve] = np.array([uses[i].edge.curve.domain for i in rep[has_curve]])
+    slot = np.full(G, -1, dtype=np.int64)  # group -> index among live groups
+    slot[live] = np.arange(live.size)
 
-        def exact(t):
-            return curve.evaluate(t)
+    def exact(k, t):
+        """3-D points of live groups ``k`` at the representatives' parameters ``t``."""
+        X = np.empty((t.size, 3))
+        cur = has_curve[k]
+        if cur.any():
+            X[cur] = c3.evaluate(curve_of[k[cur]], t[cur])
+        if not cur.all():
+            r = rep[k[~cur]]
+            uv = pc.evaluate(r, t[~cur])
+            X[~cur] = surfaces.evaluate(face[r], uv[:, 0], uv[:, 1])
+        return X
 
-        t = np.asarray(tessellate_curve(curve, tol, angle_tol).params)
-    else:
+    # the uses of live groups, and whether each runs against its representative
+    lu = np.flatnonzero(~degenerate[group_of])
+    lg = slot[group_of[lu]]  # live group of each use
+    a, b = dom[lg, 0], dom[lg, 1]
+    c, d = pdom[lu, 0], pdom[lu, 1]
+    ref = exact(lg, a + (b - a) / 3.0)
+    probe = pc.evaluate(np.repeat(lu, 2), np.column_stack([c + (d - c) / 3.0, d - (d - c) / 3.0]).ravel())
+    P = surfaces.evaluate(np.repeat(face[lu], 2), probe[:, 0], probe[:, 1]).reshape(-1, 2, 3)
+    flip = np.linalg.norm(P[:, 1] - ref, axis=1) < np.linalg.norm(P[:, 0] - ref, axis=1)
 
-        def exact(t):
-            return rep.on_surface(t)[1]
+    # initial parameters: the 3-D curve's a-priori counts per Bézier span (the curve
+    # tessellator's bounds), or a few steps per pcurve span
+    owners, lo, hi, counts = [], [], [], []
+    for k in range(live.size):
+        if has_curve[k]:
+            p, rows = c3.segments(curve_of[k])
+            M, L = _span_bounds(p, c3.segs[p][rows])
+            n = np.sqrt(M / (8.0 * tol))
+            if angle_tol is not None:
+                with np.errstate(divide="ignore", invalid="ignore"):
+                    n = np.maximum(n, np.where(L > 0, M / (L * angle_tol), 0.0))
+            br = c3.breaks
+        else:
+            p, rows = pc.segments(rep[k])
+            n = np.full(rows.size, 4.0)
+            br = pc.breaks
+        j = (curve_of[k] if has_curve[k] else rep[k])
+        first = br.start[j]
+        owners.append(np.full(rows.size, k))
+        lo.append(br.a[first : first + rows.size])
+        hi.append(br.b[first : first + rows.size])
+        counts.append(np.clip(np.ceil(np.nan_to_num(n, nan=MAX_SEGMENTS, posinf=MAX_SEGMENTS)), 1, MAX_SEGMENTS))
+    t, who = _subdivide(np.concatenate(owners), np.concatenate(lo), np.concatenate(hi), np.concatenate(counts))
 
-        br = rep.edge.pcurve.bezier_breakpoints()
-        br = br[(br >= a) & (br <= b)]
-        br = np.unique(np.concatenate([[a], br, [b]]))
-        t = np.concatenate([np.linspace(br[:-1], br[1:], 5, endpoint=False, axis=1).ravel(), [b]])
-    maps = {i: _param_map(rep, uses[i], a, b) for i in group}
-    for _ in range(MAX_ROUNDS):
-        X = exact(t)
-        tm = 0.5 * (t[:-1] + t[1:])
-        factor = np.linalg.norm(exact(tm) - 0.5 * (X[:-1] + X[1:]), axis=1) / tol
-        uvs = {}
-        for i in group:
-            use = uses[i]
-            s = maps[i](t, X)
-            uv = use.edge.pcurve.evaluate(s)
-            uvs[i] = (s, uv)
-            mid = 0.5 * (uv[:-1] + uv[1:])
-            dev = np.linalg.norm(use.face.surface.evaluate(mid[:, 0], mid[:, 1]) - 0.5 * (X[:-1] + X[1:]), axis=1)
-            factor = np.maximum(factor, dev / tol)
-            step = np.hypot(*(np.diff(uv, axis=0) * scales[use.f]).T)
-            # the scaled-length criterion is linear in the step, the chordal one quadratic
-            factor = np.maximum(factor, (step / MAX_SCALED_STEP) ** 2)
-        over = factor > 1.0
-        if not over.any() or t.size > MAX_SEGMENTS:
+    for round_ in range(MAX_ROUNDS):
+        X = exact(who, t)
+        seg = np.flatnonzero(who[1:] == who[:-1])  # segment = sample i to i + 1
+        chord = 0.5 * (X[seg] + X[seg + 1])
+        factor = np.zeros(t.size)
+        factor[seg] = np.linalg.norm(exact(who[seg], 0.5 * (t[seg] + t[seg + 1])) - chord, axis=1) / tol
+        # every use: the group's samples mapped onto its pcurve
+        gstart = np.concatenate([[0], np.flatnonzero(np.diff(who)) + 1])
+        gcount = np.diff(np.append(gstart, t.size))
+        idx = ranges(gstart[lg], gcount[lg])  # sample of each use-sample
+        owner = np.repeat(np.arange(lu.size), gcount[lg])
+        r = (t[idx] - a[owner]) / (b[owner] - a[owner])
+        s = np.where(flip[owner], d[owner] - r * (d - c)[owner], c[owner] + r * (d - c)[owner])
+        uv = pc.evaluate(lu[owner], s)
+        on = surfaces.evaluate(face[lu[owner]], uv[:, 0], uv[:, 1])
+        off = np.linalg.norm(on - X[idx], axis=1) > 1e-2 * tol
+        if off.any():  # the affine map misses: project onto those uses' curves
+            for o in np.unique(owner[off]):
+                sel = np.flatnonzero(owner == o)
+                s[sel] = _project(uses[lu[o]], s[sel], X[idx[sel]], c[o], d[o])
+                uv[sel] = uses[lu[o]].edge.pcurve.evaluate(s[sel])
+        useg = np.flatnonzero(owner[1:] == owner[:-1])
+        mid = 0.5 * (uv[useg] + uv[useg + 1])
+        dev = np.linalg.norm(surfaces.evaluate(face[lu[owner[useg]]], mid[:, 0], mid[:, 1]) - 0.5 * (X[idx[useg]] + X[idx[useg + 1]]), axis=1)
+        step = (uv[useg + 1] - uv[useg]) * scales[face[lu[owner[useg]]]]
+        # the scaled-length criterion is linear in the step, the chordal one quadratic
+        np.maximum.at(factor, idx[useg], np.maximum(dev / tol, (np.hypot(step[:, 0], step[:, 1]) / MAX_SCALED_STEP) ** 2))
+        over = factor[seg] > 1.0
+        if not over.any() or round_ == MAX_ROUNDS - 1 or t.size > MAX_SEGMENTS * live.size:
             break
-        pieces = np.where(over, np.ceil(np.minimum(np.sqrt(factor) * 1.1, 8.0)), 1).astype(np.int64)
-        frac = np.arange(pieces.sum()) - np.repeat(np.cumsum(pieces) - pieces, pieces)
-        seg = np.repeat(np.arange(pieces.size), pieces)
-        t = np.concatenate([t[seg] + (t[seg + 1] - t[seg]) * (frac / pieces[seg]), t[-1:]])
-    out.points, out.degenerate = X, False
-    out.params = {i: s for i, (s, _) in uvs.items()}
-    out.uv = {i: uv for i, (_, uv) in uvs.items()}
+        pieces = np.where(over, np.ceil(np.minimum(np.sqrt(factor[seg]) * 1.1, 8.0)), 1)
+        t, who = _subdivide(who[seg], t[seg], t[seg + 1], pieces)
+
+    cut = np.flatnonzero(np.diff(who)) + 1
+    for k, Xk in enumerate(np.split(X, cut)):
+        o = out[live[k]]
+        o.points, o.degenerate, o.params, o.uv = Xk, False, {}, {}
+    ucut = np.flatnonzero(np.diff(owner)) + 1
+    for o, (sk_, uvk) in enumerate(zip(np.split(s, ucut), np.split(uv, ucut))):
+        grp = out[live[lg[o]]]
+        grp.params[int(lu[o])] = sk_
+        grp.uv[int(lu[o])] = uvk
     return out
-
-
-def _param_map(rep, use, a, b):
-    """A function ``(t, X) -> s``: the use's pcurve parameters of the representative's
-    parameters ``t`` (points ``X``). Affine (same or opposite direction, decided at one third
-    of the edge), refined by Gauss-Newton steps onto the use's curve where the affine image
-    lies off the representative's points."""
-    if use is rep:
-        return lambda t, X: t
-    c, d = use.edge.domain
-    probe = a + (b - a) / 3.0
-    ref = rep.edge.curve.evaluate(np.array([probe])) if rep.edge.curve is not None else rep.on_surface([probe])[1]
-    fwd = use.on_surface([c + (d - c) / 3.0])[1]
-    bwd = use.on_surface([d - (d - c) / 3.0])[1]
-    flip = np.linalg.norm(bwd - ref) < np.linalg.norm(fwd - ref)
-
-    def affine(t, X):
-        r = (t - a) / (b - a)
-        s = d - r * (d - c) if flip else c + r * (d - c)
-        return _project(use, s, X, c, d)
-
-    return affine
 
 
 def _project(use, s, X, c, d, rounds: int = 6):

@@ -36,8 +36,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import ParameterError
-from .cells import cells_of_patches
-from .edges import _face_name, group_uses, sample_groups
+from .edges import _face_name, check_domains, edge_uses, group_uses, sample_groups
 from .result import Tessellation
 
 __all__ = ["tessellate_faces"]
@@ -72,25 +71,25 @@ class _FaceGrid:
     __slots__ = ("us", "vs", "scale")
 
 
-def _face_grid(surface, tol, angle_tol):
+def _face_grids(batch, tol, angle_tol):
+    """The interior grid of every surface of ``batch`` (a :class:`.batch.SurfaceBatch`): per knot
+    span row (column) the largest a-priori count of its cells, times :data:`GRID_FRACTION`."""
     from .surfaces import _initial_counts, _span_params
 
-    cellsets = cells_of_patches([surface])
-    nu, nv = _initial_counts(cellsets, tol, angle_tol)
-    box = np.concatenate([cs.box for cs in cellsets])
-    span = np.concatenate([cs.span for cs in cellsets])
-    # cells of the one patch are in (iu, iv) order, iu major (one degree pair: one cell set)
-    nsv = int(span[:, 1].max()) + 1
-    shape = (len(box) // nsv, nsv)
-    cu = np.maximum(np.ceil(nu.reshape(shape).max(axis=1) * GRID_FRACTION), 1)
-    cv = np.maximum(np.ceil(nv.reshape(shape).max(axis=0) * GRID_FRACTION), 1)
-    bu = np.append(box[:: shape[1], 0], box[-1, 1])
-    bv = np.append(box[: shape[1], 2], box[-1, 3])
-    g = _FaceGrid()
-    g.us, _ = _span_params(bu, cu.astype(np.int64))
-    g.vs, _ = _span_params(bv, cv.astype(np.int64))
-    g.scale = np.array([cu.sum() / (bu[-1] - bu[0]), cv.sum() / (bv[-1] - bv[0])])
-    return g
+    nu, nv = _initial_counts(batch.cellsets, tol, angle_tol)
+    out = []
+    for k in range(len(batch.bu)):
+        cells = slice(batch.first[k], batch.first[k] + batch.nsu[k] * batch.nsv[k])
+        shape = (batch.nsu[k], batch.nsv[k])
+        cu = np.maximum(np.ceil(nu[cells].reshape(shape).max(axis=1) * GRID_FRACTION), 1).astype(np.int64)
+        cv = np.maximum(np.ceil(nv[cells].reshape(shape).max(axis=0) * GRID_FRACTION), 1).astype(np.int64)
+        bu, bv = batch.bu[k], batch.bv[k]
+        g = _FaceGrid()
+        g.us, _ = _span_params(bu, cu)
+        g.vs, _ = _span_params(bv, cv)
+        g.scale = np.array([cu.sum() / (bu[-1] - bu[0]), cv.sum() / (bv[-1] - bv[0])])
+        out.append(g)
+    return out
 
 
 class _Points:
@@ -108,22 +107,6 @@ class _Points:
 
     def arrays(self):
         return (np.concatenate(self.face), np.concatenate(self.uv), np.concatenate(self.xyz), np.concatenate(self.vid))
-
-
-def _evaluate(faces, fidx, uv):
-    """``(k, 3)`` surface points of ``(u, v)`` ``(k, 2)`` on faces ``fidx`` ``(k,)`` (one
-    evaluation per face)."""
-    out = np.empty((len(uv), 3))
-    if len(uv) == 0:
-        return out
-    order = np.argsort(fidx, kind="stable")
-    fs = fidx[order]
-    cuts = np.flatnonzero(np.diff(fs)) + 1
-    for part in np.split(order, cuts):
-        s = faces[int(fidx[part[0]])].surface
-        out[part] = s.evaluate(uv[part, 0], uv[part, 1])
-    return out
-
 
 
 def _loops(faces, uses, groups, samples, vid_of_group):
@@ -258,6 +241,44 @@ def _densify(P, segs, step):
     return a[seg] + (b - a)[seg] * frac[:, None]
 
 
+def _crossing(P, segs):
+    """Index of a segment that crosses or touches another non-adjacent one (``P[segs]``
+    ``(s, 2, 2)``), or -1. A sweep along x: candidate pairs have overlapping x ranges (few, for
+    trims made of short chords), then exact orientation tests. Triangle must never see crossing
+    segments: it splits them at new points (or, for some inputs, crashes)."""
+    A, B = P[segs[:, 0]], P[segs[:, 1]]
+    x0, x1 = np.minimum(A[:, 0], B[:, 0]), np.maximum(A[:, 0], B[:, 0])
+    order = np.argsort(x0, kind="stable")
+    xs = x0[order]
+    end = np.searchsorted(xs, x1[order], side="right")
+    count = np.maximum(end - np.arange(1, len(xs) + 1), 0)
+    from ..limits import check
+
+    check(int(count.sum()) * 64, "the trim crossing test")
+    i = np.repeat(np.arange(len(xs)), count)
+    j = i + 1 + (np.arange(i.size) - np.repeat(np.cumsum(count) - count, count))
+    a, b = order[i], order[j]
+    shared = (segs[a, 0] == segs[b, 0]) | (segs[a, 0] == segs[b, 1]) | (segs[a, 1] == segs[b, 0]) | (segs[a, 1] == segs[b, 1])
+    a, b = a[~shared], b[~shared]
+
+    def orient(p, q, r):
+        return np.sign((q[:, 0] - p[:, 0]) * (r[:, 1] - p[:, 1]) - (q[:, 1] - p[:, 1]) * (r[:, 0] - p[:, 0]))
+
+    o1, o2 = orient(A[a], B[a], A[b]), orient(A[a], B[a], B[b])
+    o3, o4 = orient(A[b], B[b], A[a]), orient(A[b], B[b], B[a])
+    hit = (o1 * o2 <= 0) & (o3 * o4 <= 0)
+    # collinear pairs (all orientations zero) cross only if their extents overlap
+    col = (o1 == 0) & (o2 == 0)
+    if col.any():
+        ya0, ya1 = np.minimum(A[a, 1], B[a, 1]), np.maximum(A[a, 1], B[a, 1])
+        yb0, yb1 = np.minimum(A[b, 1], B[b, 1]), np.maximum(A[b, 1], B[b, 1])
+        xa0, xa1, xb0, xb1 = x0[a], x1[a], x0[b], x1[b]
+        overlap = (np.maximum(xa0, xb0) <= np.minimum(xa1, xb1)) & (np.maximum(ya0, yb0) <= np.minimum(ya1, yb1))
+        hit &= ~col | overlap
+    k = np.flatnonzero(hit)
+    return int(a[k[0]]) if k.size else -1
+
+
 def _keep_inside(T, segkey, nP):
     """Which triangles ``T`` ``(t, 3)`` (counter-clockwise) lie on the material side of the
     directed segments (``segkey``: sorted ``a * nP + b``): a triangle with an edge running along
@@ -290,28 +311,35 @@ def tessellate_faces(faces, tol: float, angle_tol, size: float) -> Tessellation:
     """Tessellate :class:`~splinekit.brep.TrimmedFace` objects as one watertight mesh (see
     :func:`splinekit.tessellate.tessellate`). ``tol``: absolute chordal tolerance;
     ``angle_tol``: radians or None; ``size``: model size (bounding-box diagonal)."""
+    from .batch import CurveBatch, SurfaceBatch
+
     triangle = _triangulator()
-    grids = [_face_grid(face.surface, tol, angle_tol) for face in faces]
+    batch = SurfaceBatch([face.surface for face in faces])
+    grids = _face_grids(batch, tol, angle_tol)
     scales = np.stack([g.scale for g in grids])
     edge_tol = max((e.tolerance for face in faces for e in face.edges), default=0.0)
-    uses, groups = group_uses(faces, max(WELD * size, 2.0 * edge_tol))
-    samples = sample_groups(uses, groups, scales, tol, angle_tol)
+    uses = edge_uses(faces)
+    pcurves = CurveBatch([u.edge.pcurve for u in uses])
+    check_domains(uses, pcurves)
+    groups = group_uses(uses, max(WELD * size, 2.0 * edge_tol), pcurves, batch)
+    samples = sample_groups(uses, groups, scales, tol, angle_tol, batch, pcurves)
     vid_of_group, edge_xyz = _edge_vertices(samples, size, edge_tol)
     loops = _loops(faces, uses, groups, samples, vid_of_group)
     layout = _Layout(loops, scales)
 
     # boundary points and segments (each loop closed on itself)
     pts = _Points()
-    segs = []
+    segs, seg_loop = [], []
     n = 0
     for f, face_loops in enumerate(loops):
-        for uv, xyz, vid in face_loops:
+        for l, (uv, xyz, vid) in enumerate(face_loops):
             k = len(uv)
             idx = np.arange(n, n + k)
             segs.append(np.column_stack([idx, np.roll(idx, -1)]))
+            seg_loop.append(np.full(k, l))
             pts.add(f, uv, xyz, vid)
             n += k
-    segs = np.concatenate(segs)
+    segs, seg_loop = np.concatenate(segs), np.concatenate(seg_loop)
     pface, puv, pxyz, pvid = pts.arrays()
     nb = len(pface)
     dense = _densify(layout.place(pface, puv), segs, 0.5 * CLEARANCE)
@@ -319,10 +347,14 @@ def tessellate_faces(faces, tol: float, angle_tol, size: float) -> Tessellation:
     n_vid = len(edge_xyz)
     pface = np.concatenate([pface, gf])
     puv = np.concatenate([puv, guv])
-    pxyz = np.concatenate([pxyz, _evaluate(faces, gf, guv)])
+    pxyz = np.concatenate([pxyz, batch.evaluate(gf, guv[:, 0], guv[:, 1])])
     pvid = np.concatenate([pvid, np.arange(n_vid, n_vid + len(gf))])
     n_vid += len(gf)
 
+    bad = _crossing(layout.place(pface[:nb], puv[:nb]), segs)
+    if bad >= 0:
+        f = int(pface[segs[bad, 0]])
+        raise ParameterError(f"{_face_name(faces[f], f)}: its trimming loops cross each other (or themselves)")
     max_dev = 0.0
     for round_ in range(MAX_ROUNDS):
         nP = len(pface)
@@ -339,7 +371,16 @@ def tessellate_faces(faces, tol: float, angle_tol, size: float) -> Tessellation:
         keep, conflict = _keep_inside(T, np.sort(segs[:, 0] * nP + segs[:, 1]), nP)
         if conflict >= 0:
             f = int(pface[T[conflict, 0]])
-            raise ParameterError(f"{_face_name(faces[f], f)}: its trimming loops overlap or nest wrongly (a hole outside the outer loop?)")
+            raise ParameterError(f"{_face_name(faces[f], f)}: its trimming loops cross, overlap or nest wrongly (a hole outside the outer loop?)")
+        if round_ == 0:  # every trim must bound some material on its left
+            kept = T[keep]
+            edges = np.concatenate([kept[:, [0, 1]], kept[:, [1, 2]], kept[:, [2, 0]]])
+            lonely = ~np.isin(segs[:, 0] * nP + segs[:, 1], edges[:, 0] * nP + edges[:, 1])
+            if lonely.any():
+                k = int(np.flatnonzero(lonely)[0])
+                f, l = int(pface[segs[k, 0]]), int(seg_loop[k])
+                raise ParameterError(f"{_face_name(faces[f], f)}: loop {l} bounds no material: it lies outside the outer loop "
+                                     "or inside another hole, or the loops cross")
         T = T[keep]
         V = pvid[T]
         T = T[(V[:, 0] != V[:, 1]) & (V[:, 1] != V[:, 2]) & (V[:, 2] != V[:, 0])]  # collapsed at a pole
@@ -352,7 +393,7 @@ def tessellate_faces(faces, tol: float, angle_tol, size: float) -> Tessellation:
         fid = np.concatenate([pface[ea], pface[T[:, 0]]])
         uv = np.concatenate([0.5 * (puv[ea] + puv[eb]), puv[T].mean(axis=1)])
         flat = np.concatenate([0.5 * (pxyz[ea] + pxyz[eb]), pxyz[T].mean(axis=1)])
-        exact = _evaluate(faces, fid, uv)
+        exact = batch.evaluate(fid, uv[:, 0], uv[:, 1])
         dev = np.linalg.norm(exact - flat, axis=1)
         max_dev = float(dev.max()) if dev.size else 0.0
         ne = len(ukey)
@@ -366,10 +407,10 @@ def tessellate_faces(faces, tol: float, angle_tol, size: float) -> Tessellation:
         pxyz = np.concatenate([pxyz, exact[new]])
         pvid = np.concatenate([pvid, np.arange(n_vid, n_vid + new.size)])
         n_vid += new.size
-    return _assemble(faces, T, pface, puv, pxyz, pvid, n_vid, max_dev, tol)
+    return _assemble(faces, batch, T, pface, puv, pxyz, pvid, n_vid, max_dev, tol)
 
 
-def _assemble(faces, T, pface, puv, pxyz, pvid, n_vid, max_dev, tol):
+def _assemble(faces, batch, T, pface, puv, pxyz, pvid, n_vid, max_dev, tol):
     """The :class:`Tessellation` of the final triangles ``T`` (point indices)."""
     flip = np.array([face.reversed for face in faces])[pface[T[:, 0]]]
     T = np.where(flip[:, None], T[:, [0, 2, 1]], T)
@@ -384,12 +425,13 @@ def _assemble(faces, T, pface, puv, pxyz, pvid, n_vid, max_dev, tol):
     V = pxyz[rep]
     UV = puv[rep]
     VP = pface[rep]
-    N = np.empty_like(V)
-    order = np.argsort(VP, kind="stable")
-    for part in np.split(order, np.flatnonzero(np.diff(VP[order])) + 1):
-        if part.size:
-            N[part] = faces[int(VP[part[0]])].normals(UV[part, 0], UV[part, 1])
-    weak = np.linalg.norm(N, axis=1) < 0.5
+    _, Su, Sv = batch.partials(VP, UV[:, 0], UV[:, 1])
+    N = np.cross(Su, Sv)
+    length = np.linalg.norm(N, axis=1)
+    scale = np.einsum("ij,ij->i", Su, Su) + np.einsum("ij,ij->i", Sv, Sv)
+    weak = length <= 1e-10 * scale
+    N /= np.where(weak, 1.0, length)[:, None]
+    N[np.array([face.reversed for face in faces])[VP]] *= -1.0
     if weak.any():  # collapsed points (poles): the mean of the adjacent triangles' normals
         X = V[tri]
         fn = np.cross(X[:, 1] - X[:, 0], X[:, 2] - X[:, 0])
