@@ -13,10 +13,11 @@ because OCP 7.9 does not bind the error queries (``HasErrors``) on the API
 classes and their ``DSFiller()`` accessor crashes the interpreter when its
 result is released; ``BOPAlgo_*`` objects report errors themselves.
 
-Nothing invalid is passed on: an OCC error or warning of the failing kind,
-a result that ``BRepCheck_Analyzer`` rejects, or a result that is not one
-solid raises a :class:`~splinekit.errors.BackendError` naming the operation
-(``"exact cut"``...) and OCC's alert or the failing sub-shapes.
+Nothing invalid is passed on: an OCC error, a result that
+``BRepCheck_Analyzer`` rejects, a result that is not one solid, or a
+converted Solid that fails splinekit's own ``check()`` raises a
+:class:`~splinekit.errors.BackendError` naming the operation (``"exact
+cut"``...) and OCC's alert, the failing sub-shapes or the problem.
 
 Accuracy: operands converted from splinekit are B-spline faces, so the
 intersection edges are OCC approximations (within the shapes' tolerance,
@@ -67,6 +68,18 @@ def solid_from_occ(shape, what: str):
         out = out[0]
     if not isinstance(out, Solid):
         raise BackendError(f"the {what} did not convert to a Solid (from_occ gave {type(out).__name__})")
+    # OCC called the shape valid; the converted shells are checked again by splinekit's own rules
+    # (closed loops, trims inside the domain, pcurves on their 3-D edges, closed and consistently
+    # oriented shells) before anyone gets them. The solid-level test that the shells point outward
+    # is left out: it meshes every face (most of the time of a full check) and OCC's validity
+    # check and the conversion keep orientations.
+    problems = [p for shell in out.shells for p in shell.check()]
+    if problems:
+        more = f" (and {len(problems) - 1} more)" if len(problems) > 1 else ""
+        raise BackendError(
+            f"the {what} gave a shape OCC calls valid, but its conversion to a splinekit Solid is not: "
+            f"[{problems[0].kind}] {problems[0].message}{more}"
+        )
     return out
 
 
