@@ -11,7 +11,7 @@ from __future__ import annotations
 
 from splinekit.errors import ParameterError
 
-from . import bracket, mug, teapot, vase, wing
+from . import block, bracket, mug, teapot, vase, wing
 from ._base import Model, Parameter, resolve_params, surface_integrals
 
 __all__ = [
@@ -31,6 +31,7 @@ MODELS = {
     "mug": mug,
     "bracket": bracket,
     "wing": wing,
+    "block": block,
 }
 
 DEFAULT_MODEL = "teapot"

@@ -1,16 +1,18 @@
-"""A block with every edge rounded and a round pocket with a filleted floor: an exact B-rep solid.
+"""A block with every edge rounded and a rounded rectangular pocket with a filleted floor: an exact B-rep solid.
 
 Units: millimetres. A ``length`` x ``width`` x ``height`` box with all twelve
 edges filleted to radius ``round`` (OpenCascade closes each corner with a
-spherical patch), then a cylindrical pocket of diameter ``pocket`` and depth
-``depth`` cut into the middle of the top face, whose floor edge is filleted
-to radius ``floor_fillet``.
+spherical patch); a ``pocket_length`` x ``pocket_width`` pocket ``depth``
+deep cut into the middle of the top face, its four vertical corners
+rounded to radius ``corner`` and the edge all round its floor filleted to
+radius ``floor_fillet`` (cylinders along the sides, tori at the corners).
 
 Made with :func:`splinekit.brep.fillet` and :func:`splinekit.brep.cut` on
-splinekit's native box and cylinder; the result is one
-:class:`~splinekit.brep.Solid` of trimmed faces: planes, cylinders, spheres
-and tori as rational B-splines (the fillets on B-spline faces are OCC's
-approximations). Meshes are its tessellation (``tolerance``).
+splinekit's native boxes; the result is one :class:`~splinekit.brep.Solid`
+of trimmed faces: planes, cylinders, spheres and tori as rational
+B-splines (fillets of B-spline faces are OCC's approximations, within
+about 1e-7 relative in volume and area). Meshes are its tessellation
+(``tolerance``).
 """
 
 from __future__ import annotations
@@ -24,13 +26,15 @@ from ._base import Model, Parameter, resolve_params
 NAME = "block"
 
 PARAMETERS = (
-    Parameter("length", 40.0, "mm", 20.0, 200.0, "size along x"),
+    Parameter("length", 40.0, "mm", 30.0, 200.0, "size along x"),
     Parameter("width", 30.0, "mm", 20.0, 200.0, "size along y"),
     Parameter("height", 20.0, "mm", 14.0, 100.0, "size along z"),
     Parameter("round", 3.0, "mm", 0.5, 5.0, "fillet radius of the twelve outer edges"),
-    Parameter("pocket", 12.0, "mm", 6.0, 20.0, "pocket diameter"),
+    Parameter("pocket_length", 20.0, "mm", 10.0, 30.0, "pocket size along x"),
+    Parameter("pocket_width", 12.0, "mm", 9.0, 22.0, "pocket size along y"),
     Parameter("depth", 8.0, "mm", 3.0, 12.0, "pocket depth"),
-    Parameter("floor_fillet", 2.0, "mm", 0.5, 2.5, "fillet radius where the pocket's wall meets its floor"),
+    Parameter("corner", 4.0, "mm", 2.5, 5.5, "radius of the pocket's vertical corners"),
+    Parameter("floor_fillet", 2.0, "mm", 0.5, 2.4, "fillet radius where the pocket's walls meet its floor"),
     Parameter("tolerance", 0.01, "mm", 0.005, 0.5, "chordal tolerance of the tessellation (STL and other meshes)"),
 )
 
@@ -40,44 +44,62 @@ _SPANDREL_CENTROID = (10.0 - 3.0 * math.pi) / (12.0 - 3.0 * math.pi)  # its cent
 
 def _check_fit(v: dict) -> None:
     """ParameterError naming the parameter when the pocket and the fillets do not fit."""
-    radius, r = 0.5 * v["pocket"], v["round"]
-    room = 0.5 * min(v["length"], v["width"]) - r
-    if radius >= room:
-        raise ParameterError(
-            f"parameter 'pocket' = {v['pocket']:g}: the pocket must stay on the flat of the top face "
-            f"(diameter below {2 * room:g} mm: the smaller side minus twice 'round')"
-        )
-    if v["depth"] > v["height"] - 2.0 * r:
+    r = v["round"]
+    for size, side in (("pocket_length", "length"), ("pocket_width", "width")):
+        if v[size] >= v[side] - 2 * r:
+            raise ParameterError(
+                f"parameter '{size}' = {v[size]:g}: the pocket must stay on the flat of the top face "
+                f"(less than {side} - 2 x round = {v[side] - 2 * r:g} mm)"
+            )
+    if v["depth"] > v["height"] - 2 * r:
         raise ParameterError(
             f"parameter 'depth' = {v['depth']:g}: expected at most height - 2 x round = "
             f"{v['height'] - 2 * r:g} mm, so the pocket's floor stays above the rounded bottom"
         )
-    if v["floor_fillet"] >= min(radius, v["depth"]):
+    half = 0.5 * min(v["pocket_length"], v["pocket_width"])
+    if v["corner"] >= half:
         raise ParameterError(
-            f"parameter 'floor_fillet' = {v['floor_fillet']:g}: expected less than the pocket's radius "
-            f"and depth ({min(radius, v['depth']):g} mm)"
+            f"parameter 'corner' = {v['corner']:g}: expected less than half the pocket's smaller side ({half:g} mm)"
+        )
+    if v["floor_fillet"] >= min(v["corner"], v["depth"]):
+        raise ParameterError(
+            f"parameter 'floor_fillet' = {v['floor_fillet']:g}: expected less than the pocket's corner radius "
+            f"and depth ({min(v['corner'], v['depth']):g} mm)"
         )
 
 
-def exact_volume(v: dict) -> float:
-    """Volume in mm^3: the rounded box (a smaller box grown by a ball of radius ``round``), minus
-    the pocket, plus the floor fillet's spandrel turned about the pocket's axis (Pappus)."""
-    r, R, d, p = v["round"], 0.5 * v["pocket"], v["depth"], v["floor_fillet"]
+def _rounded_box(v: dict) -> tuple[float, float]:
+    """``(volume, area)`` of the box with every edge rounded: a smaller box grown by a ball."""
+    r = v["round"]
     a, b, c = (v[k] - 2 * r for k in ("length", "width", "height"))
-    box = a * b * c + 2 * r * (a * b + b * c + c * a) + math.pi * r * r * (a + b + c) + 4 / 3 * math.pi * r**3
-    fillet = 2 * math.pi * (R - _SPANDREL_CENTROID * p) * _SPANDREL * p * p
-    return box - math.pi * R * R * d + fillet
+    volume = a * b * c + 2 * r * (a * b + b * c + c * a) + math.pi * r * r * (a + b + c) + 4 / 3 * math.pi * r**3
+    area = 2 * (a * b + b * c + c * a) + 2 * math.pi * r * (a + b + c) + 4 * math.pi * r * r
+    return volume, area
+
+
+def exact_volume(v: dict) -> float:
+    """Volume in mm^3: the rounded box, minus the pocket (a rectangle with rounded corners times
+    the depth), plus the floor fillet's spandrel along the straight sides and, at the four
+    corners, turned a full turn about the corner axes in all (Pappus)."""
+    a, b, d, rho, p = v["pocket_length"], v["pocket_width"], v["depth"], v["corner"], v["floor_fillet"]
+    straight = 2 * (a + b) - 8 * rho
+    pocket = d * (a * b - (4 - math.pi) * rho**2)
+    fillet = _SPANDREL * p * p * (straight + 2 * math.pi * (rho - _SPANDREL_CENTROID * p))
+    return _rounded_box(v)[0] - pocket + fillet
 
 
 def exact_area(v: dict) -> float:
-    """Area in mm^2: the rounded box, plus the pocket's wall (its floor replaces the top's disk),
-    with the floor fillet (a quarter circle turned about the axis, Pappus) instead of the floor's
-    outer ring and the wall's lowest ``floor_fillet``."""
-    r, R, d, p = v["round"], 0.5 * v["pocket"], v["depth"], v["floor_fillet"]
-    a, b, c = (v[k] - 2 * r for k in ("length", "width", "height"))
-    box = 2 * (a * b + b * c + c * a) + 2 * math.pi * r * (a + b + c) + 4 * math.pi * r * r
-    fillet = 2 * math.pi * (R - p + 2 * p / math.pi) * (math.pi * p / 2)
-    return box + 2 * math.pi * R * d - math.pi * (R * R - (R - p) ** 2) - 2 * math.pi * R * p + fillet
+    """Area in mm^2: the rounded box plus the pocket's walls (its floor replaces the opening);
+    the floor fillet swaps ``2 p`` of floor and wall for a quarter circle ``pi p / 2`` along the
+    straight sides, and at the corners a ring of floor and a band of wall for a quarter torus
+    (a quarter circle turned a full turn in all, Pappus)."""
+    a, b, d, rho, p = v["pocket_length"], v["pocket_width"], v["depth"], v["corner"], v["floor_fillet"]
+    straight = 2 * (a + b) - 8 * rho
+    walls = (straight + 2 * math.pi * rho) * d
+    sides = straight * (math.pi * p / 2 - 2 * p)
+    torus = 2 * math.pi * (rho - p + 2 * p / math.pi) * (math.pi * p / 2)
+    corners = torus - math.pi * (rho**2 - (rho - p) ** 2) - 2 * math.pi * rho * p
+    return _rounded_box(v)[1] + walls + sides + corners
 
 
 def solid(v: dict):
@@ -85,12 +107,15 @@ def solid(v: dict):
     from splinekit import brep
 
     L, W, H = v["length"], v["width"], v["height"]
-    R, d = 0.5 * v["pocket"], v["depth"]
+    a, b, d = v["pocket_length"], v["pocket_width"], v["depth"]
+    x0, y0 = 0.5 * (L - a), 0.5 * (W - b)
     body = brep.fillet(brep.box(L, W, H), "all", v["round"])
     margin = 1.0  # the cutter sticks out of the top face, so no faces coincide
-    body = brep.cut(body, brep.cylinder(R, d + margin, origin=(0.5 * L, 0.5 * W, H - d)))
-    # the floor's circular edge, at its point on the +y side (the wall's seam is on the +x side)
-    body = brep.fillet(body, [(0.5 * L, 0.5 * W + R, H - d)], v["floor_fillet"])
+    body = brep.cut(body, brep.box(a, b, d + margin, origin=(x0, y0, H - d)))
+    # the pocket's four vertical edges, at mid depth
+    body = brep.fillet(body, [(x, y, H - 0.5 * d) for x in (x0, x0 + a) for y in (y0, y0 + b)], v["corner"])
+    # one floor edge: OCC rounds the whole tangent chain round the floor
+    body = brep.fillet(body, [(0.5 * L, y0, H - d)], v["floor_fillet"])
     return brep.Solid(body.shells, name=NAME)
 
 
@@ -98,9 +123,10 @@ def build(**params) -> Model:
     """The block as one exact solid (``solids``).
 
     Checks (closed forms of :func:`exact_volume` and :func:`exact_area`, 1e-6
-    relative): ``"volume"`` (mm^3), ``"area"`` (mm^2); ``"faces"``: 29 (6 flats,
-    12 edge fillets, 8 corner patches, the pocket's wall, floor and floor
-    fillet); ``"euler_characteristic"``: 2 (no through hole).
+    relative): ``"volume"`` (mm^3), ``"area"`` (mm^2); ``"faces"``: 43 (the
+    rounded box's 6 flats, 12 edge fillets and 8 corner patches; the pocket's
+    4 walls, 4 corners, floor and 8 floor fillets); ``"euler_characteristic"``:
+    2 (no through hole).
     """
     v = resolve_params(NAME, PARAMETERS, params)
     _check_fit(v)
@@ -113,7 +139,7 @@ def build(**params) -> Model:
         checks={
             "volume": (volume, 1e-6 * volume),
             "area": (area, 1e-6 * area),
-            "faces": (29, 0),
+            "faces": (43, 0),
             "euler_characteristic": (2, 0),
         },
     )
