@@ -66,9 +66,17 @@ def edge_uses(faces):
             for f, face in enumerate(faces) for l, loop in enumerate(face.boundary_loops()) for k, e in enumerate(loop)]  # fmt: skip
 
 
+DOMAIN_SLACK = 1e-2
+"""How far (relative to the domain's range) a pcurve may stray outside its surface's domain:
+files written by CAD systems carry pcurves a little off the domain (their own tolerances); the
+surface is evaluated there by its polynomial extension (which continues a rational arc on its
+circle), as OCC does."""
+
+
 def check_domains(uses, pcurves, samples: int = 33):
     """Raise ParameterError naming the face, loop and edge of the first pcurve that leaves its
-    surface's parameter domain (checked at ``samples`` points per pcurve)."""
+    surface's parameter domain by more than :data:`DOMAIN_SLACK` of its range (checked at
+    ``samples`` points per pcurve)."""
     if not uses:
         return
     dom = np.array([u.edge.domain for u in uses])
@@ -77,7 +85,7 @@ def check_domains(uses, pcurves, samples: int = 33):
     uv = pcurves.evaluate(np.repeat(np.arange(len(uses)), samples), t).reshape(len(uses), samples, 2)
     box = np.array([u.face.domain for u in uses])  # (U, 2, 2): (u0, u1), (v0, v1)
     lo, hi = box[:, :, 0], box[:, :, 1]
-    slack = 1e-7 * (hi - lo)
+    slack = DOMAIN_SLACK * (hi - lo)
     bad = ((uv < (lo - slack)[:, None]) | (uv > (hi + slack)[:, None])).any(axis=(1, 2))
     if bad.any():
         i = int(np.flatnonzero(bad)[0])
@@ -289,7 +297,7 @@ def sample_groups(uses, groups, scales, tol, angle_tol, surfaces, pc):
         if off.any():  # the affine map misses: project onto those uses' curves
             for o in np.unique(owner[off]):
                 sel = np.flatnonzero(owner == o)
-                s[sel] = _project(uses[lu[o]], s[sel], X[idx[sel]], c[o], d[o])
+                s[sel] = _project(uses[lu[o]], s[sel], X[idx[sel]], c[o], d[o], surfaces)
                 uv[sel] = uses[lu[o]].edge.pcurve.evaluate(s[sel])
         useg = np.flatnonzero(owner[1:] == owner[:-1])
         mid = 0.5 * (uv[useg] + uv[useg + 1])
@@ -315,23 +323,20 @@ def sample_groups(uses, groups, scales, tol, angle_tol, surfaces, pc):
     return out
 
 
-def _project(use, s, X, c, d, rounds: int = 6):
+def _project(use, s, X, c, d, surfaces, rounds: int = 6):
     """Gauss-Newton steps moving the parameters ``s`` so that the use's surface points approach
-    ``X`` (only where the affine guess is off by more than rounding)."""
-    uv, P = use.on_surface(s)
-    size = np.abs(X).max() + 1.0
-    off = np.linalg.norm(P - X, axis=1) > 1e-9 * size
-    off[[0, -1]] = False  # the ends are the edge's vertices: keep them on the domain's ends
-    if not off.any():
-        return s
+    ``X`` (where the affine guess is off). Surfaces through the batch evaluator, which also
+    answers slightly off the domain (pcurves of files often stray a little)."""
     s = s.copy()
-    idx = np.flatnonzero(off)
+    idx = np.arange(1, s.size - 1)  # the ends are the edge's vertices: keep them on the domain's ends
+    face = np.full(idx.size, use.f)
     for _ in range(rounds):
+        if idx.size == 0:
+            break
         D = use.edge.pcurve.derivatives(s[idx], 1)  # (2, k, 2)
-        uv = D[0]
-        S = use.face.surface.derivatives(uv[:, 0], uv[:, 1], 1)  # (2, 2, k, 3)
-        F1 = S[1, 0] * D[1][:, :1] + S[0, 1] * D[1][:, 1:]
-        r = X[idx] - S[0, 0]
+        S, Su, Sv = surfaces.partials(face, D[0][:, 0], D[0][:, 1])
+        F1 = Su * D[1][:, :1] + Sv * D[1][:, 1:]
+        r = X[idx] - S
         denom = np.einsum("ij,ij->i", F1, F1)
         step = np.einsum("ij,ij->i", F1, r) / np.where(denom > 0, denom, 1.0)
         s[idx] = np.clip(s[idx] + step, min(c, d), max(c, d))
