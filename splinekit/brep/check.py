@@ -33,7 +33,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from ..errors import BRepError, TrimError
-from .classify import OUTSIDE, _classify_uv, _face_mesh, trim_pieces, uv_tolerance
+from .classify import OUTSIDE, _classify_uv, _face_mesh, sample_trims, trim_pieces, uv_tolerance
 from .topology import surface_points
 
 __all__ = ["Problem", "Checkable", "check_face", "check_shell", "check_solid", "FACE_KINDS"]
@@ -84,18 +84,23 @@ def _face_label(face, index=None) -> str:
 def _loop_polylines(face):
     """Per loop: ``(points (k, 2), edge index of each segment (k,))``; segment ``i`` runs from
     point ``i`` to point ``i + 1`` (cyclically)."""
+    return _split_long_segments([(p, e) for p, e, _ in sample_trims(face, _PER_PIECE)])
+
+
+def _split_long_segments(polys):
+    """Cut segments longer than twice the median into equal parts (exactly on them), so that a
+    KD-tree radius of the longest segment pairs each segment with its neighbours only."""
+    lengths = np.concatenate([np.linalg.norm(np.roll(p, -1, axis=0) - p, axis=1) for p, _ in polys])
+    h = 2.0 * float(np.median(lengths))
+    if not h > 0:
+        return polys
     out = []
-    t = np.linspace(0.0, 1.0, _PER_PIECE + 1)[:-1]
-    for loop in face.boundary_loops():
-        pts, owner = [], []
-        for ei, e in enumerate(loop):
-            br = e.pcurve.bezier_breakpoints()
-            par = (br[:-1, None] + (br[1:] - br[:-1])[:, None] * t[None]).ravel()
-            if e.pcurve.degree == 1:
-                par = br[:-1]
-            pts.append(e.pcurve.evaluate(par))
-            owner.append(np.full(len(par), ei))
-        out.append((np.concatenate(pts), np.concatenate(owner)))
+    for p, owner in polys:
+        q = np.roll(p, -1, axis=0)
+        k = np.maximum(1, np.ceil(np.linalg.norm(q - p, axis=1) / h)).astype(np.intp)
+        seg = np.repeat(np.arange(len(p)), k)
+        frac = (np.arange(k.sum()) - np.repeat(np.cumsum(k) - k, k)) / np.repeat(k, k)
+        out.append((p[seg] + frac[:, None] * (q[seg] - p[seg]), owner[seg]))
     return out
 
 
@@ -199,17 +204,24 @@ def check_face(face) -> list:
                 problems.append(Problem("crossing-loops", f"{label}: loops {li} and {lj} cross or touch {where}",
                                         float(d[k]), face=index, loop=li, edge=int(edge_of[i[k]])))
 
-    # holes inside the outer loop and not inside one another (their vertices, by winding)
-    for li in range(1, len(polys)):
-        pts = polys[li][0]
-        outer = _classify_uv(trim_pieces(face, 0), pts, tol_uv)
-        if np.any(outer == OUTSIDE):
+    # holes inside the outer loop (all their points, by winding) and not inside one another (a
+    # hole's first point, tested only against the holes whose box holds it)
+    if len(polys) > 1:
+        holes = np.concatenate([p for p, _ in polys[1:]])
+        owner = np.concatenate([np.full(len(p), li) for li, (p, _) in enumerate(polys) if li > 0])
+        outer = _classify_uv(trim_pieces(face, 0), holes, tol_uv)
+        for li in np.unique(owner[outer == OUTSIDE]):
             problems.append(Problem("inner-loop-outside", f"{label}: inner loop {li} is not inside the outer loop",
-                                    float(np.mean(outer == OUTSIDE)), face=index, loop=li))
-        for lk in range(1, len(polys)):
-            if lk != li and np.all(_classify_uv(trim_pieces(face, lk), pts[:1], tol_uv) != OUTSIDE):
-                problems.append(Problem("inner-loop-outside", f"{label}: inner loop {li} lies inside inner loop {lk}",
-                                        None, face=index, loop=li))
+                                    float(np.mean(outer[owner == li] == OUTSIDE)), face=index, loop=int(li)))
+        lo = np.array([p.min(axis=0) for p, _ in polys[1:]])
+        hi = np.array([p.max(axis=0) for p, _ in polys[1:]])
+        first = np.array([p[0] for p, _ in polys[1:]])
+        inbox = np.all((first[:, None] >= lo[None]) & (first[:, None] <= hi[None]), axis=2)
+        np.fill_diagonal(inbox, False)
+        for i, k in zip(*np.nonzero(inbox)):
+            if _classify_uv(trim_pieces(face, int(k) + 1), first[i:i + 1], tol_uv)[0] != OUTSIDE:
+                problems.append(Problem("inner-loop-outside", f"{label}: inner loop {i + 1} lies inside inner loop {k + 1}",
+                                        None, face=index, loop=int(i) + 1))
 
     # pcurve against 3-D curve
     for li, loop in enumerate(loops):

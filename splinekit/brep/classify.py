@@ -35,6 +35,7 @@ from scipy.spatial import Delaunay, cKDTree
 
 from .. import limits
 from .._validate import as_float_array
+from ..basis.bernstein import all_bernstein
 from ..errors import ParameterError
 from .topology import surface_points
 
@@ -70,30 +71,68 @@ def uv_tolerance(face, tolerance: float | None = None) -> float:
     return tol / face._cache["speed"]
 
 
-def trim_pieces(face, loop: int | None = None) -> dict:
-    """The face's trims (or loop ``loop`` alone) as homogeneous Bézier pieces grouped by degree:
-    ``{p: (m, p + 1, 3)}`` with rows ``(w u, w v, w)``. Each loop is closed exactly: an edge's
-    first point is moved onto the previous edge's last (gaps beyond tolerance are
-    :mod:`check`'s business). Cached on the face."""
-    key = ("trim_pieces", loop)
-    if key in face._cache:
-        return face._cache[key]
-    loops = face.boundary_loops()
-    groups: dict[int, list] = {}
-    for lp in (loops if loop is None else [loops[loop]]):
+def _trim_table(face) -> dict:
+    """Every trim's Bézier pieces, grouped by degree: ``{p: (H (m, p + 1, 3), loop (m,), edge (m,),
+    order (m,))}``; ``H`` rows are homogeneous ``(w u, w v, w)``, ``order`` the piece's position
+    along the face's loops (loop after loop). Each loop is closed exactly: an edge's first point is
+    moved onto the previous edge's last (gaps beyond tolerance are :mod:`check`'s business).
+    Cached on the face."""
+    if "trim_table" in face._cache:
+        return face._cache["trim_table"]
+    rows: dict[int, list] = {}
+    count = 0
+    for li, lp in enumerate(face.boundary_loops()):
         prev_end = lp[-1].end_uv
-        for edge in lp:
+        for ei, edge in enumerate(lp):
             pieces = edge.pcurve.to_bezier()
             for k, b in enumerate(pieces):
                 P = np.array(b.control_points, dtype=np.float64)
                 w = np.ones(len(P)) if b.weights is None else np.array(b.weights, dtype=np.float64)
                 if k == 0:
                     P[0] = prev_end
-                groups.setdefault(b.degree, []).append(np.concatenate([P * w[:, None], w[:, None]], axis=1))
+                rows.setdefault(b.degree, []).append((np.concatenate([P * w[:, None], w[:, None]], axis=1), li, ei, count))
+                count += 1
             prev_end = pieces[-1].control_points[-1]
-    out = {p: np.array(hs) for p, hs in groups.items()}
-    face._cache[key] = out
-    return out
+    table = {p: (np.array([r[0] for r in rs]), np.array([r[1] for r in rs]), np.array([r[2] for r in rs]),
+                 np.array([r[3] for r in rs])) for p, rs in rows.items()}
+    face._cache["trim_table"] = table
+    return table
+
+
+def trim_pieces(face, loop: int | None = None) -> dict:
+    """The face's trims (or loop ``loop`` alone) as homogeneous Bézier pieces grouped by degree:
+    ``{p: (m, p + 1, 3)}`` (see :func:`_trim_table`)."""
+    table = _trim_table(face)
+    if loop is None:
+        return {p: t[0] for p, t in table.items()}
+    return {p: t[0][t[1] == loop] for p, t in table.items() if np.any(t[1] == loop)}
+
+
+def sample_trims(face, per_piece: int) -> list:
+    """Polylines of the face's loops: per loop ``(points (k, 2), edge (k,), j (k,))``, point ``i``
+    starting segment ``i`` (cyclically), ``j`` its index within its piece. Curved pieces give
+    ``per_piece`` points each (``t = j / per_piece``), straight ones their start point only;
+    evaluated for all pieces of a degree at once (Bernstein matrix)."""
+    table = _trim_table(face)
+    n_pieces = sum(len(t[0]) for t in table.values())
+    counts = np.zeros(n_pieces, dtype=np.intp)
+    for p, (H, _, _, order) in table.items():
+        counts[order] = 1 if p == 1 else per_piece
+    start = np.concatenate([[0], np.cumsum(counts)])
+    pts = np.empty((start[-1], 2))
+    loop_of = np.empty(start[-1], dtype=np.intp)
+    edge_of = np.empty(start[-1], dtype=np.intp)
+    local = np.empty(start[-1], dtype=np.intp)
+    for p, (H, loops, edges, order) in table.items():
+        k = 1 if p == 1 else per_piece
+        B = all_bernstein(p, np.arange(k) / k)  # (p + 1, k)
+        X = np.einsum("ik,mid->mkd", B, H)
+        where = (start[order][:, None] + np.arange(k)[None]).ravel()
+        pts[where] = (X[..., :2] / X[..., 2:]).reshape(-1, 2)
+        loop_of[where] = np.repeat(loops, k)
+        edge_of[where] = np.repeat(edges, k)
+        local[where] = np.tile(np.arange(k), len(H))
+    return [(pts[loop_of == li], edge_of[loop_of == li], local[loop_of == li]) for li in range(len(face.boundary_loops()))]
 
 
 def _halve(H: np.ndarray):
@@ -135,15 +174,27 @@ def _classify_uv(pieces: dict, uv: np.ndarray, tol: float) -> np.ndarray:
     crossings = np.zeros(n, dtype=np.int64)
     on = np.zeros(n, dtype=bool)
     small = tol / 8.0
-    for H in pieces.values():
-        m = len(H)
-        # all point/piece pairs, in chunks within the memory budget
-        chunk = max(1, int(4e6 // max(m, 1)))
-        for s in range(0, n, chunk):
-            idx = np.arange(s, min(n, s + chunk))
-            limits.check(len(idx) * m * 8 * 4, "point/trim pairs")
-            pt = np.repeat(idx, m)
-            pc = np.tile(np.arange(m), len(idx))
+    # only pairs whose point lies in the piece's v-range (widened by tol) can cross or be near:
+    # points sorted by v, each piece takes a contiguous run of them
+    order = np.argsort(uv[:, 1], kind="stable")
+    vs = uv[order, 1]
+    for H0 in pieces.values():
+        C0 = H0[:, :, :2] / H0[:, :, 2:]
+        first = np.searchsorted(vs, C0[:, :, 1].min(axis=1) - tol, side="left")
+        count = np.searchsorted(vs, C0[:, :, 1].max(axis=1) + tol, side="right") - first
+        ends = np.cumsum(count)
+        # pieces in chunks of about 4e6 pairs (memory budget)
+        bounds = np.unique(np.concatenate([[0], np.searchsorted(ends, np.arange(4e6, ends[-1] if len(ends) else 0, 4e6)), [len(H0)]]))
+        for c0, c1 in zip(bounds[:-1], bounds[1:]):
+            cnt = count[c0:c1]
+            total = int(cnt.sum())
+            if total == 0:
+                continue
+            limits.check(total * 8 * 4, "point/trim pairs")
+            pc = np.repeat(np.arange(c1 - c0), cnt)
+            offs = np.arange(total) - np.repeat(np.cumsum(cnt) - cnt, cnt)
+            pt = order[np.repeat(first[c0:c1], cnt) + offs]
+            H = H0[c0:c1]
             Hs = H
             for level in range(_MAX_LEVELS + 1):
                 if pt.size == 0:
@@ -228,16 +279,10 @@ def _face_mesh(face, per_span: int = 8):
     lines = [np.unique(np.concatenate([np.linspace(a, b, k + 1) for a, b in zip(br[:-1], br[1:])]))
              for (br, _), k in zip(axes, counts)]
     cell = np.array([np.diff(lines[0]).max(), np.diff(lines[1]).max()])
-    trim, trim_mid = [], []
-    for loop in face.boundary_loops():
-        for e in loop:
-            for k, b in enumerate(e.pcurve.to_bezier()):
-                ext = np.ptp(np.asarray(b.control_points), axis=0)
-                n = max(per_span if b.degree > 1 else 1, int(np.ceil((ext / cell).max())))
-                t = np.linspace(0.0, 1.0, n + 1)
-                trim.append(b.evaluate(t[:-1]))
-                trim_mid.append((b.evaluate(t[:-1]), b.evaluate(t[1:]), b.evaluate(0.5 * (t[:-1] + t[1:]))))
-    trim = np.concatenate(trim)
+    # trims: curved pieces per_span points, then every segment cut to at most a cell
+    rings = [_refine_polygon(p, cell) for p, _, _ in sample_trims(face, per_span)]
+    trim = np.concatenate(rings)
+    face._cache["cap"] = _cap(face, rings)
     scale = 1.0 / np.maximum(cell, 1e-300)  # u and v in cells: "half a cell" the same both ways
     U, V = np.meshgrid(lines[0], lines[1], indexing="ij")
     grid = np.stack([U.ravel(), V.ravel()], axis=1)
@@ -266,12 +311,46 @@ def _face_mesh(face, per_span: int = 8):
     e = np.concatenate([tri[:, [0, 1]], tri[:, [1, 2]], tri[:, [2, 0]]])
     mid_uv = 0.5 * (pts2[e[:, 0]] + pts2[e[:, 1]])
     dev = np.linalg.norm(surface_points(face, mid_uv) - 0.5 * (P[e[:, 0]] + P[e[:, 1]]), axis=1)
-    a2, b2, m2 = (np.concatenate(x) for x in zip(*trim_mid))
-    S = [surface_points(face, x) for x in (a2, b2, m2)]
-    dev_trim = np.linalg.norm(S[2] - 0.5 * (S[0] + S[1]), axis=1)
-    out = (P, tri, float(max(dev.max(initial=0.0), dev_trim.max(initial=0.0))))
+    # and the trims' own curvature: the twice-as-dense samples' odd points against the chords
+    # (sampled twice as densely, a curved piece's odd points are the mid points of the coarse
+    # segments, whose ends are their neighbours)
+    dev_trim = 0.0
+    for p2, _, j in sample_trims(face, 2 * per_span):
+        odd = np.flatnonzero(j % 2 == 1)
+        if odd.size:
+            S = surface_points(face, p2)
+            prev, nxt = S[odd - 1], S[(odd + 1) % len(S)]
+            dev_trim = max(dev_trim, float(np.linalg.norm(S[odd] - 0.5 * (prev + nxt), axis=1).max()))
+    out = (P, tri, float(max(dev.max(initial=0.0), dev_trim)))
     face._cache["mesh"] = out
     return out
+
+
+def _cap(face, rings):
+    """A fan of triangles ``(V (k + 1, 3), T (k, 3))`` from one apex (the mean of the trims'
+    points) to every segment of the face's sampled trims ``rings`` (closed polygons in
+    ``(u, v)``): the same oriented boundary as the face's mesh. Its winding number equals the
+    mesh's at every point outside the convex hull of the two, hence outside the box of the
+    surface's control points."""
+    P = [surface_points(face, r) for r in rings]
+    V = np.concatenate(P)
+    apex = V.mean(axis=0)
+    start = np.cumsum([0] + [len(r) for r in rings])[:-1]
+    i = np.concatenate([s + np.arange(len(r)) for s, r in zip(start, rings)])
+    j = np.concatenate([s + np.roll(np.arange(len(r)), -1) for s, r in zip(start, rings)])
+    k = np.full(len(i), len(V))
+    T = np.stack([k, j, i] if face.reversed else [k, i, j], axis=1)
+    return np.concatenate([V, apex[None]]), T
+
+
+def _refine_polygon(p, cell):
+    """The closed polygon ``p`` ``(k, 2)`` with every segment cut into equal parts no longer than
+    ``cell`` ``(2,)`` in either coordinate (points exactly on the segments)."""
+    q = np.roll(p, -1, axis=0)
+    k = np.maximum(1, np.ceil((np.abs(q - p) / cell).max(axis=1))).astype(np.intp)
+    seg = np.repeat(np.arange(len(p)), k)
+    frac = (np.arange(k.sum()) - np.repeat(np.cumsum(k) - k, k)) / np.repeat(k, k)
+    return p[seg] + frac[:, None] * (q[seg] - p[seg])
 
 
 def _winding_numbers(points, V, T):
@@ -281,18 +360,21 @@ def _winding_numbers(points, V, T):
     w = np.zeros(n)
     if len(T) == 0 or n == 0:
         return w
-    A, B, C = (V[T[:, i]].T[:, None, :] for i in range(3))  # (3, 1, t) each
-    chunk = max(1, int(1e6 // len(T)))
+    A, B, C = (V[T[:, i]] for i in range(3))
+    chunk = max(1, int(5e5 // len(T)))
     for s in range(0, n, chunk):
-        p = points[s:s + chunk].T[:, :, None]  # (3, c, 1)
-        limits.check(p.shape[1] * len(T) * 8 * 16, "winding-number pairs")
-        a, b, c = A - p, B - p, C - p  # (3, c, t)
-        la = np.sqrt((a * a).sum(axis=0))
-        lb = np.sqrt((b * b).sum(axis=0))
-        lc = np.sqrt((c * c).sum(axis=0))
-        det = (a[0] * (b[1] * c[2] - b[2] * c[1]) + a[1] * (b[2] * c[0] - b[0] * c[2])
-               + a[2] * (b[0] * c[1] - b[1] * c[0]))
-        den = la * lb * lc + (a * b).sum(axis=0) * lc + (b * c).sum(axis=0) * la + (c * a).sum(axis=0) * lb
+        p = points[s:s + chunk]
+        limits.check(len(p) * len(T) * 8 * 16, "winding-number pairs")
+        # components as (c, t) arrays: plain products beat reductions over a length-3 axis
+        ax, ay, az = (A[None, :, k] - p[:, k, None] for k in range(3))
+        bx, by, bz = (B[None, :, k] - p[:, k, None] for k in range(3))
+        cx, cy, cz = (C[None, :, k] - p[:, k, None] for k in range(3))
+        la = np.sqrt(ax * ax + ay * ay + az * az)
+        lb = np.sqrt(bx * bx + by * by + bz * bz)
+        lc = np.sqrt(cx * cx + cy * cy + cz * cz)
+        det = ax * (by * cz - bz * cy) + ay * (bz * cx - bx * cz) + az * (bx * cy - by * cx)
+        den = (la * lb * lc + (ax * bx + ay * by + az * bz) * lc + (bx * cx + by * cy + bz * cz) * la
+               + (cx * ax + cy * ay + cz * az) * lb)
         w[s:s + chunk] = np.arctan2(det, den).sum(axis=1)
     return w / (2.0 * np.pi)
 
@@ -330,14 +412,18 @@ def _near_mesh(solid, Q, tol):
         if len(T) == 0:
             continue
         band = 3.0 * dev + 2.0 * tol
+        # the mesh lies in the box of the surface's control points: only points near it count
+        sel = np.flatnonzero(_box_distance(Q, f.surface.control_points.reshape(-1, 3)) <= band)
+        if sel.size == 0:
+            continue
         A, B, C = P[T[:, 0]], P[T[:, 1]], P[T[:, 2]]
         cen = (A + B + C) / 3.0
         R = float(np.max([np.linalg.norm(X - cen, axis=1).max() for X in (A, B, C)]))
-        lists = cKDTree(cen).query_ball_point(Q, band + R)
-        counts = np.fromiter((len(x) for x in lists), dtype=np.intp, count=len(Q))
+        lists = cKDTree(cen).query_ball_point(Q[sel], band + R)
+        counts = np.fromiter((len(x) for x in lists), dtype=np.intp, count=len(sel))
         if not counts.any():
             continue
-        qi = np.repeat(np.arange(len(Q)), counts)
+        qi = np.repeat(sel, counts)
         ti = np.fromiter((j for x in lists for j in x), dtype=np.intp, count=int(counts.sum()))
         limits.check(len(ti) * 8 * 30, "point/triangle distance pairs")
         d = _point_triangle_distance(Q[qi], A[ti], B[ti], C[ti])
@@ -353,6 +439,25 @@ def _solid_mesh(solid):
         solid._cache["mesh"] = (np.concatenate([m[0] for m in meshes]),
                                 np.concatenate([m[1] + o for m, o in zip(meshes, offsets)]))
     return solid._cache["mesh"]
+
+
+def _solid_winding_numbers(solid, Q, tol):
+    """Winding numbers ``(n,)`` of the solid's boundary at ``Q``: per face, its mesh for the points
+    inside the box of its control points and, where it has fewer triangles, its cap (the same
+    value, exactly) for the points outside."""
+    w = np.zeros(len(Q))
+    for f in solid.faces:
+        P, T, _ = _face_mesh(f)
+        cV, cT = f._cache["cap"] if "cap" in f._cache else (P, T)
+        if len(cT) >= len(T):
+            w += _winding_numbers(Q, P, T)
+            continue
+        cp = f.surface.control_points.reshape(-1, 3)
+        margin = tol + 1e-9 * float(np.ptp(cp, axis=0).max())
+        near = np.all((Q >= cp.min(axis=0) - margin) & (Q <= cp.max(axis=0) + margin), axis=1)
+        w[near] += _winding_numbers(Q[near], P, T)
+        w[~near] += _winding_numbers(Q[~near], cV, cT)
+    return w
 
 
 def _bounding_box(solid):
@@ -387,9 +492,8 @@ def contains(solid, points, tolerance: float | None = None) -> np.ndarray:
     cand = np.flatnonzero(np.all((P >= lo - tol) & (P <= hi + tol), axis=1))
     if cand.size == 0:
         return out[0] if single else out
-    V, T = _solid_mesh(solid)
     Q = P[cand]
-    w = _winding_numbers(Q, V, T)
+    w = _solid_winding_numbers(solid, Q, tol)
     out[cand] = np.where(np.rint(w) % 2 == 1, np.int8(INSIDE), np.int8(OUTSIDE))
     # near the mesh, its chord error may decide wrongly: settle those points exactly
     near = np.flatnonzero(_near_mesh(solid, Q, tol))
@@ -406,15 +510,23 @@ def _closest_feature_side(solid, Q, tol, fallback, project):
     best = np.full(n, np.inf)
     side = np.zeros(n)
     faces = solid.faces
+    # the mesh's vertices lie on the boundary: their nearest one bounds the closest distance, so
+    # faces and edges whose box is further away are skipped
+    V, _ = _solid_mesh(solid)
+    bound = cKDTree(V).query(Q)[0] * (1.0 + 1e-9) + tol
     for f in faces:
-        pr = project(f.surface, Q)
-        uv = np.asarray(pr.parameters).reshape(n, 2)
+        sel = np.flatnonzero(_box_distance(Q, f.surface.control_points.reshape(-1, 3)) < np.minimum(best, bound))
+        if sel.size == 0:
+            continue
+        pr = project(f.surface, Q[sel])
+        uv = np.asarray(pr.parameters).reshape(len(sel), 2)
         ok = contains_uv(f, uv) != OUTSIDE
-        better = ok & (pr.distances < best)
+        better = ok & (pr.distances < best[sel])
         if better.any():
             nrm = f.normals(uv[better, 0], uv[better, 1])
-            best[better] = pr.distances[better]
-            side[better] = np.einsum("ij,ij->i", Q[better] - pr.points[better], nrm)
+            idx = sel[better]
+            best[idx] = pr.distances[better]
+            side[idx] = np.einsum("ij,ij->i", Q[idx] - pr.points[better], nrm)
     vertex = np.zeros(n, dtype=bool)
     for shell in solid.shells:
         topo = shell.topology
@@ -426,23 +538,27 @@ def _closest_feature_side(solid, Q, tol, fallback, project):
             e = sf[fi].boundary_loops()[li][ei]
             if e.curve is None:
                 continue
-            pr = project(e.curve, Q)
-            better = pr.distances < best
-            if not better.any():
+            sel = np.flatnonzero(_box_distance(Q, e.curve.control_points) < np.minimum(best, bound))
+            if sel.size == 0:
                 continue
-            t = np.asarray(pr.parameters).reshape(n)[better]
+            pr = project(e.curve, Q[sel])
+            hit = pr.distances < best[sel]
+            if not hit.any():
+                continue
+            better = sel[hit]
+            t = np.asarray(pr.parameters).reshape(len(sel))[hit]
+            feet = pr.points[hit]
+            dist = pr.distances[hit]
             a, b = e.domain
             at_end = (np.abs(t - a) <= 1e-9 * max(1.0, abs(b - a))) | (np.abs(t - b) <= 1e-9 * max(1.0, abs(b - a)))
-            nsum = np.zeros((int(better.sum()), 3))
+            nsum = np.zeros((len(better), 3))
             for (fj, lj, ej) in g.uses:
                 use = sf[fj].boundary_loops()[lj][ej]
-                # the use's parameter at the same 3-D point: the uses of the primitives and of OCC
-                # share the edge's parameter range; project onto this use's curve when they differ
-                tu = t if use is e else _use_parameter(use, pr.points[better], project)
-                uvu = use.pcurve.evaluate(tu)
+                # the other use's (u, v) at the same 3-D point: through its own curve's parameter
+                uvu = _use_uv(sf[fj], use, t if use is e else None, feet, project)
                 nsum += sf[fj].normals(uvu[:, 0], uvu[:, 1])
-            best[better] = pr.distances[better]
-            side[better] = np.einsum("ij,ij->i", Q[better] - pr.points[better], nsum)
+            best[better] = dist
+            side[better] = np.einsum("ij,ij->i", Q[better] - feet, nsum)
             vertex[better] = at_end
     result = np.where(side > 0, np.int8(OUTSIDE), np.int8(INSIDE))
     result[vertex] = fallback[vertex]
@@ -451,8 +567,19 @@ def _closest_feature_side(solid, Q, tol, fallback, project):
     return result
 
 
-def _use_parameter(use, points, project):
-    """Parameters of ``points`` (on the edge) on another use's 3-D curve (or pcurve image)."""
-    if use.curve is not None:
-        return np.asarray(project(use.curve, points).parameters).reshape(len(points))
-    return np.full(len(points), 0.5 * sum(use.domain))
+def _box_distance(Q, pts):
+    """Distances ``(n,)`` from points ``Q`` to the bounding box of ``pts`` (a lower bound of the
+    distance to a curve or surface with these control points)."""
+    lo, hi = pts.min(axis=0), pts.max(axis=0)
+    return np.linalg.norm(np.maximum(lo - Q, 0.0) + np.maximum(Q - hi, 0.0), axis=1)
+
+
+def _use_uv(face, use, t, points, project):
+    """``(u, v)`` ``(n, 2)`` on ``face`` of ``points`` lying on the edge ``use``: from the edge
+    parameter ``t`` when known, else by projecting onto the use's 3-D curve, or (no curve) onto
+    the face's surface."""
+    if t is None and use.curve is not None:
+        t = np.asarray(project(use.curve, points).parameters).reshape(len(points))
+    if t is not None:
+        return use.pcurve.evaluate(t)
+    return np.asarray(project(face.surface, points).parameters).reshape(len(points), 2)
