@@ -19,7 +19,8 @@ TEAPOT_AREA = 21153.3212370  # scipy's adaptive dblquad on every patch at 1e-12 
 
 def _only_with_slow(request):
     """Long runs (minutes) go only into ``pytest -m slow``."""
-    if "slow" not in (request.config.getoption("markexpr") or ""):
+    expr = request.config.getoption("markexpr") or ""
+    if "slow" not in expr or "not slow" in expr:
         pytest.skip("slow: run with -m slow")
 
 
