@@ -1,0 +1,325 @@
+"""Validity of trimmed faces, shells and solids: a list of named problems, like OpenCascade's
+``BRepCheck_Analyzer``.
+
+Constructors stay permissive and fast; whatever hands a B-rep on (importers, exporters, booleans)
+calls ``obj.raise_if_invalid()`` (or ``obj.validated()``), which raises :class:`~splinekit.errors.TrimError`
+for a face's trims and :class:`~splinekit.errors.BRepError` otherwise, naming the face and the problem.
+
+Problems found (the ``kind`` of each :class:`Problem`):
+
+faces
+    ``open-loop`` (consecutive edges' ends further apart than the tolerance in 3-D, through the
+    surface, or not meeting in ``(u, v)``), ``trim-outside-domain``, ``self-intersecting-loop``,
+    ``crossing-loops`` (two loops cross or touch), ``wrong-loop-orientation`` (outer not
+    counter-clockwise or inner not clockwise, by signed area), ``inner-loop-outside`` (a hole not
+    inside the outer loop, or inside another hole), ``pcurve-deviation`` (the surface at the pcurve
+    is further from the 3-D curve than the tolerance).
+shells
+    the faces' problems, ``inconsistent-orientation`` (a shared edge used twice in the same
+    sense), ``non-manifold-edge`` (used by more than two faces).
+solids
+    the shells' problems, ``open-shell`` (free edges), ``inward-shell`` (the outer shell's signed
+    volume is negative, or a void's positive; estimated on a coarse mesh).
+
+Loops are checked on polylines of the trims sampled per Bézier piece; crossings are found among
+segments paired by a KD-tree on their mid points (no all-pairs loop).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+from ..errors import BRepError, TrimError
+from .classify import OUTSIDE, _classify_uv, _face_mesh, trim_pieces, uv_tolerance
+from .topology import surface_points
+
+__all__ = ["Problem", "Checkable", "check_face", "check_shell", "check_solid", "FACE_KINDS"]
+
+FACE_KINDS = frozenset({"open-loop", "trim-outside-domain", "self-intersecting-loop", "crossing-loops",
+                        "wrong-loop-orientation", "inner-loop-outside", "pcurve-deviation"})
+"""Problems of a single face's trims (raised as TrimError)."""
+
+_PER_PIECE = 24  # polyline samples per Bézier piece of a trim
+
+
+@dataclass(frozen=True)
+class Problem:
+    """One thing wrong with a B-rep.
+
+    ``kind`` names the problem (see the module doc), ``message`` says it in words with the face's
+    name, ``value`` is the measured quantity (a gap, a deviation, an area, a count) or None;
+    ``shell``, ``face``, ``loop``, ``edge`` locate it (indices; None where not applicable).
+    """
+
+    kind: str
+    message: str
+    value: float | None = None
+    shell: int | None = None
+    face: int | None = None
+    loop: int | None = None
+    edge: int | None = None
+
+    @property
+    def where(self) -> dict:
+        """The non-None location indices, e.g. ``{"face": 3, "loop": 1}``."""
+        return {k: getattr(self, k) for k in ("shell", "face", "loop", "edge") if getattr(self, k) is not None}
+
+    def located(self, message: str, **where) -> "Problem":
+        """The same problem with another ``message`` and more location indices (a face's problem
+        seen from its shell)."""
+        fields = {k: getattr(self, k) for k in ("kind", "value", "shell", "face", "loop", "edge")}
+        fields.update({k: v for k, v in where.items() if fields.get(k) is None})
+        return Problem(message=message, **fields)
+
+
+def _face_label(face, index=None) -> str:
+    """``face 3 'top'``, ``face 'top'``, ``face 3`` or ``face``."""
+    return "face" + ("" if index is None else f" {index}") + (f" {face.name!r}" if face.name else "")
+
+
+# -- faces ----------------------------------------------------------------------------------------
+def _loop_polylines(face):
+    """Per loop: ``(points (k, 2), edge index of each segment (k,))``; segment ``i`` runs from
+    point ``i`` to point ``i + 1`` (cyclically)."""
+    out = []
+    t = np.linspace(0.0, 1.0, _PER_PIECE + 1)[:-1]
+    for loop in face.boundary_loops():
+        pts, owner = [], []
+        for ei, e in enumerate(loop):
+            br = e.pcurve.bezier_breakpoints()
+            par = (br[:-1, None] + (br[1:] - br[:-1])[:, None] * t[None]).ravel()
+            if e.pcurve.degree == 1:
+                par = br[:-1]
+            pts.append(e.pcurve.evaluate(par))
+            owner.append(np.full(len(par), ei))
+        out.append((np.concatenate(pts), np.concatenate(owner)))
+    return out
+
+
+def _signed_area(p):
+    q = np.roll(p, -1, axis=0)
+    return 0.5 * float(np.sum(p[:, 0] * q[:, 1] - q[:, 0] * p[:, 1]))
+
+
+def _segment_distances(a0, a1, b0, b1):
+    """Distances ``(n,)`` between segments ``a0 a1`` and ``b0 b1`` (all ``(n, 2)``): 0 when they
+    cross, else the smallest end point to segment distance."""
+    from .classify import _segment_distance
+
+    def orient(p, q, r):
+        return (q[:, 0] - p[:, 0]) * (r[:, 1] - p[:, 1]) - (q[:, 1] - p[:, 1]) * (r[:, 0] - p[:, 0])
+
+    d1, d2 = orient(a0, a1, b0), orient(a0, a1, b1)
+    d3, d4 = orient(b0, b1, a0), orient(b0, b1, a1)
+    cross = (d1 * d2 < 0) & (d3 * d4 < 0)
+    d = np.minimum.reduce([_segment_distance(a0, a1, b0), _segment_distance(a0, a1, b1),
+                           _segment_distance(b0, b1, a0), _segment_distance(b0, b1, a1)])
+    return np.where(cross, 0.0, d)
+
+
+def check_face(face) -> list:
+    """The problems of one trimmed face (messages name it by its ``name``)."""
+    index = None
+    label = _face_label(face)
+    problems = []
+    tol = face.tolerance
+    tol_uv = uv_tolerance(face)
+    s = face.surface
+    (u0, u1), (v0, v1) = face.domain
+    loops = face.boundary_loops()
+    explicit = face.is_trimmed
+
+    # closure: each edge's end against the next edge's start, in 3-D through the surface and in uv
+    for li, loop in enumerate(loops):
+        ends = np.array([e.end_uv for e in loop])
+        starts = np.array([e.start_uv for e in np.roll(np.array(loop, dtype=object), -1)])
+        gap3 = np.linalg.norm(surface_points(face, ends) - surface_points(face, starts), axis=1)
+        gap_uv = np.linalg.norm(ends - starts, axis=1)
+        for ei in np.flatnonzero((gap3 > tol) | (gap_uv > 10.0 * tol_uv + 1e-12 * max(u1 - u0, v1 - v0))):
+            nxt = (ei + 1) % len(loop)
+            what = f"{gap3[ei]:.3g} in 3-D" if gap3[ei] > tol else f"{gap_uv[ei]:.3g} in (u, v) (closed in 3-D only: across a seam?)"
+            problems.append(Problem("open-loop", f"{label}: loop {li} is open between edges {ei} and {nxt}: gap {what} (tolerance {tol:g})",
+                                    float(gap3[ei] if gap3[ei] > tol else gap_uv[ei]), face=index, loop=li, edge=int(ei)))
+    if not explicit:
+        return problems
+
+    polys = _loop_polylines(face)
+    span = max(u1 - u0, v1 - v0)
+    # inside the surface's domain
+    for li, (p, owner) in enumerate(polys):
+        over = np.maximum.reduce([u0 - p[:, 0], p[:, 0] - u1, v0 - p[:, 1], p[:, 1] - v1])
+        bad = over > tol_uv + 1e-12 * span
+        if bad.any():
+            k = int(np.argmax(over))
+            problems.append(Problem("trim-outside-domain", f"{label}: loop {li}, edge {int(owner[k])} leaves the surface's domain "
+                                    f"[{u0:g}, {u1:g}] x [{v0:g}, {v1:g}] by {over[k]:.3g} at (u, v) = ({p[k, 0]:.6g}, {p[k, 1]:.6g})",
+                                    float(over[k]), face=index, loop=li, edge=int(owner[k])))
+
+    # orientation by signed area: outer counter-clockwise, inner clockwise
+    areas = [_signed_area(p) for p, _ in polys]
+    for li, a in enumerate(areas):
+        if (li == 0 and a <= 0) or (li > 0 and a >= 0):
+            want = "counter-clockwise (outer loop)" if li == 0 else "clockwise (inner loop)"
+            problems.append(Problem("wrong-loop-orientation", f"{label}: loop {li} runs the wrong way: signed area {a:.6g} in (u, v), "
+                                    f"expected {want}", float(a), face=index, loop=li))
+
+    # crossings and touchings among all segments, candidates paired by a KD-tree on mid points
+    P0 = np.concatenate([p for p, _ in polys])
+    P1 = np.concatenate([np.roll(p, -1, axis=0) for p, _ in polys])
+    loop_of = np.concatenate([np.full(len(p), li) for li, (p, _) in enumerate(polys)])
+    pos = np.concatenate([np.arange(len(p)) for p, _ in polys])
+    length = np.array([len(p) for p, _ in polys])[loop_of]
+    edge_of = np.concatenate([o for _, o in polys])
+    mid = 0.5 * (P0 + P1)
+    half = 0.5 * np.linalg.norm(P1 - P0, axis=1)
+    pairs = cKDTree(mid).query_pairs(2.0 * float(half.max()) + tol_uv, output_type="ndarray")
+    if len(pairs):
+        i, j = pairs[:, 0], pairs[:, 1]
+        same = loop_of[i] == loop_of[j]
+        gap = np.abs(pos[i] - pos[j])
+        adjacent = same & ((gap == 1) | (gap == length[i] - 1))
+        i, j, same = i[~adjacent], j[~adjacent], same[~adjacent]
+        d = _segment_distances(P0[i], P1[i], P0[j], P1[j])
+        hit = d <= tol_uv
+        reported = set()
+        for k in np.flatnonzero(hit):
+            li, lj = int(loop_of[i[k]]), int(loop_of[j[k]])
+            key = (min(li, lj), max(li, lj))
+            if key in reported:
+                continue
+            reported.add(key)
+            where = f"near (u, v) = ({mid[i[k], 0]:.6g}, {mid[i[k], 1]:.6g})"
+            if same[k]:
+                problems.append(Problem("self-intersecting-loop", f"{label}: loop {li} crosses or touches itself (edges {int(edge_of[i[k]])} and {int(edge_of[j[k]])}) {where}",
+                                        float(d[k]), face=index, loop=li, edge=int(edge_of[i[k]])))
+            else:
+                problems.append(Problem("crossing-loops", f"{label}: loops {li} and {lj} cross or touch {where}",
+                                        float(d[k]), face=index, loop=li, edge=int(edge_of[i[k]])))
+
+    # holes inside the outer loop and not inside one another (their vertices, by winding)
+    for li in range(1, len(polys)):
+        pts = polys[li][0]
+        outer = _classify_uv(trim_pieces(face, 0), pts, tol_uv)
+        if np.any(outer == OUTSIDE):
+            problems.append(Problem("inner-loop-outside", f"{label}: inner loop {li} is not inside the outer loop",
+                                    float(np.mean(outer == OUTSIDE)), face=index, loop=li))
+        for lk in range(1, len(polys)):
+            if lk != li and np.all(_classify_uv(trim_pieces(face, lk), pts[:1], tol_uv) != OUTSIDE):
+                problems.append(Problem("inner-loop-outside", f"{label}: inner loop {li} lies inside inner loop {lk}",
+                                        None, face=index, loop=li))
+
+    # pcurve against 3-D curve
+    for li, loop in enumerate(loops):
+        for ei, e in enumerate(loop):
+            if e.curve is None:
+                continue
+            br = np.union1d(e.pcurve.bezier_breakpoints(), e.curve.bezier_breakpoints())
+            a, b = e.domain
+            br = br[(br >= a) & (br <= b)]
+            t = (br[:-1, None] + (br[1:] - br[:-1])[:, None] * np.linspace(0.0, 1.0, 17)[None]).ravel()
+            uv = e.pcurve.evaluate(t)
+            dev = float(np.linalg.norm(surface_points(face, uv) - e.curve.evaluate(t), axis=1).max())
+            limit = max(e.tolerance, tol)
+            if dev > limit:
+                problems.append(Problem("pcurve-deviation", f"{label}: loop {li}, edge {ei}: the surface at the pcurve is {dev:.3g} "
+                                        f"from the 3-D curve (tolerance {limit:g})", dev, face=index, loop=li, edge=ei))
+    return problems
+
+
+# -- shells and solids ------------------------------------------------------------------------------
+def check_shell(shell, index: int | None = None) -> list:
+    """The problems of a shell: its faces', inconsistent orientation, non-manifold edges."""
+    problems = []
+    for fi, f in enumerate(shell.faces):
+        # the face's messages start with its label; name its index in the shell too
+        own, label = _face_label(f), ("" if index is None else f"shell {index}, ") + _face_label(f, fi)
+        problems += [p.located(label + p.message[len(own):], shell=index, face=fi) for p in f.check()]
+    topo = shell.topology
+    faces = shell.faces
+    for gi, why in topo.badly_used:
+        g = topo.edges[gi]
+        names = ", ".join(_face_label(faces[u[0]], u[0]) for u in g.uses)
+        fi, li, ei = g.uses[0]
+        if why == "same-direction":
+            problems.append(Problem("inconsistent-orientation", f"the edge shared by {names} is used twice in the same sense: "
+                                    "the faces' orientations disagree", None, shell=index, face=fi, loop=li, edge=ei))
+        elif why == "non-manifold":
+            problems.append(Problem("non-manifold-edge", f"an edge is used {len(g.uses)} times (by {names})", float(len(g.uses)),
+                                    shell=index, face=fi, loop=li, edge=ei))
+    return problems
+
+
+def _signed_volume(shell) -> float:
+    """Signed volume of the shell's faces' meshes (divergence theorem): a cheap estimate."""
+    total = 0.0
+    for f in shell.faces:
+        P, T, _ = _face_mesh(f)
+        if len(T):
+            total += float(np.einsum("ij,ij->i", P[T[:, 0]], np.cross(P[T[:, 1]], P[T[:, 2]])).sum()) / 6.0
+    return total
+
+
+def check_solid(solid) -> list:
+    """The problems of a solid: its shells', open shells, shells pointing the wrong way."""
+    problems = []
+    for si, sh in enumerate(solid.shells):
+        problems += check_shell(sh, si)
+        topo = sh.topology
+        free = topo.free_edges
+        if free:
+            fi, li, ei = free[0].uses[0]
+            problems.append(Problem("open-shell", f"shell {si} of the solid is open: {len(free)} free edge(s), the first on "
+                                    f"{_face_label(sh.faces[fi], fi)}, loop {li}, edge {ei}", float(len(free)),
+                                    shell=si, face=fi, loop=li, edge=ei))
+        elif not any(p.kind in ("inconsistent-orientation", "non-manifold-edge") and p.shell == si for p in problems):
+            vol = _signed_volume(sh)
+            if (si == 0 and vol < 0) or (si > 0 and vol > 0):
+                want = "outward (positive volume)" if si == 0 else "into the void (negative volume)"
+                problems.append(Problem("inward-shell", f"shell {si} points the wrong way: signed volume {vol:.6g}, expected {want}",
+                                        vol, shell=si))
+    return problems
+
+
+def _cached(obj, compute):
+    if "check" not in obj._cache:
+        obj._cache["check"] = tuple(compute())
+    return list(obj._cache["check"])
+
+
+class Checkable:
+    """``check()``, ``is_valid``, ``raise_if_invalid()`` and ``validated()`` for faces, shells and
+    solids; subclasses provide ``_problems()``."""
+
+    __slots__ = ()
+
+    def _problems(self) -> list:
+        raise NotImplementedError
+
+    def check(self) -> list:
+        """The named :class:`Problem` list (empty when valid). Cached on the immutable object."""
+        return _cached(self, self._problems)
+
+    @property
+    def is_valid(self) -> bool:
+        """``not self.check()``."""
+        return not self.check()
+
+    def raise_if_invalid(self) -> None:
+        """Raise :class:`~splinekit.errors.TrimError` (a face's trims) or
+        :class:`~splinekit.errors.BRepError` (anything else) naming the first problem's face and
+        the problem; the message lists the others' count."""
+        problems = self.check()
+        if not problems:
+            return
+        first = problems[0]
+        more = f" (and {len(problems) - 1} more problem(s))" if len(problems) > 1 else ""
+        error = TrimError if first.kind in FACE_KINDS else BRepError
+        raise error(f"{type(self).__name__}{f' {self.name!r}' if self.name else ''} is invalid: [{first.kind}] {first.message}{more}")
+
+    def validated(self):
+        """``self`` when valid; raises as :meth:`raise_if_invalid` otherwise."""
+        self.raise_if_invalid()
+        return self
