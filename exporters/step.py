@@ -385,7 +385,7 @@ def import_step(path, *, unit: str = "mm") -> list[StepItem]:
         for name, shape in _named_shapes(tool, free.Value(i), None, TopLoc.TopLoc_Location(), (TDataStd, TDF)):
             if shape.IsNull():
                 continue
-            geometry = from_occ(shape)
+            geometry = from_occ(shape, surfaces=True)
             for g in geometry if isinstance(geometry, list) else [geometry]:
                 items.append(StepItem(name, g))
     if not items:
