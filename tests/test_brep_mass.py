@@ -163,3 +163,34 @@ def test_rigid_motion_invariance():
     close(b.volume, a.volume, 1e-11)
     close(b.area, a.area, 1e-11)
     assert np.abs(b.principal_moments - a.principal_moments).max() <= 1e-10 * a.principal_moments.max()
+
+
+def test_native_primitives_closed_forms():
+    """The exact primitives of splinekit.brep.primitives (trimmed planar caps, seams, poles,
+    an apex) against hand formulas: volume, area, centroid and the axial moment."""
+    from splinekit.brep import primitives as P
+
+    axis = np.array([1.0, 2.0, 2.0]) / 3.0
+    r1, r2, h = 3.0, 1.0, 5.0
+    cases = [
+        (P.box(2.0, 3.0, 5.0, origin=(1.0, -1.0, 2.0)), 30.0, 2 * (6 + 15 + 10), [2.0, 0.5, 4.5]),
+        (P.cone(r1, r2, h, origin=(1.0, 1.0, 1.0), axis=axis), PI * h * (r1**2 + r1 * r2 + r2**2) / 3,
+         PI * (r1**2 + r2**2) + PI * (r1 + r2) * np.hypot(r1 - r2, h),
+         np.ones(3) + axis * h * (r1**2 + 2 * r1 * r2 + 3 * r2**2) / (4 * (r1**2 + r1 * r2 + r2**2))),
+        (P.cone(2.0, 0.0, 3.0), PI * 4, PI * 4 + PI * 2 * np.hypot(2, 3), [0, 0, 0.75]),  # apex
+        (P.cylinder(2.0, 3.0), PI * 12, 2 * PI * 4 + 2 * PI * 6, [0, 0, 1.5]),
+        (P.sphere(2.0, (1.0, 0.0, -1.0)), 32 / 3 * PI, 16 * PI, [1.0, 0.0, -1.0]),
+        (P.torus(4.0, 1.5), 2 * PI**2 * 4 * 2.25, 4 * PI**2 * 6, [0, 0, 0]),
+        (P.box_with_hole(20.0, 4.0), 8000 - PI * 16 * 20, 2400 - 2 * PI * 16 + 2 * PI * 4 * 20, [0, 0, 0]),
+        (P.plate_with_holes(10.0, 6.0, 2.0, [(3.0, 3.0, 1.0), (7.0, 2.0, 0.5)]),
+         120 - PI * 2 * (1 + 0.25), 2 * (60 + 20 + 12) - 2 * PI * (1 + 0.25) + 2 * PI * 2 * (1 + 0.5),
+         (np.array([5, 3, 1]) * 120 - PI * 2 * (np.array([3, 3, 1]) + 0.25 * np.array([7, 2, 1]))) / (120 - PI * 2.5)),
+    ]
+    for solid, volume, area, centre in cases:
+        mp = solid.mass_properties()
+        close(mp.volume, volume)
+        close(mp.area, area)
+        assert np.abs(mp.centroid - centre).max() <= REL * 20, (solid, mp.centroid, centre)
+    # axial moment of the frustum: integral of pi r(z)^4 / 2 dz = pi h (r1^5 - r2^5) / (10 (r1 - r2))
+    frustum = P.cone(r1, r2, h, axis=axis).inertia()
+    close(axis @ frustum @ axis, PI * h * (r1**5 - r2**5) / (10 * (r1 - r2)))

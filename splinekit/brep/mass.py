@@ -23,7 +23,7 @@ import numpy as np
 from .._validate import as_positive
 from .integrate import DEFAULT_TOLERANCE, integrate
 
-__all__ = ["MassProperties", "area", "volume", "centroid", "inertia", "mass_properties"]
+__all__ = ["MassProperties", "area", "area_and_volume", "volume", "centroid", "inertia", "mass_properties"]
 
 # second moments in this order: xx, yy, zz, xy, yz, xz
 _I, _J = np.array([0, 1, 2, 0, 1, 0]), np.array([0, 1, 2, 1, 2, 2])
@@ -192,6 +192,18 @@ def volume_with_error(obj, tol: float = DEFAULT_TOLERANCE) -> tuple[float, float
         return float(r.value[0]), float(r.error[0])
 
     return _cached(obj, ("volume", tol), compute)
+
+
+def area_and_volume(obj, tol: float = DEFAULT_TOLERANCE) -> tuple[float, float, float, float]:
+    """``(area, area error, volume, volume error)`` of a face, shell or solid in one adaptive
+    integration (the volume is the divergence-theorem flux over the oriented faces)."""
+    tol = as_positive(tol, "tol")
+
+    def compute():
+        _, r = _integrals(obj, tol, ("area", "volume"))
+        return float(r.value[0]), float(r.error[0]), float(r.value[1]), float(r.error[1])
+
+    return _cached(obj, ("area and volume", tol), compute)
 
 
 def _moments_to_properties(mass, m1, m2, errs, center):
