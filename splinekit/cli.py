@@ -598,11 +598,21 @@ def cmd_render(args, console: _Console) -> int:
         if suffix in STEP_SUFFIXES:
             import exporters
 
-            patches = [item.geometry for item in exporters.import_step(target) if hasattr(item.geometry, "degree_u")]
-            if not patches:
+            items = [item.geometry for item in exporters.import_step(target)]
+            patches = [g for g in items if hasattr(g, "degree_u")]
+            from .brep import Shell, Solid, TrimmedFace
+
+            breps = [g for g in items if isinstance(g, (Shell, Solid, TrimmedFace))]
+            if breps:  # trimmed faces are drawn as their tessellation
+                tessellate = _tessellator()
+                mesh = _combined([tessellate(g, None) for g in breps])
+                render_mesh(mesh, out, title=title, **options)
+                what = _count(sum(len(getattr(g, "faces", (g,))) for g in breps), "trimmed face")
+            elif patches:
+                render_patches(patches, out, title=title, **options)
+                what = _count(len(patches), "face")
+            else:
                 raise FileFormatError(f"the STEP file {target!r} holds no faces to draw")
-            render_patches(patches, out, title=title, **options)
-            what = _count(len(patches), "face")
         elif suffix in MESH_SUFFIXES:
             import exporters
 
