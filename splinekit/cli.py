@@ -584,7 +584,7 @@ def cmd_render(args, console: _Console) -> int:
         if suffix in STEP_SUFFIXES:
             import exporters
 
-            patches = [item.geometry for item in exporters.import_step(target) if hasattr(item.geometry, "degree_u")]
+            patches = [item.geometry for item in exporters.import_step(target, surfaces=True) if hasattr(item.geometry, "degree_u")]
             if not patches:
                 raise FileFormatError(f"the STEP file {target!r} holds no faces to draw")
             render_patches(patches, out, title=title, **options)

@@ -443,12 +443,16 @@ def _nurbs_converted(shape):
     return converter.Shape()
 
 
-def brep_from_shape(shape, *, name=None):
+def brep_from_shape(shape, *, name=None, on_error=None):
     """splinekit B-rep objects for the OCC ``shape``.
 
     A face gives a TrimmedFace, a shell a Shell, a solid a Solid; a compound (or compsolid) gives
     a list of its solids, shells, faces and free curves, in OCC's order (nested compounds
     flattened). ``name`` labels the returned object(s).
+
+    A face that cannot be converted raises BackendError naming it (``face i``: its number in
+    reading order). With ``on_error(index, message)`` given instead, the face is left out and
+    reported through the callback; a solid that lost faces comes back as its shells (open).
     """
     TopAbs, TopoDS, BRepTools = _ocp("TopAbs", "TopoDS", "BRepTools")
     for face in _sub_shapes(shape, "FACE"):
@@ -476,37 +480,51 @@ def brep_from_shape(shape, *, name=None):
         if more(its[0]) or more(its[1]):
             raise BackendError("the NURBS-converted shape does not match the original's structure")
 
+    lost = []  # faces left out (on_error given)
+
     def face(s, c, label=None):
-        return reader.face(TopoDS.TopoDS.Face_s(s), TopoDS.TopoDS.Face_s(c), next(counter), label)
+        index = next(counter)
+        try:
+            return reader.face(TopoDS.TopoDS.Face_s(s), TopoDS.TopoDS.Face_s(c), index, label)
+        except Exception as exc:  # SplineKitError, or an OCC Standard_Failure (no common base)
+            message = str(exc) if isinstance(exc, BackendError) else f"face {index}: {type(exc).__name__}: {exc}"
+            if on_error is None:
+                raise BackendError(message) from None
+            on_error(index, message)
+            lost.append(index)
+            return None
 
     def shell(s, c, label=None):
         from ..brep import Shell
 
         # faces explored with their orientations composed with the shell's (and solid's)
-        return Shell([face(f, fc) for f, fc in pairs(s, c, kinds.TopAbs_FACE)], name=label)
+        faces = [f for f in (face(f, fc) for f, fc in pairs(s, c, kinds.TopAbs_FACE)) if f is not None]
+        return Shell(faces, name=label) if faces else None
 
     def solid(s, c):
         from ..brep import Solid
 
         outer = BRepClass3d.BRepClass3d.OuterShell_s(TopoDS.TopoDS.Solid_s(s))
-        shells = []
+        shells, before = [], len(lost)
         for sh, shc in pairs(s, c, kinds.TopAbs_SHELL):
             if outer is not None and not outer.IsNull() and sh.IsSame(outer):
-                shells.insert(0, shell(sh, shc))
+                shells.insert(0, shell(sh, shc, name))
             else:
-                shells.append(shell(sh, shc))
+                shells.append(shell(sh, shc, name))
+        if len(lost) > before:  # faces were left out: the shells no longer close
+            return [x for x in shells if x is not None]
         if not shells:
             raise BackendError("the OCC solid has no shell")
-        return Solid(shells, name=name)
+        return [Solid(shells, name=name)]
 
     def convert(s, c):
         kind = s.ShapeType()
         if kind == kinds.TopAbs_FACE:
-            return [face(s, c, name)]
+            return [x for x in [face(s, c, name)] if x is not None]
         if kind == kinds.TopAbs_SHELL:
-            return [shell(s, c, name)]
+            return [x for x in [shell(s, c, name)] if x is not None]
         if kind == kinds.TopAbs_SOLID:
-            return [solid(s, c)]
+            return solid(s, c)
         if kind in (kinds.TopAbs_EDGE, kinds.TopAbs_WIRE):
             from .occ import _edge_to_curve
 
@@ -517,7 +535,7 @@ def brep_from_shape(shape, *, name=None):
         return []  # vertices
 
     out = convert(shape, converted)
-    if shape.ShapeType() in (kinds.TopAbs_FACE, kinds.TopAbs_SHELL, kinds.TopAbs_SOLID) and len(out) == 1:
+    if on_error is None and shape.ShapeType() in (kinds.TopAbs_FACE, kinds.TopAbs_SHELL, kinds.TopAbs_SOLID):
         return out[0]
     return out
 
