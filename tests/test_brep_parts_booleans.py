@@ -17,6 +17,8 @@ import sys
 
 import numpy as np
 import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 from OCP.BRepCheck import BRepCheck_Analyzer
 from OCP.TopAbs import TopAbs_ShapeEnum
 
@@ -232,3 +234,26 @@ def test_mesh_booleans_accept_solids(cube, drilled):
     assert mesh.volume >= drilled.volume() - 1e-9 * drilled.volume()
     fused = sk.union(cube, brep.box(20.0, 20.0, 20.0, origin=(0.0, -5.0, -10.0)), tolerance=tol)
     assert fused.is_closed and abs(fused.volume - (800 - 150) * 20) < 1e-9 * 13000
+
+
+# -- property: boxes against inclusion-exclusion ---------------------------------------------------
+
+_corner = st.tuples(*[st.integers(-4, 4).map(lambda k: 2.5 * k)] * 3)
+_size = st.tuples(*[st.integers(1, 6).map(lambda k: 2.5 * k)] * 3)
+
+
+@settings(max_examples=6, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(_corner, _size, _corner, _size)
+def test_box_booleans_inclusion_exclusion(oa, sa, ob, sb):
+    """Any two axis-aligned boxes on a 2.5 mm grid (so faces often coincide or touch): the volumes
+    of the pieces of fuse, cut and common follow from the overlap of the two boxes."""
+    a, b = brep.box(*sa, origin=oa), brep.box(*sb, origin=ob)
+    lo = np.maximum(oa, ob)
+    hi = np.minimum(np.add(oa, sa), np.add(ob, sb))
+    overlap = float(np.prod(np.clip(hi - lo, 0.0, None)))
+    va, vb = float(np.prod(sa)), float(np.prod(sb))
+    for op, expected in ((brep.fuse, va + vb - overlap), (brep.cut, va - overlap), (brep.common, overlap)):
+        parts = op(a, b, pieces=True)
+        for part in parts:
+            assert_valid_trimmed(part)
+        assert sum(p.volume() for p in parts) == pytest.approx(expected, rel=ROUNDING, abs=1e-9), op.__name__
