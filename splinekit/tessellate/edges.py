@@ -279,11 +279,12 @@ def sample_groups(uses, groups, scales, tol, angle_tol, surfaces, pc):
     t, who = _subdivide(np.concatenate(owners), np.concatenate(lo), np.concatenate(hi), np.concatenate(counts))
 
     for round_ in range(MAX_ROUNDS):
-        X = exact(who, t)
         seg = np.flatnonzero(who[1:] == who[:-1])  # segment = sample i to i + 1
+        both = exact(np.concatenate([who, who[seg]]), np.concatenate([t, 0.5 * (t[seg] + t[seg + 1])]))
+        X, Xm = both[: t.size], both[t.size :]
         chord = 0.5 * (X[seg] + X[seg + 1])
         factor = np.zeros(t.size)
-        factor[seg] = np.linalg.norm(exact(who[seg], 0.5 * (t[seg] + t[seg + 1])) - chord, axis=1) / tol
+        factor[seg] = np.linalg.norm(Xm - chord, axis=1) / tol
         # every use: the group's samples mapped onto its pcurve
         gstart = np.concatenate([[0], np.flatnonzero(np.diff(who)) + 1])
         gcount = np.diff(np.append(gstart, t.size))
@@ -292,17 +293,23 @@ def sample_groups(uses, groups, scales, tol, angle_tol, surfaces, pc):
         r = (t[idx] - a[owner]) / (b[owner] - a[owner])
         s = np.where(flip[owner], d[owner] - r * (d - c)[owner], c[owner] + r * (d - c)[owner])
         uv = pc.evaluate(lu[owner], s)
-        on = surfaces.evaluate(face[lu[owner]], uv[:, 0], uv[:, 1])
+        useg = np.flatnonzero(owner[1:] == owner[:-1])
+        fu = face[lu[owner]]
+        # the use's points (to check the map) and its chords' parametric midpoints, in one call
+        mid = 0.5 * (uv[useg] + uv[useg + 1])
+        P = surfaces.evaluate(np.concatenate([fu, fu[useg]]), np.concatenate([uv[:, 0], mid[:, 0]]),
+                              np.concatenate([uv[:, 1], mid[:, 1]]))  # fmt: skip
+        on, Pm = P[: uv.shape[0]], P[uv.shape[0] :]
         off = np.linalg.norm(on - X[idx], axis=1) > 1e-2 * tol
         if off.any():  # the affine map misses: project onto those uses' curves
             for o in np.unique(owner[off]):
                 sel = np.flatnonzero(owner == o)
                 s[sel] = _project(uses[lu[o]], s[sel], X[idx[sel]], c[o], d[o], surfaces)
                 uv[sel] = uses[lu[o]].edge.pcurve.evaluate(s[sel])
-        useg = np.flatnonzero(owner[1:] == owner[:-1])
-        mid = 0.5 * (uv[useg] + uv[useg + 1])
-        dev = np.linalg.norm(surfaces.evaluate(face[lu[owner[useg]]], mid[:, 0], mid[:, 1]) - 0.5 * (X[idx[useg]] + X[idx[useg + 1]]), axis=1)
-        step = (uv[useg + 1] - uv[useg]) * scales[face[lu[owner[useg]]]]
+            mid = 0.5 * (uv[useg] + uv[useg + 1])
+            Pm = surfaces.evaluate(fu[useg], mid[:, 0], mid[:, 1])
+        dev = np.linalg.norm(Pm - 0.5 * (X[idx[useg]] + X[idx[useg + 1]]), axis=1)
+        step = (uv[useg + 1] - uv[useg]) * scales[fu[useg]]
         # the scaled-length criterion is linear in the step, the chordal one quadratic
         np.maximum.at(factor, idx[useg], np.maximum(dev / tol, (np.hypot(step[:, 0], step[:, 1]) / MAX_SCALED_STEP) ** 2))
         over = factor[seg] > 1.0
