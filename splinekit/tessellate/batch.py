@@ -80,24 +80,30 @@ class CurveBatch:
 
     def __init__(self, curves):
         self.dim = curves[0].dim if curves else 0
-        degrees = np.array([c.degree for c in curves], dtype=np.int64)
-        self.groups = {}
-        breaks, firsts = [], []
-        pieces = []  # per object: (degree, first row in its degree group)
-        rows = {}
-        segs_by_p = {}
-        for c in curves:
+        self.degree = np.array([c.degree for c in curves], dtype=np.int64)
+        # curves on one knot vector share one decomposition matrix: one product per knot vector
+        by_knots: dict = {}
+        for i, c in enumerate(curves):
+            by_knots.setdefault((c.degree, tuple(c.knots.tolist())), []).append(i)
+        breaks = [None] * len(curves)
+        segs = [None] * len(curves)
+        for (p, knots), members in by_knots.items():
+            br, M = bezier_matrix(p, knots)
+            coefs = np.stack([_homogeneous(curves[i]) for i in members])  # (m, n, dim + 1)
+            S = np.einsum("sij,mjk->msik", M, coefs)
+            for r, i in enumerate(members):
+                breaks[i], segs[i] = br, S[r]
+        rows: dict = {}
+        first = np.zeros(len(curves), dtype=np.int64)
+        segs_by_p: dict = {}
+        for i, c in enumerate(curves):
             p = c.degree
-            br, segs = _segments(c)
-            at = rows.get(p, 0)
-            segs_by_p.setdefault(p, []).append(segs)
-            rows[p] = at + len(segs)
-            breaks.append(br)
-            pieces.append(at)
-        self.degree = degrees
-        self.segs = {p: np.concatenate(s) for p, s in segs_by_p.items()}
-        self.breaks = _Breaks(breaks, pieces) if curves else None
-        self.first_row = np.asarray(pieces, dtype=np.int64)
+            first[i] = rows.get(p, 0)
+            rows[p] = first[i] + len(segs[i])
+            segs_by_p.setdefault(p, []).append(segs[i])
+        self.segs = {p: np.concatenate(v) for p, v in segs_by_p.items()}
+        self.breaks = _Breaks(breaks, first) if curves else None
+        self.first_row = first
 
     def segments(self, k):
         """``(p, rows)``: the degree and Bézier segment rows of curve ``k``."""
@@ -121,12 +127,12 @@ class CurveBatch:
         return out
 
 
-def _segments(curve):
-    """``(breaks, homogeneous Bézier segments (s, p + 1, dim + 1))`` of a curve."""
-    coefs = np.asarray(curve.homogeneous_points) if curve.is_rational else np.column_stack(
-        [np.asarray(curve.control_points), np.ones(len(curve.control_points))])  # fmt: skip
-    breaks, M = bezier_matrix(curve.degree, tuple(curve.knots.tolist()))
-    return breaks, np.einsum("sij,jk->sik", M, coefs)
+def _homogeneous(curve):
+    """``(n, dim + 1)`` homogeneous control points (unit weights for a polynomial curve)."""
+    if curve.is_rational:
+        return np.asarray(curve.homogeneous_points)
+    P = np.asarray(curve.control_points)
+    return np.column_stack([P, np.ones(len(P))])
 
 
 @functools.lru_cache(maxsize=256)

@@ -320,7 +320,7 @@ def tessellate_faces(faces, tol: float, angle_tol, size: float) -> Tessellation:
     edge_tol = max((e.tolerance for face in faces for e in face.edges), default=0.0)
     uses = edge_uses(faces)
     pcurves = CurveBatch([u.edge.pcurve for u in uses])
-    check_domains(uses, pcurves)
+    check_domains(uses, pcurves, batch)
     groups = group_uses(uses, max(WELD * size, 2.0 * edge_tol), pcurves, batch)
     samples = sample_groups(uses, groups, scales, tol, angle_tol, batch, pcurves)
     vid_of_group, edge_xyz = _edge_vertices(samples, size, edge_tol)
