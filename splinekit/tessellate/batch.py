@@ -15,13 +15,39 @@ import functools
 import numpy as np
 
 from ..basis import algebra
-from ..basis.bernstein import all_bernstein
 from .cells import cells_of_patches
 
 __all__ = ["CurveBatch", "SurfaceBatch"]
 
 CHUNK = 1 << 16
 """Queries evaluated per block (bounds the gathered control nets' memory)."""
+
+
+def _bernstein(p, t):
+    """``(p + 1, n)`` Bernstein polynomials of degree ``p`` at ``t`` ``(n,)``, by the
+    triangular recurrence on whole arrays (no argument checks: the batch evaluators' inner
+    loop; :func:`~splinekit.basis.bernstein.all_bernstein` is the checked public form)."""
+    B = np.zeros((p + 1, t.size))
+    B[0] = 1.0
+    s = 1.0 - t
+    for j in range(1, p + 1):
+        saved = np.zeros(t.size)
+        for k in range(j):
+            tmp = B[k].copy()
+            B[k] = saved + s * tmp
+            saved = t * tmp
+        B[j] = saved
+    return B
+
+
+def _bernstein_d(p, t):
+    """``(p + 1, n)`` first derivatives of the degree-``p`` Bernstein polynomials at ``t``."""
+    D = np.zeros((p + 1, t.size))
+    if p > 0:
+        B = _bernstein(p - 1, t)
+        D[1:] += p * B
+        D[:-1] -= p * B
+    return D
 
 
 class _Breaks:
@@ -54,24 +80,30 @@ class CurveBatch:
 
     def __init__(self, curves):
         self.dim = curves[0].dim if curves else 0
-        degrees = np.array([c.degree for c in curves], dtype=np.int64)
-        self.groups = {}
-        breaks, firsts = [], []
-        pieces = []  # per object: (degree, first row in its degree group)
-        rows = {}
-        segs_by_p = {}
-        for c in curves:
+        self.degree = np.array([c.degree for c in curves], dtype=np.int64)
+        # curves on one knot vector share one decomposition matrix: one product per knot vector
+        by_knots: dict = {}
+        for i, c in enumerate(curves):
+            by_knots.setdefault((c.degree, tuple(c.knots.tolist())), []).append(i)
+        breaks = [None] * len(curves)
+        segs = [None] * len(curves)
+        for (p, knots), members in by_knots.items():
+            br, M = bezier_matrix(p, knots)
+            coefs = np.stack([_homogeneous(curves[i]) for i in members])  # (m, n, dim + 1)
+            S = np.einsum("sij,mjk->msik", M, coefs)
+            for r, i in enumerate(members):
+                breaks[i], segs[i] = br, S[r]
+        rows: dict = {}
+        first = np.zeros(len(curves), dtype=np.int64)
+        segs_by_p: dict = {}
+        for i, c in enumerate(curves):
             p = c.degree
-            br, segs = _segments(c)
-            at = rows.get(p, 0)
-            segs_by_p.setdefault(p, []).append(segs)
-            rows[p] = at + len(segs)
-            breaks.append(br)
-            pieces.append(at)
-        self.degree = degrees
-        self.segs = {p: np.concatenate(s) for p, s in segs_by_p.items()}
-        self.breaks = _Breaks(breaks, pieces) if curves else None
-        self.first_row = np.asarray(pieces, dtype=np.int64)
+            first[i] = rows.get(p, 0)
+            rows[p] = first[i] + len(segs[i])
+            segs_by_p.setdefault(p, []).append(segs[i])
+        self.segs = {p: np.concatenate(v) for p, v in segs_by_p.items()}
+        self.breaks = _Breaks(breaks, first) if curves else None
+        self.first_row = first
 
     def segments(self, k):
         """``(p, rows)``: the degree and Bézier segment rows of curve ``k``."""
@@ -89,18 +121,18 @@ class CurveBatch:
         deg = self.degree[k]
         for p in np.unique(deg):
             sel = np.flatnonzero(deg == p) if len(self.segs) > 1 else slice(None)
-            B = all_bernstein(int(p), s[sel])  # (p + 1, n)
+            B = _bernstein(int(p), s[sel])  # (p + 1, n)
             h = np.einsum("in,nik->nk", B, self.segs[int(p)][row[sel]])
             out[sel] = h[:, :-1] / h[:, -1:]
         return out
 
 
-def _segments(curve):
-    """``(breaks, homogeneous Bézier segments (s, p + 1, dim + 1))`` of a curve."""
-    coefs = np.asarray(curve.homogeneous_points) if curve.is_rational else np.column_stack(
-        [np.asarray(curve.control_points), np.ones(len(curve.control_points))])  # fmt: skip
-    breaks, M = bezier_matrix(curve.degree, tuple(curve.knots.tolist()))
-    return breaks, np.einsum("sij,jk->sik", M, coefs)
+def _homogeneous(curve):
+    """``(n, dim + 1)`` homogeneous control points (unit weights for a polynomial curve)."""
+    if curve.is_rational:
+        return np.asarray(curve.homogeneous_points)
+    P = np.asarray(curve.control_points)
+    return np.column_stack([P, np.ones(len(P))])
 
 
 @functools.lru_cache(maxsize=256)
@@ -164,8 +196,6 @@ class SurfaceBatch:
         return self._run(k, u, v, True)
 
     def _run(self, k, u, v, partial):
-        from .surfaces import _cell_partials
-
         k = np.asarray(k, dtype=np.int64)
         n = k.size
         out = [np.empty((n, 3)) for _ in range(3 if partial else 1)]
@@ -178,16 +208,16 @@ class SurfaceBatch:
             cs = self.cellsets[c]
             for lo in range(0, sel.size, CHUNK):
                 part = sel[lo : lo + CHUNK]
-                nets = cs.nets[g[part] - self.offsets[c]]
-                if partial:
-                    S, Su, Sv, _ = _cell_partials(nets, s[part], t[part], cs.p, cs.q)
-                    box = self.box[g[part]]  # local -> surface parameters
-                    out[0][part] = S
-                    out[1][part] = Su / (box[:, 1] - box[:, 0])[:, None]
-                    out[2][part] = Sv / (box[:, 3] - box[:, 2])[:, None]
-                else:
-                    Bu = all_bernstein(cs.p, s[part])
-                    Bv = all_bernstein(cs.q, t[part])
-                    h = np.einsum("jn,njk->nk", Bv, np.einsum("in,nijk->njk", Bu, nets))
-                    out[0][part] = h[:, :3] / h[:, 3:]
+                nets = cs.nets[g[part] - self.offsets[c]]  # (m, p + 1, q + 1, 4) homogeneous
+                Bu, Bv = _bernstein(cs.p, s[part]), _bernstein(cs.q, t[part])
+                T0 = np.einsum("in,nijk->njk", Bu, nets)
+                h = np.einsum("jn,njk->nk", Bv, T0)
+                S = h[:, :3] / h[:, 3:]
+                out[0][part] = S
+                if partial:  # quotient rule, then local -> surface parameters
+                    hu = np.einsum("jn,njk->nk", Bv, np.einsum("in,nijk->njk", _bernstein_d(cs.p, s[part]), nets))
+                    hv = np.einsum("jn,njk->nk", _bernstein_d(cs.q, t[part]), T0)
+                    box = self.box[g[part]]
+                    out[1][part] = (hu[:, :3] - hu[:, 3:] * S) / (h[:, 3:] * (box[:, 1] - box[:, 0])[:, None])
+                    out[2][part] = (hv[:, :3] - hv[:, 3:] * S) / (h[:, 3:] * (box[:, 3] - box[:, 2])[:, None])
         return tuple(out) if partial else out[0]

@@ -117,7 +117,11 @@ def tessellate(obj, tolerance=None, *, angle_tolerance=DEFAULT_ANGLE_TOLERANCE, 
         :class:`~splinekit.NurbsSurface`), a list of them (a body: patches
         that share edges are stitched), or a Catmull-Clark
         :class:`~splinekit.SubdivisionSurface` (through ``to_bsplines(levels)``)
-        -> :class:`Tessellation`. Surfaces must be 3-D.
+        -> :class:`Tessellation`. Surfaces must be 3-D. A B-rep
+        :class:`~splinekit.brep.TrimmedFace`, :class:`~splinekit.brep.Shell` or
+        :class:`~splinekit.brep.Solid`, or a list of them -> one watertight
+        :class:`Tessellation` (``face_patch`` / ``vertex_patch`` index the faces in
+        order; see :mod:`splinekit.tessellate.trimmed`).
     tolerance : float, optional
         Chordal tolerance, an absolute distance in model units (or, with
         ``relative=True``, a fraction of the model size). The model size is
@@ -158,6 +162,18 @@ def tessellate(obj, tolerance=None, *, angle_tolerance=DEFAULT_ANGLE_TOLERANCE, 
     apart (folds), and stops refining a cell direction at 64 steps.
     Raises :class:`~splinekit.errors.ParameterError` for a bad tolerance, an
     unsupported object, or a tolerance needing more than 50 million triangles.
+
+    Trimmed faces, shells and solids: every edge is sampled once in 3-D and
+    shared by the faces that use it (uses paired by their ``key``, keyless
+    uses geometrically), so a closed shell gives a closed mesh; the trims
+    are the constraints of a constrained Delaunay triangulation of each face's
+    parameter plane (scaled so that the interior grid's step is one in both
+    directions), refined where the measured deviation exceeds the tolerance.
+    Triangles follow the faces' orientation (``reversed``). ``max_deviation``
+    is measured as above, at every triangle's centre and edge midpoint. A face
+    whose trims are invalid (not closed, leaving the domain, crossing, facing
+    the wrong way, a hole outside the outer loop) raises ParameterError naming
+    the face.
     """
     if tolerance is not None:
         tolerance = as_real(tolerance, "tolerance")

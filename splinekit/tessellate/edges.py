@@ -73,18 +73,19 @@ surface is evaluated there by its polynomial extension (which continues a ration
 circle), as OCC does."""
 
 
-def check_domains(uses, pcurves, samples: int = 33):
+def check_domains(uses, pcurves, surfaces, samples: int = 17):
     """Raise ParameterError naming the face, loop and edge of the first pcurve that leaves its
     surface's parameter domain by more than :data:`DOMAIN_SLACK` of its range (checked at
     ``samples`` points per pcurve)."""
     if not uses:
         return
-    dom = np.array([u.edge.domain for u in uses])
+    dom = np.column_stack([pcurves.breaks.lo, pcurves.breaks.hi])
     r = np.linspace(0.0, 1.0, samples)
     t = (dom[:, :1] + (dom[:, 1:] - dom[:, :1]) * r).ravel()
     uv = pcurves.evaluate(np.repeat(np.arange(len(uses)), samples), t).reshape(len(uses), samples, 2)
-    box = np.array([u.face.domain for u in uses])  # (U, 2, 2): (u0, u1), (v0, v1)
-    lo, hi = box[:, :, 0], box[:, :, 1]
+    f = np.array([u.f for u in uses])
+    lo = np.column_stack([surfaces.lu.lo, surfaces.lv.lo])[f]  # (U, 2): (u0, v0) of each use's face
+    hi = np.column_stack([surfaces.lu.hi, surfaces.lv.hi])[f]
     slack = DOMAIN_SLACK * (hi - lo)
     bad = ((uv < (lo - slack)[:, None]) | (uv > (hi + slack)[:, None])).any(axis=(1, 2))
     if bad.any():
@@ -121,7 +122,7 @@ def group_uses(uses, weld: float, pcurves, surfaces):
     groups = list(by_key.values()) + singles
     if loose:
         loose_a = np.asarray(loose)
-        dom = np.array([uses[i].edge.domain for i in loose])
+        dom = np.column_stack([pcurves.breaks.lo, pcurves.breaks.hi])[loose_a]
         t = (dom[:, :1] + (dom[:, 1:] - dom[:, :1]) * EDGE_FRACTIONS).ravel()
         k = np.repeat(loose_a, EDGE_FRACTIONS.size)
         uv = pcurves.evaluate(k, t)
@@ -193,7 +194,7 @@ def sample_groups(uses, groups, scales, tol, angle_tol, surfaces, pc):
 
     U = len(uses)
     face = np.array([u.f for u in uses], dtype=np.int64)
-    pdom = np.array([u.edge.domain for u in uses])
+    pdom = np.column_stack([pc.breaks.lo, pc.breaks.hi])
     G = len(groups)
     degenerate = np.array([uses[g[0]].edge.degenerate for g in groups], dtype=bool)
     group_of = np.empty(U, dtype=np.int64)
@@ -256,34 +257,44 @@ def sample_groups(uses, groups, scales, tol, angle_tol, surfaces, pc):
 
     # initial parameters: the 3-D curve's a-priori counts per Bézier span (the curve
     # tessellator's bounds), or a few steps per pcurve span
-    owners, lo, hi, counts = [], [], [], []
-    for k in range(live.size):
-        if has_curve[k]:
-            p, rows = c3.segments(curve_of[k])
-            M, L = _span_bounds(p, c3.segs[p][rows])
+    cur = np.flatnonzero(has_curve)
+    raw = np.flatnonzero(~has_curve)
+    n_curve = np.zeros(0)
+    if cur.size:
+        n_row = {}
+        for p, segs in c3.segs.items():
+            M, L = _span_bounds(p, segs)
             n = np.sqrt(M / (8.0 * tol))
             if angle_tol is not None:
                 with np.errstate(divide="ignore", invalid="ignore"):
                     n = np.maximum(n, np.where(L > 0, M / (L * angle_tol), 0.0))
-            br = c3.breaks
-        else:
-            p, rows = pc.segments(rep[k])
-            n = np.full(rows.size, 4.0)
-            br = pc.breaks
-        j = (curve_of[k] if has_curve[k] else rep[k])
-        first = br.start[j]
-        owners.append(np.full(rows.size, k))
-        lo.append(br.a[first : first + rows.size])
-        hi.append(br.b[first : first + rows.size])
-        counts.append(np.clip(np.ceil(np.nan_to_num(n, nan=MAX_SEGMENTS, posinf=MAX_SEGMENTS)), 1, MAX_SEGMENTS))
-    t, who = _subdivide(np.concatenate(owners), np.concatenate(lo), np.concatenate(hi), np.concatenate(counts))
+            n_row[p] = n
+        j = ranges(c3.breaks.start, c3.breaks.count)  # every piece, object order
+        obj = np.repeat(np.arange(cur.size), c3.breaks.count)
+        row = c3.first_row[obj] + (j - c3.breaks.start[obj])
+        deg = c3.degree[obj]
+        n_curve = np.empty(j.size)
+        for p, n in n_row.items():
+            n_curve[deg == p] = n[row[deg == p]]
+        pieces_c = (cur[obj], c3.breaks.a[j], c3.breaks.b[j], n_curve)
+    else:
+        pieces_c = (np.zeros(0, dtype=np.int64), np.zeros(0), np.zeros(0), np.zeros(0))
+    j = ranges(pc.breaks.start[rep[raw]], pc.breaks.count[rep[raw]])
+    obj = np.repeat(raw, pc.breaks.count[rep[raw]])
+    pieces_p = (obj, pc.breaks.a[j], pc.breaks.b[j], np.full(j.size, 4.0))
+    owners, lo, hi, counts = (np.concatenate([x, y]) for x, y in zip(pieces_c, pieces_p))
+    order = np.argsort(owners, kind="stable")
+    owners, lo, hi = owners[order], lo[order], hi[order]
+    counts = np.clip(np.ceil(np.nan_to_num(counts[order], nan=MAX_SEGMENTS, posinf=MAX_SEGMENTS)), 1, MAX_SEGMENTS)
+    t, who = _subdivide(owners, lo, hi, counts)
 
     for round_ in range(MAX_ROUNDS):
-        X = exact(who, t)
         seg = np.flatnonzero(who[1:] == who[:-1])  # segment = sample i to i + 1
+        both = exact(np.concatenate([who, who[seg]]), np.concatenate([t, 0.5 * (t[seg] + t[seg + 1])]))
+        X, Xm = both[: t.size], both[t.size :]
         chord = 0.5 * (X[seg] + X[seg + 1])
         factor = np.zeros(t.size)
-        factor[seg] = np.linalg.norm(exact(who[seg], 0.5 * (t[seg] + t[seg + 1])) - chord, axis=1) / tol
+        factor[seg] = np.linalg.norm(Xm - chord, axis=1) / tol
         # every use: the group's samples mapped onto its pcurve
         gstart = np.concatenate([[0], np.flatnonzero(np.diff(who)) + 1])
         gcount = np.diff(np.append(gstart, t.size))
@@ -292,17 +303,23 @@ def sample_groups(uses, groups, scales, tol, angle_tol, surfaces, pc):
         r = (t[idx] - a[owner]) / (b[owner] - a[owner])
         s = np.where(flip[owner], d[owner] - r * (d - c)[owner], c[owner] + r * (d - c)[owner])
         uv = pc.evaluate(lu[owner], s)
-        on = surfaces.evaluate(face[lu[owner]], uv[:, 0], uv[:, 1])
+        useg = np.flatnonzero(owner[1:] == owner[:-1])
+        fu = face[lu[owner]]
+        # the use's points (to check the map) and its chords' parametric midpoints, in one call
+        mid = 0.5 * (uv[useg] + uv[useg + 1])
+        P = surfaces.evaluate(np.concatenate([fu, fu[useg]]), np.concatenate([uv[:, 0], mid[:, 0]]),
+                              np.concatenate([uv[:, 1], mid[:, 1]]))  # fmt: skip
+        on, Pm = P[: uv.shape[0]], P[uv.shape[0] :]
         off = np.linalg.norm(on - X[idx], axis=1) > 1e-2 * tol
         if off.any():  # the affine map misses: project onto those uses' curves
             for o in np.unique(owner[off]):
                 sel = np.flatnonzero(owner == o)
                 s[sel] = _project(uses[lu[o]], s[sel], X[idx[sel]], c[o], d[o], surfaces)
                 uv[sel] = uses[lu[o]].edge.pcurve.evaluate(s[sel])
-        useg = np.flatnonzero(owner[1:] == owner[:-1])
-        mid = 0.5 * (uv[useg] + uv[useg + 1])
-        dev = np.linalg.norm(surfaces.evaluate(face[lu[owner[useg]]], mid[:, 0], mid[:, 1]) - 0.5 * (X[idx[useg]] + X[idx[useg + 1]]), axis=1)
-        step = (uv[useg + 1] - uv[useg]) * scales[face[lu[owner[useg]]]]
+            mid = 0.5 * (uv[useg] + uv[useg + 1])
+            Pm = surfaces.evaluate(fu[useg], mid[:, 0], mid[:, 1])
+        dev = np.linalg.norm(Pm - 0.5 * (X[idx[useg]] + X[idx[useg + 1]]), axis=1)
+        step = (uv[useg + 1] - uv[useg]) * scales[fu[useg]]
         # the scaled-length criterion is linear in the step, the chordal one quadratic
         np.maximum.at(factor, idx[useg], np.maximum(dev / tol, (np.hypot(step[:, 0], step[:, 1]) / MAX_SCALED_STEP) ** 2))
         over = factor[seg] > 1.0

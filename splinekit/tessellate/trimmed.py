@@ -247,9 +247,11 @@ def _crossing(P, segs):
     xs = x0[order]
     end = np.searchsorted(xs, x1[order], side="right")
     count = np.maximum(end - np.arange(1, len(xs) + 1), 0)
-    from ..limits import check
+    total = int(count.sum())
+    if total > 1_000_000:
+        from ..limits import check
 
-    check(int(count.sum()) * 64, "the trim crossing test")
+        check(total * 64, "the trim crossing test")
     i = np.repeat(np.arange(len(xs)), count)
     j = i + 1 + (np.arange(i.size) - np.repeat(np.cumsum(count) - count, count))
     a, b = order[i], order[j]
@@ -274,32 +276,35 @@ def _crossing(P, segs):
     return int(a[k[0]]) if k.size else -1
 
 
-def _keep_inside(T, segkey, nP):
-    """Which triangles ``T`` ``(t, 3)`` (counter-clockwise) lie on the material side of the
-    directed segments (``segkey``: sorted ``a * nP + b``): a triangle with an edge running along
-    a segment lies to its left, inside; one running against it lies outside; the label spreads
-    over triangles connected across non-segment edges. Returns ``(keep (t,) bool, conflict)``:
-    ``conflict`` is a triangle whose region is both inside and outside (loops that overlap or
-    nest wrongly), or -1."""
+def _half_edges(T):
+    """``(a, b)`` ``(t, 3)``: the edge opposite corner ``k`` of each counter-clockwise triangle,
+    directed as the triangle runs (Triangle's ``neighbors[:, k]`` lies across it)."""
+    return T[:, [1, 2, 0]], T[:, [2, 0, 1]]
+
+
+def _keep_inside(T, N, nxt):
+    """Which triangles ``T`` ``(t, 3)`` (counter-clockwise; ``N`` their neighbours across each
+    corner's opposite edge, -1 on the hull) lie on the material side of the trims (``nxt[i]``:
+    the point after boundary point ``i`` in its loop, -1 for other points). A triangle with an
+    edge running along a trim lies to its left, inside; one running against it lies outside;
+    the label spreads over triangles connected across non-trim edges. Returns ``(keep (t,)
+    bool, conflict, along (t, 3) bool)``: ``conflict`` is a triangle whose region is both inside
+    and outside (crossing or badly nested loops), or -1; ``along`` marks edges on a trim."""
     from .surfaces import _components
 
-    a = T.ravel()
-    b = T[:, [1, 2, 0]].ravel()
-    fwd = np.isin(a * nP + b, segkey)
-    rev = np.isin(b * nP + a, segkey)
-    und = np.minimum(a, b) * nP + np.maximum(a, b)
-    order = np.argsort(und, kind="stable")
-    su = und[order]
-    twin = np.flatnonzero(su[1:] == su[:-1])
-    h0, h1 = order[twin], order[twin + 1]
-    link = ~(fwd[h0] | rev[h0])
-    lab = _components(len(T), h0[link] // 3, h1[link] // 3)
+    a, b = _half_edges(T)
+    fwd = nxt[a] == b  # nxt of an interior point is -1, never a point index
+    rev = nxt[b] == a
+    along = fwd | rev
+    t, k = np.nonzero((N >= 0) & ~along)
+    lab = _components(len(T), t, N[t, k])
     inside = np.zeros(len(T), dtype=bool)
     outside = np.zeros(len(T), dtype=bool)
-    inside[lab[np.flatnonzero(fwd) // 3]] = True
-    outside[lab[np.flatnonzero(rev) // 3]] = True
+    inside[lab[np.nonzero(fwd)[0]]] = True
+    outside[lab[np.nonzero(rev)[0]]] = True
     both = np.flatnonzero(inside & outside)
-    return inside[lab], (int(np.flatnonzero(np.isin(lab, both))[0]) if both.size else -1)
+    conflict = int(np.flatnonzero(np.isin(lab, both))[0]) if both.size else -1
+    return inside[lab], conflict, along
 
 
 def tessellate_faces(faces, tol: float, angle_tol, size: float) -> Tessellation:
@@ -315,7 +320,7 @@ def tessellate_faces(faces, tol: float, angle_tol, size: float) -> Tessellation:
     edge_tol = max((e.tolerance for face in faces for e in face.edges), default=0.0)
     uses = edge_uses(faces)
     pcurves = CurveBatch([u.edge.pcurve for u in uses])
-    check_domains(uses, pcurves)
+    check_domains(uses, pcurves, batch)
     groups = group_uses(uses, max(WELD * size, 2.0 * edge_tol), pcurves, batch)
     samples = sample_groups(uses, groups, scales, tol, angle_tol, batch, pcurves)
     vid_of_group, edge_xyz = _edge_vertices(samples, size, edge_tol)
@@ -340,6 +345,9 @@ def tessellate_faces(faces, tol: float, angle_tol, size: float) -> Tessellation:
     dense = _densify(layout.place(pface, puv), segs, 0.5 * CLEARANCE)
     gf, guv = _grid_points(grids, layout, dense)
     n_vid = len(edge_xyz)
+    # the point after each boundary point in its loop (-1: not a boundary point), grown with the points
+    nxt_b = np.full(nb, -1, dtype=np.int64)
+    nxt_b[segs[:, 0]] = segs[:, 1]
     pface = np.concatenate([pface, gf])
     puv = np.concatenate([puv, guv])
     pxyz = np.concatenate([pxyz, batch.evaluate(gf, guv[:, 0], guv[:, 1])])
@@ -356,44 +364,52 @@ def tessellate_faces(faces, tol: float, angle_tol, size: float) -> Tessellation:
         if 2 * nP > MAX_TRIANGLES:
             raise ParameterError(f"tolerance {tol:.3g} needs more than {MAX_TRIANGLES:,} triangles; use a larger tolerance")
         P = layout.place(pface, puv)
-        r = triangle.triangulate({"vertices": P, "segments": segs}, "pQ")
+        nxt = np.concatenate([nxt_b, np.full(nP - nb, -1, dtype=np.int64)])
+        r = triangle.triangulate({"vertices": P, "segments": segs}, "pnQ")
         if len(r["vertices"]) != nP:  # Triangle split crossing segments at new points
             x = r["vertices"][nP, 0]
             f = int(np.searchsorted(layout.x0, x, side="right") - 1)
             raise ParameterError(f"{_face_name(faces[f], f)}: its trimming loops cross each other (or themselves)")
         T = np.asarray(r["triangles"], dtype=np.int64)
-        T = T[(pface[T[:, 0]] == pface[T[:, 1]]) & (pface[T[:, 0]] == pface[T[:, 2]])]
-        keep, conflict = _keep_inside(T, np.sort(segs[:, 0] * nP + segs[:, 1]), nP)
+        N = np.asarray(r["neighbors"], dtype=np.int64)
+        keep, conflict, along = _keep_inside(T, N, nxt)
         if conflict >= 0:
             f = int(pface[T[conflict, 0]])
             raise ParameterError(f"{_face_name(faces[f], f)}: its trimming loops cross, overlap or nest wrongly (a hole outside the outer loop?)")
+        ha, hb = _half_edges(T)
         if round_ == 0:  # every trim must bound some material on its left
-            kept = T[keep]
-            edges = np.concatenate([kept[:, [0, 1]], kept[:, [1, 2]], kept[:, [2, 0]]])
-            lonely = ~np.isin(segs[:, 0] * nP + segs[:, 1], edges[:, 0] * nP + edges[:, 1])
-            if lonely.any():
-                k = int(np.flatnonzero(lonely)[0])
-                f, l = int(pface[segs[k, 0]]), int(seg_loop[k])
+            covered = np.zeros(nb, dtype=bool)
+            on = keep[:, None] & (nxt[ha] == hb)
+            covered[ha[on]] = True
+            if not covered.all():
+                k = int(np.flatnonzero(~covered)[0])
+                f, l = int(pface[k]), int(seg_loop[k])
                 raise ParameterError(f"{_face_name(faces[f], f)}: loop {l} bounds no material: it lies outside the outer loop "
                                      "or inside another hole, or the loops cross")
-        T = T[keep]
         V = pvid[T]
-        T = T[(V[:, 0] != V[:, 1]) & (V[:, 1] != V[:, 2]) & (V[:, 2] != V[:, 0])]  # collapsed at a pole
-        # measure: triangle centres and edge midpoints (each edge once)
-        a, b = T.ravel(), T[:, [1, 2, 0]].ravel()
-        und = np.minimum(a, b) * nP + np.maximum(a, b)
-        ukey, first, inv = np.unique(und, return_index=True, return_inverse=True)
-        ea, eb = a[first], b[first]
-        is_seg = np.isin(ukey, np.sort(np.minimum(segs[:, 0], segs[:, 1]) * nP + np.maximum(segs[:, 0], segs[:, 1])))
-        fid = np.concatenate([pface[ea], pface[T[:, 0]]])
-        uv = np.concatenate([0.5 * (puv[ea] + puv[eb]), puv[T].mean(axis=1)])
-        flat = np.concatenate([0.5 * (pxyz[ea] + pxyz[eb]), pxyz[T].mean(axis=1)])
+        live = keep & (V[:, 0] != V[:, 1]) & (V[:, 1] != V[:, 2]) & (V[:, 2] != V[:, 0])  # not collapsed at a pole
+        # measure: triangle centres and edge midpoints, each edge once (from its lower live triangle)
+        n_side = np.where(N >= 0, N, 0)
+        other_live = (N >= 0) & live[n_side]
+        own = live[:, None] & (~other_live | (np.arange(len(T))[:, None] < N))
+        et, ek = np.nonzero(own)
+        ea, eb = ha[et, ek], hb[et, ek]
+        tl = np.flatnonzero(live)
+        Tl = T[tl]
+        fid = np.concatenate([pface[ea], pface[Tl[:, 0]]])
+        uv = np.concatenate([0.5 * (puv[ea] + puv[eb]), puv[Tl].mean(axis=1)])
+        flat = np.concatenate([0.5 * (pxyz[ea] + pxyz[eb]), pxyz[Tl].mean(axis=1)])
         exact = batch.evaluate(fid, uv[:, 0], uv[:, 1])
         dev = np.linalg.norm(exact - flat, axis=1)
         max_dev = float(dev.max()) if dev.size else 0.0
-        ne = len(ukey)
-        bad_edge = (dev[:ne] > tol) & ~is_seg
-        bad_tri = (dev[ne:] > tol) & ~bad_edge[inv.reshape(-1, 3)].any(axis=1)
+        ne = len(ea)
+        bad_edge = (dev[:ne] > tol) & ~along[et, ek]
+        # a triangle's centre is added only when none of its edges is split
+        split = np.zeros(len(T), dtype=bool)
+        split[et[bad_edge]] = True
+        nb_t = N[et[bad_edge], ek[bad_edge]]
+        split[nb_t[nb_t >= 0]] = True
+        bad_tri = (dev[ne:] > tol) & ~split[tl]
         new = np.concatenate([np.flatnonzero(bad_edge), ne + np.flatnonzero(bad_tri)])
         if new.size == 0 or round_ == MAX_ROUNDS - 1:
             break
@@ -402,7 +418,7 @@ def tessellate_faces(faces, tol: float, angle_tol, size: float) -> Tessellation:
         pxyz = np.concatenate([pxyz, exact[new]])
         pvid = np.concatenate([pvid, np.arange(n_vid, n_vid + new.size)])
         n_vid += new.size
-    return _assemble(faces, batch, T, pface, puv, pxyz, pvid, n_vid, max_dev, tol)
+    return _assemble(faces, batch, T[live], pface, puv, pxyz, pvid, n_vid, max_dev, tol)
 
 
 def _assemble(faces, batch, T, pface, puv, pxyz, pvid, n_vid, max_dev, tol):
@@ -430,9 +446,7 @@ def _assemble(faces, batch, T, pface, puv, pxyz, pvid, n_vid, max_dev, tol):
     if weak.any():  # collapsed points (poles): the mean of the adjacent triangles' normals
         X = V[tri]
         fn = np.cross(X[:, 1] - X[:, 0], X[:, 2] - X[:, 0])
-        acc = np.zeros_like(V)
-        for k in range(3):
-            np.add.at(acc, tri[:, k], fn)
+        acc = np.stack([sum(np.bincount(tri[:, k], fn[:, j], len(V)) for k in range(3)) for j in range(3)], axis=1)
         length = np.linalg.norm(acc, axis=1, keepdims=True)
         N[weak] = (acc / np.where(length > 0, length, 1.0))[weak]
     return Tessellation._build(V, tri, N, UV, VP, pface[T[:, 0]], puv[T], max_dev, tol)
