@@ -66,7 +66,7 @@ def test_measured_values():
     p = next(p for p in gap if p.kind == "open-loop")
     assert p.value == pytest.approx(0.1) and p.where == {"loop": 0, "edge": 3}
     out = next(p for p in TrimmedFace(PLANE, BAD_FACES["trim-outside-domain"]).check() if p.kind == "trim-outside-domain")
-    assert out.value == pytest.approx(0.2)
+    assert out.value == pytest.approx(0.2)  # the plane is 1 x 1: (u, v) is length
     wrong = TrimmedFace(PLANE, BAD_FACES["wrong-loop-orientation"]).check()
     assert wrong[0].value == pytest.approx(-0.64)  # the square's area, negative: clockwise
     # an inner loop turned counter-clockwise: named as loop 1

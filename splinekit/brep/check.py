@@ -104,6 +104,12 @@ def _split_long_segments(polys):
     return out
 
 
+def _surface_derivatives(face, uv):
+    """First derivatives ``(2, 2, n, 3)`` of the face's surface at ``uv`` clamped into its domain."""
+    (u0, u1), (v0, v1) = face.domain
+    return face.surface.derivatives(np.clip(uv[:, 0], u0, u1), np.clip(uv[:, 1], v0, v1), 1)
+
+
 def _signed_area(p):
     q = np.roll(p, -1, axis=0)
     return 0.5 * float(np.sum(p[:, 0] * q[:, 1] - q[:, 0] * p[:, 1]))
@@ -137,31 +143,54 @@ def check_face(face) -> list:
     loops = face.boundary_loops()
     explicit = face.is_trimmed
 
-    # closure: each edge's end against the next edge's start, in 3-D through the surface and in uv
+    # closure: each edge's end against the next edge's start, within the two edges' tolerances
+    # (each end lies within its edge's tolerance of the shared vertex). Measured in 3-D through
+    # the surface, both as the distance of the two surface points and as the length of the
+    # (u, v) gap mapped by the surface's derivatives there: the first misses a jump across a
+    # seam (same 3-D point), the second forgives a gap along a pole (no 3-D length).
     for li, loop in enumerate(loops):
         ends = np.array([e.end_uv for e in loop])
-        starts = np.array([e.start_uv for e in np.roll(np.array(loop, dtype=object), -1)])
+        starts = np.array([e.start_uv for e in loop[1:] + loop[:1]])
+        etol = np.array([e.tolerance for e in loop])
+        limit = np.maximum(tol, etol + np.roll(etol, -1))
         gap3 = np.linalg.norm(surface_points(face, ends) - surface_points(face, starts), axis=1)
-        gap_uv = np.linalg.norm(ends - starts, axis=1)
-        for ei in np.flatnonzero((gap3 > tol) | (gap_uv > 10.0 * tol_uv + 1e-12 * max(u1 - u0, v1 - v0))):
+        d = _surface_derivatives(face, 0.5 * (ends + starts))
+        duv = starts - ends
+        gap_lin = np.linalg.norm(d[1, 0] * duv[:, :1] + d[0, 1] * duv[:, 1:], axis=1)
+        for ei in np.flatnonzero((gap3 > limit) | (gap_lin > limit)):
             nxt = (ei + 1) % len(loop)
-            what = f"{gap3[ei]:.3g} in 3-D" if gap3[ei] > tol else f"{gap_uv[ei]:.3g} in (u, v) (closed in 3-D only: across a seam?)"
-            problems.append(Problem("open-loop", f"{label}: loop {li} is open between edges {ei} and {nxt}: gap {what} (tolerance {tol:g})",
-                                    float(gap3[ei] if gap3[ei] > tol else gap_uv[ei]), face=index, loop=li, edge=int(ei)))
+            if gap3[ei] > limit[ei]:
+                what, value = f"{gap3[ei]:.3g} in 3-D", gap3[ei]
+            else:
+                what, value = (f"{np.linalg.norm(duv[ei]):.3g} in (u, v), {gap_lin[ei]:.3g} in 3-D along the surface "
+                               "(the ends meet in space only: across a seam?)"), gap_lin[ei]
+            problems.append(Problem("open-loop", f"{label}: loop {li} is open between edges {ei} and {nxt}: gap {what} "
+                                    f"(tolerance {limit[ei]:g})", float(value), face=index, loop=li, edge=int(ei)))
     if not explicit:
         return problems
 
     polys = _loop_polylines(face)
     span = max(u1 - u0, v1 - v0)
-    # inside the surface's domain
+    # inside the surface's domain: the excursion's length in 3-D, mapped by the derivatives at the
+    # nearest domain point (so a step in u at a pole, which has no length, is forgiven), within
+    # the edge's tolerance
+    etols = [np.array([e.tolerance for e in lp]) for lp in loops]
     for li, (p, owner) in enumerate(polys):
-        over = np.maximum.reduce([u0 - p[:, 0], p[:, 0] - u1, v0 - p[:, 1], p[:, 1] - v1])
-        bad = over > tol_uv + 1e-12 * span
+        clamped = np.stack([np.clip(p[:, 0], u0, u1), np.clip(p[:, 1], v0, v1)], axis=1)
+        out_of = np.flatnonzero(np.any(clamped != p, axis=1))
+        if out_of.size == 0:
+            continue
+        d = _surface_derivatives(face, clamped[out_of])
+        step = p[out_of] - clamped[out_of]
+        over = np.linalg.norm(d[1, 0] * step[:, :1] + d[0, 1] * step[:, 1:], axis=1)
+        bad = over > np.maximum(tol, etols[li][owner[out_of]])
         if bad.any():
-            k = int(np.argmax(over))
+            k = out_of[int(np.argmax(np.where(bad, over, -np.inf)))]
+            far = float(np.abs(step).max())
             problems.append(Problem("trim-outside-domain", f"{label}: loop {li}, edge {int(owner[k])} leaves the surface's domain "
-                                    f"[{u0:g}, {u1:g}] x [{v0:g}, {v1:g}] by {over[k]:.3g} at (u, v) = ({p[k, 0]:.6g}, {p[k, 1]:.6g})",
-                                    float(over[k]), face=index, loop=li, edge=int(owner[k])))
+                                    f"[{u0:g}, {u1:g}] x [{v0:g}, {v1:g}] at (u, v) = ({p[k, 0]:.6g}, {p[k, 1]:.6g}): "
+                                    f"{far:.3g} in (u, v), {float(over.max()):.3g} in 3-D", float(over.max()),
+                                    face=index, loop=li, edge=int(owner[k])))
 
     # orientation by signed area: outer counter-clockwise, inner clockwise
     areas = [_signed_area(p) for p, _ in polys]
@@ -223,7 +252,8 @@ def check_face(face) -> list:
                 problems.append(Problem("inner-loop-outside", f"{label}: inner loop {i + 1} lies inside inner loop {k + 1}",
                                         None, face=index, loop=int(i) + 1))
 
-    # pcurve against 3-D curve
+    # pcurve against 3-D curve at the same parameter (the data model's SameParameter); when they
+    # disagree, say whether the curves are at least the same point set (only the parameter off)
     for li, loop in enumerate(loops):
         for ei, e in enumerate(loop):
             if e.curve is None:
@@ -232,12 +262,18 @@ def check_face(face) -> list:
             a, b = e.domain
             br = br[(br >= a) & (br <= b)]
             t = (br[:-1, None] + (br[1:] - br[:-1])[:, None] * np.linspace(0.0, 1.0, 17)[None]).ravel()
-            uv = e.pcurve.evaluate(t)
-            dev = float(np.linalg.norm(surface_points(face, uv) - e.curve.evaluate(t), axis=1).max())
+            on_surface = surface_points(face, e.pcurve.evaluate(t))
+            dev = float(np.linalg.norm(on_surface - e.curve.evaluate(t), axis=1).max())
             limit = max(e.tolerance, tol)
             if dev > limit:
+                from ..closest import project
+
+                apart = float(project(e.curve, on_surface).distances.max())
+                how = (f"; as point sets they are {apart:.3g} apart (only the parameters differ)" if apart <= limit
+                       else f"; {apart:.3g} apart as point sets")
                 problems.append(Problem("pcurve-deviation", f"{label}: loop {li}, edge {ei}: the surface at the pcurve is {dev:.3g} "
-                                        f"from the 3-D curve (tolerance {limit:g})", dev, face=index, loop=li, edge=ei))
+                                        f"from the 3-D curve at the same parameter (tolerance {limit:g}){how}", dev,
+                                        face=index, loop=li, edge=ei))
     return problems
 
 

@@ -56,10 +56,11 @@ _MAX_LEVELS = 64  # halvings of a trim piece: far below any tolerance of a unit-
 
 
 # -- faces ----------------------------------------------------------------------------------------
-def uv_tolerance(face, tolerance: float | None = None) -> float:
-    """The ``(u, v)`` distance that is at most ``tolerance`` (default the face's) in 3-D:
-    ``tolerance / max(|Su|, |Sv|)`` over a grid of the surface's domain (cached per face)."""
-    tol = face.tolerance if tolerance is None else float(tolerance)
+def uv_tolerance(face, tolerance=None):
+    """The ``(u, v)`` distance that is at most ``tolerance`` (default the face's; a float or an
+    array) in 3-D: ``tolerance / max(|Su|, |Sv|)`` over a grid of the surface's domain (the speed
+    is cached per face)."""
+    tol = face.tolerance if tolerance is None else (np.asarray(tolerance, dtype=np.float64) if np.ndim(tolerance) else float(tolerance))
     if "speed" not in face._cache:
         (u0, u1), (v0, v1) = face.domain
         s = face.surface
