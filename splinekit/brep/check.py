@@ -173,7 +173,7 @@ def check_face(face) -> list:
     span = max(u1 - u0, v1 - v0)
     # inside the surface's domain: the excursion's length in 3-D, mapped by the derivatives at the
     # nearest domain point (so a step in u at a pole, which has no length, is forgiven), within
-    # the edge's tolerance
+    # twice the edge's tolerance (the clamped point and the true one each within it)
     etols = [np.array([e.tolerance for e in lp]) for lp in loops]
     for li, (p, owner) in enumerate(polys):
         clamped = np.stack([np.clip(p[:, 0], u0, u1), np.clip(p[:, 1], v0, v1)], axis=1)
@@ -183,13 +183,13 @@ def check_face(face) -> list:
         d = _surface_derivatives(face, clamped[out_of])
         step = p[out_of] - clamped[out_of]
         over = np.linalg.norm(d[1, 0] * step[:, :1] + d[0, 1] * step[:, 1:], axis=1)
-        bad = over > np.maximum(tol, etols[li][owner[out_of]])
+        bad = over > 2.0 * np.maximum(tol, etols[li][owner[out_of]])
         if bad.any():
             k = out_of[int(np.argmax(np.where(bad, over, -np.inf)))]
             far = float(np.abs(step).max())
             problems.append(Problem("trim-outside-domain", f"{label}: loop {li}, edge {int(owner[k])} leaves the surface's domain "
                                     f"[{u0:g}, {u1:g}] x [{v0:g}, {v1:g}] at (u, v) = ({p[k, 0]:.6g}, {p[k, 1]:.6g}): "
-                                    f"{far:.3g} in (u, v), {float(over.max()):.3g} in 3-D", float(over.max()),
+                                    f"{far:.3g} in (u, v), {float(over.max()):.3g} in 3-D (tolerance {2.0 * max(tol, float(etols[li][owner[k]])):g})", float(over.max()),
                                     face=index, loop=li, edge=int(owner[k])))
 
     # orientation by signed area: outer counter-clockwise, inner clockwise
@@ -200,13 +200,19 @@ def check_face(face) -> list:
             problems.append(Problem("wrong-loop-orientation", f"{label}: loop {li} runs the wrong way: signed area {a:.6g} in (u, v), "
                                     f"expected {want}", float(a), face=index, loop=li))
 
-    # crossings and touchings among all segments, candidates paired by a KD-tree on mid points
-    P0 = np.concatenate([p for p, _ in polys])
-    P1 = np.concatenate([np.roll(p, -1, axis=0) for p, _ in polys])
-    loop_of = np.concatenate([np.full(len(p), li) for li, (p, _) in enumerate(polys)])
-    pos = np.concatenate([np.arange(len(p)) for p, _ in polys])
-    length = np.array([len(p) for p, _ in polys])[loop_of]
-    edge_of = np.concatenate([o for _, o in polys])
+    # crossings and touchings among all segments, candidates paired by a KD-tree on mid points;
+    # degenerate edges (a pole's side, or a point) are left out: the loop steps over them, since
+    # their ends are one point in space whatever their (u, v)
+    kept = []
+    for li, (p, owner) in enumerate(polys):
+        solid = ~np.array([loops[li][k].degenerate for k in owner], dtype=bool) if len(owner) else np.zeros(0, bool)
+        kept.append((p[solid], owner[solid]) if solid.sum() >= 2 else (p, owner))
+    P0 = np.concatenate([p for p, _ in kept])
+    P1 = np.concatenate([np.roll(p, -1, axis=0) for p, _ in kept])
+    loop_of = np.concatenate([np.full(len(p), li) for li, (p, _) in enumerate(kept)])
+    pos = np.concatenate([np.arange(len(p)) for p, _ in kept])
+    length = np.array([len(p) for p, _ in kept])[loop_of]
+    edge_of = np.concatenate([o for _, o in kept])
     mid = 0.5 * (P0 + P1)
     half = 0.5 * np.linalg.norm(P1 - P0, axis=1)
     pairs = cKDTree(mid).query_pairs(2.0 * float(half.max()) + tol_uv, output_type="ndarray")

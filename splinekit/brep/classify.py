@@ -85,19 +85,37 @@ def _trim_table(face) -> dict:
     for li, lp in enumerate(face.boundary_loops()):
         prev_end = lp[-1].end_uv
         for ei, edge in enumerate(lp):
-            pieces = edge.pcurve.to_bezier()
-            for k, b in enumerate(pieces):
-                P = np.array(b.control_points, dtype=np.float64)
-                w = np.ones(len(P)) if b.weights is None else np.array(b.weights, dtype=np.float64)
-                if k == 0:
-                    P[0] = prev_end
-                rows.setdefault(b.degree, []).append((np.concatenate([P * w[:, None], w[:, None]], axis=1), li, ei, count))
+            pieces = _bezier_coefs(edge.pcurve)
+            pieces[0, 0] = np.append(prev_end, 1.0) * pieces[0, 0, 2]
+            p = pieces.shape[1] - 1
+            for k in range(len(pieces)):
+                rows.setdefault(p, []).append((pieces[k], li, ei, count))
                 count += 1
-            prev_end = pieces[-1].control_points[-1]
+            prev_end = pieces[-1, -1, :2] / pieces[-1, -1, 2]
     table = {p: (np.array([r[0] for r in rs]), np.array([r[1] for r in rs]), np.array([r[2] for r in rs]),
                  np.array([r[3] for r in rs])) for p, rs in rows.items()}
     face._cache["trim_table"] = table
     return table
+
+
+def _bezier_coefs(curve) -> np.ndarray:
+    """Homogeneous control points ``(m, p + 1, dim + 1)`` of the curve's Bézier pieces. A curve
+    already in Bézier form (clamped, every interior knot of multiplicity ``p``: polylines, the
+    conics of :mod:`splinekit.construct`, most converted CAD curves) is sliced directly; others
+    go through knot insertion (``to_bezier``)."""
+    p, U = curve.degree, curve.knots
+    H = curve.homogeneous_points if curve.is_rational else np.column_stack([curve.control_points, np.ones(len(curve.control_points))])
+    H = np.array(H, dtype=np.float64)
+    _, mult = np.unique(U[p + 1:len(U) - p - 1], return_counts=True)
+    if U[0] == U[p] and U[-1] == U[len(U) - p - 1] and np.all(mult == p) and len(H) == p * (len(mult) + 1) + 1:
+        idx = p * np.arange(len(mult) + 1)[:, None] + np.arange(p + 1)[None]
+        return H[idx]
+    out = []
+    for b in curve.to_bezier():
+        P = np.asarray(b.control_points, dtype=np.float64)
+        w = np.ones(len(P)) if b.weights is None else np.asarray(b.weights, dtype=np.float64)
+        out.append(np.concatenate([P * w[:, None], w[:, None]], axis=1))
+    return np.array(out)
 
 
 def trim_pieces(face, loop: int | None = None) -> dict:
@@ -287,8 +305,7 @@ def _face_mesh(face, per_span: int = 8):
     scale = 1.0 / np.maximum(cell, 1e-300)  # u and v in cells: "half a cell" the same both ways
     U, V = np.meshgrid(lines[0], lines[1], indexing="ij")
     grid = np.stack([U.ravel(), V.ravel()], axis=1)
-    inside = _classify_uv(trim_pieces(face), grid, uv_tolerance(face)) == INSIDE
-    grid = grid[inside]
+    grid = grid[_polygon_parity(rings, grid)]
     if len(grid):
         d, _ = cKDTree(trim * scale).query(grid * scale)
         grid = grid[d > 0.5]
@@ -299,7 +316,7 @@ def _face_mesh(face, per_span: int = 8):
         return out
     tri = Delaunay(pts2 * scale).simplices
     cen = pts2[tri].mean(axis=1)
-    tri = tri[_classify_uv(trim_pieces(face), cen, uv_tolerance(face)) == INSIDE]
+    tri = tri[_polygon_parity(rings, cen)]
     # counter-clockwise in (u, v): the normal Su x Sv side
     a, b, c = pts2[tri[:, 0]], pts2[tri[:, 1]], pts2[tri[:, 2]]
     ccw = (b[:, 0] - a[:, 0]) * (c[:, 1] - a[:, 1]) - (b[:, 1] - a[:, 1]) * (c[:, 0] - a[:, 0]) > 0
@@ -325,6 +342,28 @@ def _face_mesh(face, per_span: int = 8):
     out = (P, tri, float(max(dev.max(initial=0.0), dev_trim)))
     face._cache["mesh"] = out
     return out
+
+
+def _polygon_parity(rings, q):
+    """Even-odd inside test ``(n,)`` of points ``q`` ``(n, 2)`` against the closed polygons
+    ``rings`` (the mesh's own boundary). Each segment meets only the points in its v-range:
+    points sorted by v, each segment takes a contiguous run of them."""
+    a = np.concatenate(rings)
+    b = np.concatenate([np.roll(r, -1, axis=0) for r in rings])
+    order = np.argsort(q[:, 1], kind="stable")
+    vs = q[order, 1]
+    lo = np.searchsorted(vs, np.minimum(a[:, 1], b[:, 1]), side="left")
+    count = np.searchsorted(vs, np.maximum(a[:, 1], b[:, 1]), side="right") - lo
+    total = int(count.sum())
+    limits.check(total * 8 * 6, "point/segment pairs")
+    seg = np.repeat(np.arange(len(a)), count)
+    pt = order[np.repeat(lo, count) + np.arange(total) - np.repeat(np.cumsum(count) - count, count)]
+    A, B, Q = a[seg], b[seg], q[pt]
+    straddle = (A[:, 1] <= Q[:, 1]) != (B[:, 1] <= Q[:, 1])
+    with np.errstate(divide="ignore", invalid="ignore"):
+        x = A[:, 0] + (Q[:, 1] - A[:, 1]) * (B[:, 0] - A[:, 0]) / (B[:, 1] - A[:, 1])
+    hits = straddle & (Q[:, 0] < x)
+    return np.bincount(pt[hits], minlength=len(q)) % 2 == 1
 
 
 def _cap(face, rings):
