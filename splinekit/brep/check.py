@@ -33,7 +33,8 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from ..errors import BRepError, TrimError
-from .classify import OUTSIDE, _classify_uv, _face_mesh, sample_trims, trim_pieces, uv_tolerance
+from .coarse_mesh import face_mesh
+from .trims import OUTSIDE, classify_uv, sample_trims, segment_distance, trim_pieces, uv_tolerance
 from .topology import surface_points
 
 __all__ = ["Problem", "Checkable", "check_face", "check_shell", "check_solid", "FACE_KINDS"]
@@ -118,16 +119,14 @@ def _signed_area(p):
 def _segment_distances(a0, a1, b0, b1):
     """Distances ``(n,)`` between segments ``a0 a1`` and ``b0 b1`` (all ``(n, 2)``): 0 when they
     cross, else the smallest end point to segment distance."""
-    from .classify import _segment_distance
-
     def orient(p, q, r):
         return (q[:, 0] - p[:, 0]) * (r[:, 1] - p[:, 1]) - (q[:, 1] - p[:, 1]) * (r[:, 0] - p[:, 0])
 
     d1, d2 = orient(a0, a1, b0), orient(a0, a1, b1)
     d3, d4 = orient(b0, b1, a0), orient(b0, b1, a1)
     cross = (d1 * d2 < 0) & (d3 * d4 < 0)
-    d = np.minimum.reduce([_segment_distance(a0, a1, b0), _segment_distance(a0, a1, b1),
-                           _segment_distance(b0, b1, a0), _segment_distance(b0, b1, a1)])
+    d = np.minimum.reduce([segment_distance(a0, a1, b0), segment_distance(a0, a1, b1),
+                           segment_distance(b0, b1, a0), segment_distance(b0, b1, a1)])
     return np.where(cross, 0.0, d)
 
 
@@ -244,7 +243,7 @@ def check_face(face) -> list:
     if len(polys) > 1:
         holes = np.concatenate([p for p, _ in polys[1:]])
         owner = np.concatenate([np.full(len(p), li) for li, (p, _) in enumerate(polys) if li > 0])
-        outer = _classify_uv(trim_pieces(face, 0), holes, tol_uv)
+        outer = classify_uv(trim_pieces(face, 0), holes, tol_uv)
         for li in np.unique(owner[outer == OUTSIDE]):
             problems.append(Problem("inner-loop-outside", f"{label}: inner loop {li} is not inside the outer loop",
                                     float(np.mean(outer[owner == li] == OUTSIDE)), face=index, loop=int(li)))
@@ -254,7 +253,7 @@ def check_face(face) -> list:
         inbox = np.all((first[:, None] >= lo[None]) & (first[:, None] <= hi[None]), axis=2)
         np.fill_diagonal(inbox, False)
         for i, k in zip(*np.nonzero(inbox)):
-            if _classify_uv(trim_pieces(face, int(k) + 1), first[i:i + 1], tol_uv)[0] != OUTSIDE:
+            if classify_uv(trim_pieces(face, int(k) + 1), first[i:i + 1], tol_uv)[0] != OUTSIDE:
                 problems.append(Problem("inner-loop-outside", f"{label}: inner loop {i + 1} lies inside inner loop {k + 1}",
                                         None, face=index, loop=int(i) + 1))
 
@@ -310,7 +309,7 @@ def _signed_volume(shell) -> float:
     """Signed volume of the shell's faces' meshes (divergence theorem): a cheap estimate."""
     total = 0.0
     for f in shell.faces:
-        P, T, _ = _face_mesh(f)
+        P, T, _ = face_mesh(f)
         if len(T):
             total += float(np.einsum("ij,ij->i", P[T[:, 0]], np.cross(P[T[:, 1]], P[T[:, 2]])).sum()) / 6.0
     return total
