@@ -4,7 +4,7 @@ domain to a requested relative tolerance, with an error estimate.
 Two rules, both built on the 7-15 point Gauss-Kronrod pair (the 7-point Gauss rule is embedded in
 the 15-point Kronrod rule, so the difference of the two costs no extra evaluation):
 
-- **Untrimmed faces** (natural domain): the tensor rule K15 x K15 on cells, starting from the
+- **Untrimmed faces** (natural domain, or one loop around an axis-parallel rectangle): the tensor rule K15 x K15 on cells, starting from the
   surface's Bézier spans. A cell's error is ``|K x K - G x K| + |K x K - K x G|`` (the u and v
   parts); cells whose error is too large are bisected across the direction with the larger part.
 - **Trimmed faces**: Green's theorem, ``integral over D of g du dv = closed integral over dD of
@@ -99,17 +99,21 @@ class Integral:
 # per-face rules: initial pieces, evaluation of pieces, bisection
 
 class _TensorRule:
-    """K15 x K15 on cells ``(m, 4)`` = ``[u0, u1, v0, v1]`` of an untrimmed face."""
+    """K15 x K15 on cells ``(m, 4)`` = ``[u0, u1, v0, v1]`` of an untrimmed face, or of a face
+    whose only loop is an axis-parallel rectangle ``rect`` = ``(u0, u1, v0, v1)``."""
 
-    def __init__(self, face, integrand):
+    def __init__(self, face, integrand, rect=None):
         self.surface = face.surface
         self.sign = -1.0 if face.reversed else 1.0
         self.integrand = integrand
+        self.rect = rect
 
-    def initial(self, cells=None):
-        if cells is not None:
-            return np.asarray(cells, dtype=float).reshape(-1, 4)
+    def initial(self):
         bu, bv = self.surface.bezier_breakpoints()
+        if self.rect is not None:
+            u0, u1, v0, v1 = self.rect
+            bu = np.concatenate([[u0], bu[(bu > u0) & (bu < u1)], [u1]])
+            bv = np.concatenate([[v0], bv[(bv > v0) & (bv < v1)], [v1]])
         U0, V0 = np.meshgrid(bu[:-1], bv[:-1], indexing="ij")
         U1, V1 = np.meshgrid(bu[1:], bv[1:], indexing="ij")
         return np.stack([U0.ravel(), U1.ravel(), V0.ravel(), V1.ravel()], axis=1)
@@ -161,12 +165,12 @@ class _GreenRule:
         # total variation of v along the loops: bounds how inner errors add up in the outer sum
         total = 0.0
         for c in self.pcurves:
-            t, w = _gauss_on(c.bezier_breakpoints(), 16)
+            t, w = _gauss_on(c.bezier_breakpoints())
             total += float(w @ np.abs(c.derivatives(t, 1)[1][:, 1]))
         self.v_length = max(total, np.finfo(float).tiny)
         self.inner_scale = None  # per-component magnitude of g, set on the first pass
 
-    def initial(self, cells=None):
+    def initial(self):
         rows = []
         for i, c in enumerate(self.pcurves):
             b = c.bezier_breakpoints()
@@ -269,16 +273,45 @@ class _GreenRule:
         return G, G_err, n_eval
 
 
-def _gauss_on(breaks, order):
-    """Gauss-Legendre nodes and weights on every interval between consecutive ``breaks``."""
-    g, w = np.polynomial.legendre.leggauss(order)
+_GL16 = np.polynomial.legendre.leggauss(16)
+
+
+def _gauss_on(breaks):
+    """16-point Gauss-Legendre nodes and weights on every interval between consecutive ``breaks``."""
+    g, w = _GL16
     breaks = np.asarray(breaks, dtype=float)
     mid, half = 0.5 * (breaks[1:] + breaks[:-1]), 0.5 * (breaks[1:] - breaks[:-1])
     return (mid[:, None] + half[:, None] * g).ravel(), (half[:, None] * w).ravel()
 
 
+def _rectangle(face, rel: float = 1e-12):
+    """``(u0, u1, v0, v1)`` when the face's only loop runs counter-clockwise around that
+    axis-parallel rectangle (every pcurve straight along one of its sides: OCC's trims of
+    spheres, tori, cylinders and untrimmed B-spline faces), else None. Such a face gets the
+    tensor rule, cheaper than Green's theorem and adaptive in both directions at poles."""
+    if len(face.loops) != 1:
+        return None
+    cps = [np.asarray(e.pcurve.control_points, dtype=float) for e in face.loops[0]]
+    pts = np.concatenate(cps)
+    (u0, v0), (u1, v1) = pts.min(axis=0), pts.max(axis=0)
+    eps = rel * max(u1 - u0, v1 - v0, np.finfo(float).tiny)
+    if not (u1 - u0 > eps and v1 - v0 > eps):
+        return None
+    for cp in cps:
+        if not any(np.all(np.abs(cp[:, k] - side) <= eps) for k, side in ((0, u0), (0, u1), (1, v0), (1, v1))):
+            return None
+    ends = np.array([c[0] for c in cps] + [cps[-1][-1]])  # straight pieces: the end points' polygon
+    area = 0.5 * float(np.sum(ends[:-1, 0] * ends[1:, 1] - ends[1:, 0] * ends[:-1, 1]))
+    if abs(area - (u1 - u0) * (v1 - v0)) > 1e-9 * (u1 - u0) * (v1 - v0):
+        return None
+    return float(u0), float(u1), float(v0), float(v1)
+
+
 def _rule_for(face, integrand):
-    return _GreenRule(face, integrand) if face.is_trimmed else _TensorRule(face, integrand)
+    if not face.is_trimmed:
+        return _TensorRule(face, integrand)
+    rect = _rectangle(face)
+    return _GreenRule(face, integrand) if rect is None else _TensorRule(face, integrand, rect)
 
 
 # ---------------------------------------------------------------------------
