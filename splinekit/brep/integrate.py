@@ -33,6 +33,7 @@ import numpy as np
 
 from .. import limits
 from .._validate import as_positive
+from ..basis.bspline import basis_ders_t, find_span
 from ..errors import ParameterError
 
 __all__ = ["Integral", "integrate", "integrate_face", "kronrod15", "DEFAULT_TOLERANCE"]
@@ -96,6 +97,36 @@ class Integral:
 
 
 # ---------------------------------------------------------------------------
+# the surface on the nodes of many cells at once
+
+def _cell_derivatives(surface, u, v):
+    """``S``, ``Su``, ``Sv`` ``(m, a, b, 3)`` on the tensor grids ``u[c] x v[c]`` of ``m`` cells
+    (``u`` ``(m, a)``, ``v`` ``(m, b)``), each cell inside one knot span of the surface.
+
+    Exploits the tensor structure: the basis functions are evaluated per node row and
+    contracted with the cell's local ``(p + 1) x (q + 1)`` net, two small products instead of a
+    full basis product per point. Rational surfaces: quotient rule on the homogeneous values.
+    """
+    p, q, U, V, C = surface._pu, surface._pv, surface._ku, surface._kv, surface._coefs
+    m, a = u.shape
+    b = v.shape[1]
+    su = find_span(p, U, u[:, a // 2])
+    sv = find_span(q, V, v[:, b // 2])
+    Nu = basis_ders_t(p, U, np.repeat(su, a), u.ravel(), 1).reshape(2, p + 1, m, a)
+    Nv = basis_ders_t(q, V, np.repeat(sv, b), v.ravel(), 1).reshape(2, q + 1, m, b)
+    net = C[(su[:, None] - p + np.arange(p + 1))[:, :, None], (sv[:, None] - q + np.arange(q + 1))[:, None, :]]
+    A = np.einsum("dami,mabk->dmibk", Nu, net)  # contracted in u: (2, m, a, q + 1, k)
+    D = np.einsum("dmibk,ebmj->demijk", A, Nv)  # (2, 2, m, a, b, k)
+    if not surface._rational:
+        return D[0, 0], D[1, 0], D[0, 1]
+    w = D[..., -1:]
+    S = D[0, 0, ..., :-1] / w[0, 0]
+    Su = (D[1, 0, ..., :-1] - w[1, 0] * S) / w[0, 0]
+    Sv = (D[0, 1, ..., :-1] - w[0, 1] * S) / w[0, 0]
+    return S, Su, Sv
+
+
+# ---------------------------------------------------------------------------
 # per-face rules: initial pieces, evaluation of pieces, bisection
 
 class _TensorRule:
@@ -124,10 +155,8 @@ class _TensorRule:
         du, dv = cells[:, 1] - cells[:, 0], cells[:, 3] - cells[:, 2]
         u = cells[:, 0, None] + du[:, None] * _T  # (m, 15)
         v = cells[:, 2, None] + dv[:, None] * _T
-        uu = np.broadcast_to(u[:, :, None], (m, _NQ, _NQ)).ravel()
-        vv = np.broadcast_to(v[:, None, :], (m, _NQ, _NQ)).ravel()
-        d = self.surface.derivatives(uu, vv, 1)
-        f = self.integrand(d[0, 0], d[1, 0], d[0, 1], self.sign)  # (m * 225, k)
+        S, Su, Sv = (x.reshape(-1, 3) for x in _cell_derivatives(self.surface, u, v))
+        f = self.integrand(S, Su, Sv, self.sign)  # (m * 225, k)
         k = f.shape[-1]
         f = f.reshape(m, _NQ, _NQ, k) * (0.25 * du * dv)[:, None, None, None]
         fk = np.einsum("j,mijc->mic", _W_K, f)  # v contracted with Kronrod
@@ -213,8 +242,9 @@ class _GreenRule:
         return np.concatenate([a, b])
 
     def _g(self, s, v):
-        d = self.surface.derivatives(s, v, 1)
-        return self.integrand(d[0, 0], d[1, 0], d[0, 1], self.sign)
+        """The integrand at the nodes ``s`` ``(q, 15)`` of ``q`` intervals, each at its ``v`` ``(q,)``."""
+        S, Su, Sv = (x.reshape(-1, 3) for x in _cell_derivatives(self.surface, s, v[:, None]))
+        return self.integrand(S, Su, Sv, self.sign)
 
     def _inner(self, u, v, tol):
         """``G(u, v) = integral from u_ref to u of g(s, v) ds`` at ``n`` points: ``(G (n, k),
@@ -245,7 +275,7 @@ class _GreenRule:
             limits.check(q * _NQ * 8 * 24, "inner quadrature nodes")
             h = s1 - s0
             s = s0[:, None] + h[:, None] * _T
-            f = self._g(s.ravel(), np.repeat(vv, _NQ)).reshape(q, _NQ, -1)
+            f = self._g(s, vv).reshape(q, _NQ, -1)
             n_eval += f.shape[0] * _NQ
             if G is None:
                 k = f.shape[-1]
