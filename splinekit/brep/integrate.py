@@ -34,6 +34,7 @@ import numpy as np
 from .. import limits
 from .._validate import as_positive
 from ..basis.bspline import basis_ders_t, find_span
+from ..construct.curves import line
 from ..errors import ParameterError
 
 __all__ = ["Integral", "integrate", "integrate_face", "kronrod15", "DEFAULT_TOLERANCE"]
@@ -187,8 +188,8 @@ class _GreenRule:
         self.surface = face.surface
         self.sign = -1.0 if face.reversed else 1.0
         self.integrand = integrand
-        self.pcurves = [e.pcurve for e in face.edges]
-        (self.u_ref, u1), _ = self.surface.domain
+        (self.u_ref, u1), (v0, v1) = self.surface.domain
+        self.pcurves = _closed_pcurves(face.loops, 1e-14 * max(u1 - self.u_ref, v1 - v0))
         self.width = max(u1 - self.u_ref, np.finfo(float).tiny)
         self.u_breaks = self.surface.bezier_breakpoints()[0]
         # total variation of v along the loops: bounds how inner errors add up in the outer sum
@@ -304,6 +305,21 @@ class _GreenRule:
 
 
 _GL16 = np.polynomial.legendre.leggauss(16)
+
+
+def _closed_pcurves(loops, tiny):
+    """The pcurves of the loops, with a straight piece across every gap between one pcurve's
+    end and the next one's start (approximated trims, e.g. OCC's NURBS conversion, leave gaps
+    of 1e-7 in (u, v)): Green's theorem needs closed loops, and on an open one the result
+    depends on the direction of the inner integral by G times the gap."""
+    out = []
+    for loop in loops:
+        for edge, following in zip(loop, loop[1:] + loop[:1]):
+            out.append(edge.pcurve)
+            a, b = edge.end_uv, following.start_uv
+            if np.abs(a - b).max() > tiny:
+                out.append(line(a, b))
+    return out
 
 
 def _gauss_on(breaks):
