@@ -4,7 +4,7 @@ domain to a requested relative tolerance, with an error estimate.
 Two rules, both built on the 7-15 point Gauss-Kronrod pair (the 7-point Gauss rule is embedded in
 the 15-point Kronrod rule, so the difference of the two costs no extra evaluation):
 
-- **Untrimmed faces** (natural domain): the tensor rule K15 x K15 on cells, starting from the
+- **Untrimmed faces** (natural domain, or one loop around an axis-parallel rectangle): the tensor rule K15 x K15 on cells, starting from the
   surface's Bézier spans. A cell's error is ``|K x K - G x K| + |K x K - K x G|`` (the u and v
   parts); cells whose error is too large are bisected across the direction with the larger part.
 - **Trimmed faces**: Green's theorem, ``integral over D of g du dv = closed integral over dD of
@@ -33,6 +33,8 @@ import numpy as np
 
 from .. import limits
 from .._validate import as_positive
+from ..basis.bspline import basis_ders_t, find_span
+from ..construct.curves import line
 from ..errors import ParameterError
 
 __all__ = ["Integral", "integrate", "integrate_face", "kronrod15", "DEFAULT_TOLERANCE"]
@@ -96,20 +98,54 @@ class Integral:
 
 
 # ---------------------------------------------------------------------------
+# the surface on the nodes of many cells at once
+
+def _cell_derivatives(surface, u, v):
+    """``S``, ``Su``, ``Sv`` ``(m, a, b, 3)`` on the tensor grids ``u[c] x v[c]`` of ``m`` cells
+    (``u`` ``(m, a)``, ``v`` ``(m, b)``), each cell inside one knot span of the surface.
+
+    Exploits the tensor structure: the basis functions are evaluated per node row and
+    contracted with the cell's local ``(p + 1) x (q + 1)`` net, two small products instead of a
+    full basis product per point. Rational surfaces: quotient rule on the homogeneous values.
+    """
+    p, q, U, V, C = surface._pu, surface._pv, surface._ku, surface._kv, surface._coefs
+    m, a = u.shape
+    b = v.shape[1]
+    su = find_span(p, U, u[:, a // 2])
+    sv = find_span(q, V, v[:, b // 2])
+    Nu = basis_ders_t(p, U, np.repeat(su, a), u.ravel(), 1).reshape(2, p + 1, m, a)
+    Nv = basis_ders_t(q, V, np.repeat(sv, b), v.ravel(), 1).reshape(2, q + 1, m, b)
+    net = C[(su[:, None] - p + np.arange(p + 1))[:, :, None], (sv[:, None] - q + np.arange(q + 1))[:, None, :]]
+    A = np.einsum("dami,mabk->dmibk", Nu, net)  # contracted in u: (2, m, a, q + 1, k)
+    D = np.einsum("dmibk,ebmj->demijk", A, Nv)  # (2, 2, m, a, b, k)
+    if not surface._rational:
+        return D[0, 0], D[1, 0], D[0, 1]
+    w = D[..., -1:]
+    S = D[0, 0, ..., :-1] / w[0, 0]
+    Su = (D[1, 0, ..., :-1] - w[1, 0] * S) / w[0, 0]
+    Sv = (D[0, 1, ..., :-1] - w[0, 1] * S) / w[0, 0]
+    return S, Su, Sv
+
+
+# ---------------------------------------------------------------------------
 # per-face rules: initial pieces, evaluation of pieces, bisection
 
 class _TensorRule:
-    """K15 x K15 on cells ``(m, 4)`` = ``[u0, u1, v0, v1]`` of an untrimmed face."""
+    """K15 x K15 on cells ``(m, 4)`` = ``[u0, u1, v0, v1]`` of an untrimmed face, or of a face
+    whose only loop is an axis-parallel rectangle ``rect`` = ``(u0, u1, v0, v1)``."""
 
-    def __init__(self, face, integrand):
+    def __init__(self, face, integrand, rect=None):
         self.surface = face.surface
         self.sign = -1.0 if face.reversed else 1.0
         self.integrand = integrand
+        self.rect = rect
 
-    def initial(self, cells=None):
-        if cells is not None:
-            return np.asarray(cells, dtype=float).reshape(-1, 4)
+    def initial(self):
         bu, bv = self.surface.bezier_breakpoints()
+        if self.rect is not None:
+            u0, u1, v0, v1 = self.rect
+            bu = np.concatenate([[u0], bu[(bu > u0) & (bu < u1)], [u1]])
+            bv = np.concatenate([[v0], bv[(bv > v0) & (bv < v1)], [v1]])
         U0, V0 = np.meshgrid(bu[:-1], bv[:-1], indexing="ij")
         U1, V1 = np.meshgrid(bu[1:], bv[1:], indexing="ij")
         return np.stack([U0.ravel(), U1.ravel(), V0.ravel(), V1.ravel()], axis=1)
@@ -120,10 +156,8 @@ class _TensorRule:
         du, dv = cells[:, 1] - cells[:, 0], cells[:, 3] - cells[:, 2]
         u = cells[:, 0, None] + du[:, None] * _T  # (m, 15)
         v = cells[:, 2, None] + dv[:, None] * _T
-        uu = np.broadcast_to(u[:, :, None], (m, _NQ, _NQ)).ravel()
-        vv = np.broadcast_to(v[:, None, :], (m, _NQ, _NQ)).ravel()
-        d = self.surface.derivatives(uu, vv, 1)
-        f = self.integrand(d[0, 0], d[1, 0], d[0, 1], self.sign)  # (m * 225, k)
+        S, Su, Sv = (x.reshape(-1, 3) for x in _cell_derivatives(self.surface, u, v))
+        f = self.integrand(S, Su, Sv, self.sign)  # (m * 225, k)
         k = f.shape[-1]
         f = f.reshape(m, _NQ, _NQ, k) * (0.25 * du * dv)[:, None, None, None]
         fk = np.einsum("j,mijc->mic", _W_K, f)  # v contracted with Kronrod
@@ -154,19 +188,19 @@ class _GreenRule:
         self.surface = face.surface
         self.sign = -1.0 if face.reversed else 1.0
         self.integrand = integrand
-        self.pcurves = [e.pcurve for e in face.edges]
-        (self.u_ref, u1), _ = self.surface.domain
+        (self.u_ref, u1), (v0, v1) = self.surface.domain
+        self.pcurves = _closed_pcurves(face.loops, 1e-14 * max(u1 - self.u_ref, v1 - v0))
         self.width = max(u1 - self.u_ref, np.finfo(float).tiny)
         self.u_breaks = self.surface.bezier_breakpoints()[0]
         # total variation of v along the loops: bounds how inner errors add up in the outer sum
         total = 0.0
         for c in self.pcurves:
-            t, w = _gauss_on(c.bezier_breakpoints(), 16)
+            t, w = _gauss_on(c.bezier_breakpoints())
             total += float(w @ np.abs(c.derivatives(t, 1)[1][:, 1]))
         self.v_length = max(total, np.finfo(float).tiny)
         self.inner_scale = None  # per-component magnitude of g, set on the first pass
 
-    def initial(self, cells=None):
+    def initial(self):
         rows = []
         for i, c in enumerate(self.pcurves):
             b = c.bezier_breakpoints()
@@ -209,8 +243,9 @@ class _GreenRule:
         return np.concatenate([a, b])
 
     def _g(self, s, v):
-        d = self.surface.derivatives(s, v, 1)
-        return self.integrand(d[0, 0], d[1, 0], d[0, 1], self.sign)
+        """The integrand at the nodes ``s`` ``(q, 15)`` of ``q`` intervals, each at its ``v`` ``(q,)``."""
+        S, Su, Sv = (x.reshape(-1, 3) for x in _cell_derivatives(self.surface, s, v[:, None]))
+        return self.integrand(S, Su, Sv, self.sign)
 
     def _inner(self, u, v, tol):
         """``G(u, v) = integral from u_ref to u of g(s, v) ds`` at ``n`` points: ``(G (n, k),
@@ -241,7 +276,7 @@ class _GreenRule:
             limits.check(q * _NQ * 8 * 24, "inner quadrature nodes")
             h = s1 - s0
             s = s0[:, None] + h[:, None] * _T
-            f = self._g(s.ravel(), np.repeat(vv, _NQ)).reshape(q, _NQ, -1)
+            f = self._g(s, vv).reshape(q, _NQ, -1)
             n_eval += f.shape[0] * _NQ
             if G is None:
                 k = f.shape[-1]
@@ -269,16 +304,60 @@ class _GreenRule:
         return G, G_err, n_eval
 
 
-def _gauss_on(breaks, order):
-    """Gauss-Legendre nodes and weights on every interval between consecutive ``breaks``."""
-    g, w = np.polynomial.legendre.leggauss(order)
+_GL16 = np.polynomial.legendre.leggauss(16)
+
+
+def _closed_pcurves(loops, tiny):
+    """The pcurves of the loops, with a straight piece across every gap between one pcurve's
+    end and the next one's start (approximated trims, e.g. OCC's NURBS conversion, leave gaps
+    of 1e-7 in (u, v)): Green's theorem needs closed loops, and on an open one the result
+    depends on the direction of the inner integral by G times the gap."""
+    out = []
+    for loop in loops:
+        for edge, following in zip(loop, loop[1:] + loop[:1]):
+            out.append(edge.pcurve)
+            a, b = edge.end_uv, following.start_uv
+            if np.abs(a - b).max() > tiny:
+                out.append(line(a, b))
+    return out
+
+
+def _gauss_on(breaks):
+    """16-point Gauss-Legendre nodes and weights on every interval between consecutive ``breaks``."""
+    g, w = _GL16
     breaks = np.asarray(breaks, dtype=float)
     mid, half = 0.5 * (breaks[1:] + breaks[:-1]), 0.5 * (breaks[1:] - breaks[:-1])
     return (mid[:, None] + half[:, None] * g).ravel(), (half[:, None] * w).ravel()
 
 
+def _rectangle(face, rel: float = 1e-12):
+    """``(u0, u1, v0, v1)`` when the face's only loop runs counter-clockwise around that
+    axis-parallel rectangle (every pcurve straight along one of its sides: OCC's trims of
+    spheres, tori, cylinders and untrimmed B-spline faces), else None. Such a face gets the
+    tensor rule, cheaper than Green's theorem and adaptive in both directions at poles."""
+    if len(face.loops) != 1:
+        return None
+    cps = [np.asarray(e.pcurve.control_points, dtype=float) for e in face.loops[0]]
+    pts = np.concatenate(cps)
+    (u0, v0), (u1, v1) = pts.min(axis=0), pts.max(axis=0)
+    eps = rel * max(u1 - u0, v1 - v0, np.finfo(float).tiny)
+    if not (u1 - u0 > eps and v1 - v0 > eps):
+        return None
+    for cp in cps:
+        if not any(np.all(np.abs(cp[:, k] - side) <= eps) for k, side in ((0, u0), (0, u1), (1, v0), (1, v1))):
+            return None
+    ends = np.array([c[0] for c in cps] + [cps[-1][-1]])  # straight pieces: the end points' polygon
+    area = 0.5 * float(np.sum(ends[:-1, 0] * ends[1:, 1] - ends[1:, 0] * ends[:-1, 1]))
+    if abs(area - (u1 - u0) * (v1 - v0)) > 1e-9 * (u1 - u0) * (v1 - v0):
+        return None
+    return float(u0), float(u1), float(v0), float(v1)
+
+
 def _rule_for(face, integrand):
-    return _GreenRule(face, integrand) if face.is_trimmed else _TensorRule(face, integrand)
+    if not face.is_trimmed:
+        return _TensorRule(face, integrand)
+    rect = _rectangle(face)
+    return _GreenRule(face, integrand) if rect is None else _TensorRule(face, integrand, rect)
 
 
 # ---------------------------------------------------------------------------
