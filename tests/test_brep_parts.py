@@ -158,9 +158,6 @@ def imported(step_files):
 
 NAMES = pytest.mark.parametrize("name", list(PARTS))
 
-# exporters.import_step returning Solids (branch brep-occ) is not merged here yet
-NEEDS_BREP_IMPORT = pytest.mark.xfail(reason="exporters.import_step does not return B-rep solids yet", strict=False)
-
 
 # -- the tests --------------------------------------------------------------------------------------
 
@@ -175,7 +172,6 @@ def test_occ_reference_agrees_with_closed_forms(name, step_files):
         assert ref[key] == pytest.approx(value, rel=RELATIVE), key
 
 
-@NEEDS_BREP_IMPORT
 @NAMES
 def test_import_counts_and_measures(name, imported, step_files):
     solid = imported[name]
@@ -191,7 +187,6 @@ def test_import_counts_and_measures(name, imported, step_files):
         assert measured == pytest.approx(ref[key], rel=RELATIVE), key
 
 
-@NEEDS_BREP_IMPORT
 @NAMES
 def test_tessellation_is_watertight(name, imported, step_files):
     solid = imported[name]
@@ -203,7 +198,6 @@ def test_tessellation_is_watertight(name, imported, step_files):
     assert abs(mesh.volume - exact) <= mesh.area * mesh.max_deviation
 
 
-@NEEDS_BREP_IMPORT
 @NAMES
 def test_export_and_read_back(name, imported, step_files, tmp_path):
     solid = imported[name]
@@ -227,7 +221,6 @@ def test_export_and_read_back(name, imported, step_files, tmp_path):
     assert reread.volume() == pytest.approx(closed_forms.get("volume", ref["volume"]), rel=RELATIVE)
 
 
-@NEEDS_BREP_IMPORT
 def test_exact_boolean_on_imported_parts(imported):
     """An imported part drilled again with splinekit's exact cut: one more hole, its volume by hand."""
     part = imported["box_with_holes"]
@@ -237,7 +230,6 @@ def test_exact_boolean_on_imported_parts(imported):
     assert out.volume() == pytest.approx(6000 - 180 * math.pi - 40 * math.pi, rel=1e-8)
 
 
-@NEEDS_BREP_IMPORT
 def test_swept_spline_against_occ_and_gauss_legendre(tmp_path):
     """A B-spline sweep read from build123d's file: volume as OCC gives it; the side face's area
     against Gauss-Legendre quadrature written here (64 points per Bezier span in u and v) because

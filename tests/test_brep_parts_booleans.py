@@ -242,7 +242,7 @@ _corner = st.tuples(*[st.integers(-4, 4).map(lambda k: 2.5 * k)] * 3)
 _size = st.tuples(*[st.integers(1, 6).map(lambda k: 2.5 * k)] * 3)
 
 
-@settings(max_examples=6, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@settings(max_examples=4, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(_corner, _size, _corner, _size)
 def test_box_booleans_inclusion_exclusion(oa, sa, ob, sb):
     """Any two axis-aligned boxes on a 2.5 mm grid (so faces often coincide or touch): the volumes
