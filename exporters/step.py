@@ -20,15 +20,15 @@ from __future__ import annotations
 import os
 import unicodedata
 from contextlib import contextmanager
-from typing import Any, NamedTuple
 
 from splinekit._atomic import atomic_write
 from splinekit.errors import ExportError, FileFormatError, ParameterError
 from splinekit.interop.occ import from_occ, require_ocp, to_shape
 
+from ._brep_io import BrepItem, ReadResult, default_names, items_from_shapes
 from ._meshio import _fspath, check_target
 
-__all__ = ["export_step", "import_step", "StepItem", "STEP_UNITS"]
+__all__ = ["export_step", "import_step", "StepItem", "ReadResult", "STEP_UNITS"]
 
 #: Length units a STEP file can declare: name -> (OCC's ``write.step.unit`` value, metres per unit).
 STEP_UNITS = {
@@ -42,15 +42,10 @@ STEP_UNITS = {
 }
 
 
-class StepItem(NamedTuple):
-    """One geometry read from a STEP file, with the name of the object it belongs to.
-
-    ``name`` is the STEP product name (``None`` if the file gives none);
-    ``geometry`` is a splinekit surface (one face) or curve (one edge).
-    """
-
-    name: str | None
-    geometry: Any
+StepItem = BrepItem
+"""One object read from a STEP file: ``(name, geometry)``, ``name`` the STEP product name (None if
+the file gives none), ``geometry`` a Solid, Shell or TrimmedFace (a curve for a free edge; with
+``import_step(..., surfaces=True)`` a plain surface per face)."""
 
 
 def _unit(unit) -> tuple[str, float]:
@@ -258,11 +253,14 @@ def export_step(path, objects, *, names=None, unit: str = "mm", tolerance: float
     * a surface: a B-spline face bounded by its domain;
     * a list or tuple of surfaces: the patches sewn into a shell, written as a
       solid when the shell is closed (see :func:`splinekit.occ.to_shape`);
+    * a :class:`~splinekit.brep.TrimmedFace`, ``Shell`` or ``Solid``: an exact OCC face, shell
+      or solid with its trims and shared edges, checked with ``BRepCheck_Analyzer`` before
+      anything is written (an invalid one raises BackendError naming the failing faces);
     * an OCC shape or a build123d / cadquery object: written as it is.
 
     So ``export_step(p, [s0, s1])`` writes two faces and ``export_step(p, [[s0, s1]])``
     one shell. ``names`` (one non-empty printable string or ``None`` per object)
-    become the STEP product names. Each named object is a product of its own;
+    become the STEP product names (by default the B-rep objects' own ``.name``). Each named object is a product of its own;
     consecutive unnamed objects share one product (a compound), which gets OCC's
     default name (its shape type, such as ``"COMPOUND"``, ``"FACE"`` or ``"SOLID"``).
     The geometry and its order are the same either way. Coordinates are written unchanged and the file declares them
@@ -277,7 +275,7 @@ def export_step(path, objects, *, names=None, unit: str = "mm", tolerance: float
     path = _fspath(path)
     step_unit, metres = _unit(unit)
     items = _objects(objects)
-    labels = _names(names, len(items))
+    labels = _names(default_names(items, names), len(items))
     path = _check_target(path)
     IFSelect, _, _, STEPCAFControl, STEPControl, TCollection, TDataStd, _, _, XCAFDoc = _ocp_step()
     shapes = [to_shape(obj, tolerance=tolerance) for obj in items]
@@ -346,16 +344,26 @@ def _named_shapes(tool, label, inherited, parent_loc, mods):
     return [(name, tool.GetShape_s(label).Moved(parent_loc))]
 
 
-def import_step(path, *, unit: str = "mm") -> list[StepItem]:
-    """The faces (as surfaces) and free edges (as curves) of the STEP file ``path``, in file order.
+def import_step(path, *, unit: str = "mm", strict: bool = True, surfaces: bool = False) -> ReadResult:
+    """The solids, shells and faces of the STEP file ``path`` as splinekit B-rep objects, in file order.
 
-    Returns a list of :class:`StepItem` ``(name, geometry)``: one item per face,
-    named after the STEP product (object) it belongs to, so a solid named
-    ``"box"`` gives six items named ``"box"``; edges that bound no face (exported
-    curves, wires) give one item each (a curve), after the product's faces. Surfaces are exact B-spline forms of the faces
-    over their UV bounding box (see :func:`splinekit.occ.from_occ`: analytic
-    faces are converted, trimming loops are not kept). Coordinates come in
-    ``unit`` (millimetres by default), converted from the unit the file declares.
+    Returns a :class:`ReadResult` (a list) of :class:`StepItem` ``(name, geometry)``: one item
+    per solid, per shell outside a solid and per face outside a shell, ``geometry`` a
+    :class:`~splinekit.brep.Solid` / ``Shell`` / ``TrimmedFace`` keeping every trimming loop,
+    face orientation and shared edge (see :func:`splinekit.occ.from_occ`), ``name`` the STEP
+    product (object) it belongs to; edges that bound no face give one curve each. Every surface
+    type OCC reads (plane, cylinder, cone, sphere, torus, revolution, extrusion, offset, Bézier,
+    B-spline) comes as its exact B-spline / NURBS form. Coordinates come in ``unit``
+    (millimetres by default), converted from the unit the file declares.
+
+    Each object is rebuilt and checked with OCC's ``BRepCheck_Analyzer`` before it is returned.
+    ``strict=True`` (default): a face that cannot be converted or an object that is not valid
+    raises FileFormatError naming the object, the face and the problem. ``strict=False``: those
+    are left out (a solid that lost faces comes back as a Shell of the good ones), and each is
+    described in the result's ``.problems`` list and in a warning.
+
+    ``surfaces=True`` gives the former reading instead: one item per face holding the plain
+    B-spline form of its surface over the face's UV box (trims dropped).
 
     Raises FileFormatError if ``path`` is missing, unreadable or not STEP, or
     holds no geometry; ParameterError if ``path`` is not a path (``None``, an
@@ -365,6 +373,25 @@ def import_step(path, *, unit: str = "mm") -> list[StepItem]:
     _, metres = _unit(unit)
     if not os.path.isfile(path):
         raise FileFormatError(f"STEP file {path!r} does not exist or is not a file")
+    for flag, value in (("strict", strict), ("surfaces", surfaces)):
+        if not isinstance(value, bool):
+            raise ParameterError(f"{flag} must be True or False, got {value!r}")
+    named = _read_named_shapes(path, metres)
+    if surfaces:
+        items = ReadResult()
+        for name, shape in named:
+            geometry = from_occ(shape, surfaces=True)
+            for g in geometry if isinstance(geometry, list) else [geometry]:
+                items.append(StepItem(name, g))
+    else:
+        items = items_from_shapes(named, strict=strict, path=path, kind="STEP")
+    if not items:
+        raise FileFormatError(f"the STEP file {path!r} holds no faces or edges")
+    return items
+
+
+def _read_named_shapes(path: str, metres: float) -> list:
+    """``(product name, TopoDS_Shape)`` for every part of the STEP file, assemblies walked."""
     IFSelect, _, _, STEPCAFControl, _, _, TDataStd, TDF, _, XCAFDoc = _ocp_step()
     doc = _new_document(metres)
     with _occ_settings():
@@ -380,14 +407,9 @@ def import_step(path, *, unit: str = "mm") -> list[StepItem]:
     tool = XCAFDoc.XCAFDoc_DocumentTool.ShapeTool_s(doc.Main())
     free = TDF.TDF_LabelSequence()
     tool.GetFreeShapes(free)
-    items = []
+    named = []
     for i in range(1, free.Length() + 1):
         for name, shape in _named_shapes(tool, free.Value(i), None, TopLoc.TopLoc_Location(), (TDataStd, TDF)):
-            if shape.IsNull():
-                continue
-            geometry = from_occ(shape)
-            for g in geometry if isinstance(geometry, list) else [geometry]:
-                items.append(StepItem(name, g))
-    if not items:
-        raise FileFormatError(f"the STEP file {path!r} holds no faces or edges")
-    return items
+            if not shape.IsNull():
+                named.append((name, shape))
+    return named

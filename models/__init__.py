@@ -11,8 +11,8 @@ from __future__ import annotations
 
 from splinekit.errors import ParameterError
 
-from . import bracket, mug, teapot, vase, wing
-from ._base import Model, Parameter, resolve_params, surface_integrals
+from . import block, bracket, mug, teapot, vase, wing
+from ._base import INTEGRAL_TOLERANCE, Model, Parameter, resolve_params, surface_integrals
 
 __all__ = [
     "DEFAULT_MODEL",
@@ -23,6 +23,7 @@ __all__ = [
     "get_model",
     "resolve_params",
     "surface_integrals",
+    "INTEGRAL_TOLERANCE",
 ]
 
 MODELS = {
@@ -31,6 +32,7 @@ MODELS = {
     "mug": mug,
     "bracket": bracket,
     "wing": wing,
+    "block": block,
 }
 
 DEFAULT_MODEL = "teapot"

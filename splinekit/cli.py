@@ -288,15 +288,19 @@ def model_mesh(model, tolerance=None, label: str = "tessellating"):
     ``tolerance`` is the absolute chordal tolerance (model units); None takes
     :func:`splinekit.tessellate.tessellate`'s default (1e-3 of the model size).
     """
-    if not model.bodies:
+    solids = list(getattr(model, "solids", None) or [])
+    if not model.bodies and not solids:
         if model.mesh is None:
             raise ParameterError(f"model '{model.name}' has neither exact bodies nor a mesh")
         return model.mesh, None
+    if tolerance is None and solids:  # a B-rep model states the tolerance of its meshes
+        tolerance = (model.params or {}).get("tolerance")
     tessellate = _tessellator()
     meshes = []
-    with progress(len(model.bodies), label) as bar:
-        for body in model.bodies:
-            meshes.append(tessellate(list(body), tolerance))
+    items = [list(body) for body in model.bodies] + solids
+    with progress(len(items), label) as bar:
+        for item in items:
+            meshes.append(tessellate(item, tolerance))
             bar.advance()
     deviation = max(float(getattr(m, "max_deviation", 0.0)) for m in meshes)
     return _combined(meshes), deviation
@@ -314,7 +318,8 @@ def _build_and_export(registry, name, sets, formats, tolerance, out_dir, strict,
     model = _build_model(registry, name, sets, console)
     t_build = time.perf_counter() - t0
     formats = list(formats)
-    if not model.bodies and "step" in formats:
+    solids = list(getattr(model, "solids", None) or [])
+    if not model.bodies and not solids and "step" in formats:
         if strict:
             raise ParameterError(f"model '{name}' exists only as a mesh (no exact surfaces): it cannot be written as STEP")
         formats.remove("step")
@@ -331,7 +336,8 @@ def _build_and_export(registry, name, sets, formats, tolerance, out_dir, strict,
             path = os.path.join(out_dir, f"{name}.{fmt}")
             t1 = time.perf_counter()
             if fmt == "step":
-                exporters.export_step(path, [list(b) for b in model.bodies], names=list(model.body_names) or None)
+                names = list(model.body_names) + [s.name or model.name for s in solids]
+                exporters.export_step(path, [list(b) for b in model.bodies] + solids, names=names or None)
             else:
                 exporters.export_mesh(path, mesh, format=fmt)
             written.append(path)
@@ -339,7 +345,12 @@ def _build_and_export(registry, name, sets, formats, tolerance, out_dir, strict,
             bar.advance()
     patches = _patches_of(model)
     head = f"{name} ({_params_text(model)})" if model.params else name
-    what = [_count(len(model.bodies), "body", "bodies"), _count(len(patches), "exact face")] if model.bodies else ["mesh only"]
+    if solids:
+        what = [_count(len(solids), "exact solid"), _count(sum(len(s.faces) for s in solids), "trimmed face")]
+    elif model.bodies:
+        what = [_count(len(model.bodies), "body", "bodies"), _count(len(patches), "exact face")]
+    else:
+        what = ["mesh only"]
     if mesh is not None:
         tri = _count(mesh.n_faces, "triangle" if mesh.is_triangle_mesh else "mesh face")
         if deviation is not None:
@@ -348,7 +359,10 @@ def _build_and_export(registry, name, sets, formats, tolerance, out_dir, strict,
     console.out(f"{head}: {', '.join(what)}")
     for path in written:
         console.out(f"  wrote {path}  {_size_text(os.path.getsize(path))}")
-    if model.bodies and model.closed and "step" in formats:
+    if solids and not model.bodies:
+        volume, area = sum(s.volume() for s in solids), sum(s.area() for s in solids)
+        console.out(f"  volume {volume:.10g}, area {area:.10g} (exact, splinekit.brep mass properties)")
+    elif model.bodies and model.closed and "step" in formats:
         from .interop.occ import to_shape
 
         shapes = [to_shape(list(body)) for body in model.bodies]
@@ -584,11 +598,21 @@ def cmd_render(args, console: _Console) -> int:
         if suffix in STEP_SUFFIXES:
             import exporters
 
-            patches = [item.geometry for item in exporters.import_step(target) if hasattr(item.geometry, "degree_u")]
-            if not patches:
+            items = [item.geometry for item in exporters.import_step(target)]
+            patches = [g for g in items if hasattr(g, "degree_u")]
+            from .brep import Shell, Solid, TrimmedFace
+
+            breps = [g for g in items if isinstance(g, (Shell, Solid, TrimmedFace))]
+            if breps:  # trimmed faces are drawn as their tessellation
+                tessellate = _tessellator()
+                mesh = _combined([tessellate(g, None) for g in breps])
+                render_mesh(mesh, out, title=title, **options)
+                what = _count(sum(len(getattr(g, "faces", (g,))) for g in breps), "trimmed face")
+            elif patches:
+                render_patches(patches, out, title=title, **options)
+                what = _count(len(patches), "face")
+            else:
                 raise FileFormatError(f"the STEP file {target!r} holds no faces to draw")
-            render_patches(patches, out, title=title, **options)
-            what = _count(len(patches), "face")
         elif suffix in MESH_SUFFIXES:
             import exporters
 
@@ -609,6 +633,10 @@ def cmd_render(args, console: _Console) -> int:
         elif model.mesh is not None:
             render_mesh(model.mesh, out, title=title, **options)
             what = _count(model.mesh.n_faces, "mesh face")
+        elif getattr(model, "solids", None):
+            mesh, _ = model_mesh(model)  # trimmed faces are drawn as their tessellation
+            render_mesh(mesh, out, title=title, **options)
+            what = _count(mesh.n_faces, "triangle")
         else:
             raise ParameterError(f"model '{target}' has neither exact bodies nor a mesh to draw")
     console.out(f"wrote {out} ({what}, colored by {args.color}, {size[0]}x{size[1]}) in {time.perf_counter() - t0:.2f} s")
@@ -688,6 +716,51 @@ def cmd_check(args, console: _Console) -> int:
     return 1 if failed else 0
 
 
+def _check_solids(model, table: _Checks, measures: dict) -> str:
+    """Checks and measures of a model's exact B-rep solids; returns the measures' source.
+
+    Area and volume are splinekit's adaptive integrals (relative tolerance 1e-10), cross-checked
+    against OCC's GProp at precision 1e-10 on the same solids; the Euler characteristic is the
+    tessellation's (a closed mesh: 2 - 2 genus), which also has to be closed with a volume within
+    area x max deviation of the exact one.
+    """
+    from .interop.exact_booleans import occ_solid
+    from .interop.occ import _check_valid
+
+    BRepGProp, GProp = _occ("BRepGProp", "GProp")
+    solids = list(model.solids)
+    occ_area_total = occ_volume_total = 0.0
+    for i, solid in enumerate(solids):
+        label = solid.name or f"solid {i}"
+        try:
+            shape = occ_solid(solid)
+            _check_valid(shape, label)
+        except SplineKitError as exc:
+            table.truth(f"{label}: OCC calls it a valid solid", False, str(exc).splitlines()[0][:120])
+            continue
+        table.truth(f"{label}: OCC calls it a valid solid", True, "BRepCheck_Analyzer")
+        for kind, fn in (("area", BRepGProp.BRepGProp.SurfaceProperties_s), ("volume", BRepGProp.BRepGProp.VolumeProperties_s)):
+            props = GProp.GProp_GProps()
+            fn(shape, props, 1e-10)
+            if kind == "area":
+                occ_area_total += props.Mass()
+            else:
+                occ_volume_total += props.Mass()
+    measures["faces"] = sum(len(s.faces) for s in solids)
+    measures["area"] = sum(s.area() for s in solids)
+    measures["volume"] = sum(s.volume() for s in solids)
+    for kind, ours, theirs in (("area", measures["area"], occ_area_total), ("volume", measures["volume"], occ_volume_total)):
+        table.compare(f"{kind}: splinekit vs OCC", ours, theirs, 1e-8 * abs(theirs), "OCC GProp at precision 1e-10")
+    mesh, deviation = model_mesh(model)
+    table.truth("tessellation is closed", bool(mesh.is_closed))
+    measures["euler_characteristic"] = mesh.euler_characteristic
+    if mesh.is_closed:
+        bound = float(mesh.area) * float(deviation or 0.0)
+        table.compare("tessellation volume vs exact", float(mesh.volume), measures["volume"], max(bound, 1e-12),
+                      "within area x max deviation")
+    return "splinekit"
+
+
 def _check_model(registry, name, sets, console: _Console) -> int:
     """Print the check table of model ``name``; returns the number of failed checks."""
     from .interop.occ import to_shape
@@ -713,13 +786,21 @@ def _check_model(registry, name, sets, console: _Console) -> int:
             for i, n in enumerate(n_solids):
                 table.truth(f"body {i} is a closed solid", n >= 1, f"{n} solid(s)")
         measures["faces"] = sum(len(_sub_shapes(s, "FACE")) for s in shapes)
-        measures["area"] = sum(occ_area(s) for s in shapes)
-        measures["volume"] = sum(occ_volume(s) for s in shapes) if model.closed else None
+        # area and volume: an independent reference (OCC's GProp where reliable, else scipy)
+        from .interop.gprop import reference_integrals
+
+        sewn = shapes if len(shapes) == len(model.bodies) else None
+        reference = reference_integrals(model.bodies, closed=model.closed, shapes=sewn)
+        measures["area"], measures["volume"] = reference.area, reference.volume
+        sources = dict.fromkeys(("area", "volume"), f"{reference.source} ({reference.reason})")
         measures["euler_characteristic"] = sum(_euler_characteristic(s) for s in shapes)
         size = np.ptp(np.concatenate([np.asarray(p.control_points).reshape(-1, 3) for p in patches]), axis=0).max()
         worst, count = point_deviation(patches)
         table.compare(f"point deviation vs OCC ({count} points)", worst, 0.0, 1e-9 * max(size, 1.0), "splinekit vs Geom_Surface.Value")
         source = "OCC"
+    elif getattr(model, "solids", None):
+        source = _check_solids(model, table, measures)
+        sources = {}
     else:
         mesh = model.mesh
         if mesh is None:
@@ -731,6 +812,7 @@ def _check_model(registry, name, sets, console: _Console) -> int:
         measures["volume"] = float(mesh.volume) if mesh.is_closed else None
         measures["euler_characteristic"] = mesh.euler_characteristic
         source = "mesh"
+        sources = {}
     chi = measures["euler_characteristic"]
     measures["genus"] = (2 - chi) / 2
     for key, value in (model.checks or {}).items():
@@ -746,7 +828,7 @@ def _check_model(registry, name, sets, console: _Console) -> int:
         elif measures[measure] is None:
             table.compare(key, None, expected, tol, f"{source}: no closed solid to measure")
         else:
-            table.compare(key, measures[measure], expected, tol, f"{source} {measure}")
+            table.compare(key, measures[measure], expected, tol, sources.get(measure, f"{source} {measure}"))
     if model.bodies and model.closed:
         try:
             tessellate = _tessellator()
@@ -760,7 +842,8 @@ def _check_model(registry, name, sets, console: _Console) -> int:
                 vol = sum(float(m.volume) for m in meshes)
                 bound = sum(float(m.area) * float(m.max_deviation) for m in meshes)
                 table.compare("tessellation volume vs OCC", vol, measures["volume"], max(bound, 1e-12), "within area x max deviation")
-    console.out(f"check {name}" + (f" ({_params_text(model)})" if model.params else "") + f": {_count(len(patches), 'exact face')}"
+    n_faces = len(patches) + sum(len(s.faces) for s in getattr(model, "solids", None) or [])
+    console.out(f"check {name}" + (f" ({_params_text(model)})" if model.params else "") + f": {_count(n_faces, 'exact face')}"
                 + (f", mesh of {_count(model.mesh.n_faces, 'face')}" if model.mesh is not None else ""))
     console.out(_table(table.rows, ["check", "measured", "expected", "tolerance", "result", "note"]))
     n_fail = table.failed

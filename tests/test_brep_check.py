@@ -66,7 +66,7 @@ def test_measured_values():
     p = next(p for p in gap if p.kind == "open-loop")
     assert p.value == pytest.approx(0.1) and p.where == {"loop": 0, "edge": 3}
     out = next(p for p in TrimmedFace(PLANE, BAD_FACES["trim-outside-domain"]).check() if p.kind == "trim-outside-domain")
-    assert out.value == pytest.approx(0.2)
+    assert out.value == pytest.approx(0.2)  # the plane is 1 x 1: (u, v) is length
     wrong = TrimmedFace(PLANE, BAD_FACES["wrong-loop-orientation"]).check()
     assert wrong[0].value == pytest.approx(-0.64)  # the square's area, negative: clockwise
     # an inner loop turned counter-clockwise: named as loop 1
@@ -136,3 +136,23 @@ def test_problem_is_a_frozen_record():
     with pytest.raises(AttributeError):
         p.kind = "x"
     assert p.where == {"face": 2, "loop": 0}
+
+
+def test_pcurve_deviation_tells_a_parameter_mismatch_from_a_wrong_curve():
+    """The same segment traversed with another parametrization is 'only the parameters differ';
+    a displaced segment is not."""
+    from splinekit.curves import BSplineCurve
+
+    plane_face = box(1, 1, 1).faces[1]  # the top face: (u, v) = (x, y) at z = 1
+    loop = list(plane_face.loops[0])
+    e = loop[0]
+    a, b = e.curve.evaluate(0.0), e.curve.evaluate(1.0)
+    # a quadratic with its middle control point off centre: same segment, other speed
+    skewed = BSplineCurve(2, [0, 0, 0, 1, 1, 1], np.array([a, a + 0.8 * (b - a), b]))
+    face = TrimmedFace(plane_face.surface, [[Edge(e.pcurve, skewed, key=e.key)] + loop[1:]], name="top")
+    (p,) = face.check()
+    assert p.kind == "pcurve-deviation" and "only the parameters differ" in p.message
+    moved = BSplineCurve(1, [0, 0, 1, 1], np.array([a, b]) + [0.0, 0.0, 0.01])
+    (p,) = TrimmedFace(plane_face.surface, [[Edge(e.pcurve, moved, key=e.key)] + loop[1:]]).check()
+    assert p.kind == "pcurve-deviation" and "only the parameters" not in p.message
+    assert p.value == pytest.approx(0.01)

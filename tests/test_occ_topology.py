@@ -263,7 +263,11 @@ def test_wrapper_types_follow_the_input():
     assert isinstance(occ.to_cadquery(box_patches()[:3]), cq.Shell)
     # and back: a cadquery Workplane and a build123d ShapeList are accepted by from_occ
     wp = occ.to_cadquery(box_patches(), workplane=True)
-    assert len(occ.from_occ(wp)) == 6
+    assert len(occ.from_occ(wp, surfaces=True)) == 6
+    assert len(occ.from_occ(occ.to_build123d(box_patches()).faces(), surfaces=True)) == 6
+    # by default they come back as B-rep objects: one closed solid, six separate faces
+    (solid,) = occ.from_occ(wp)
+    assert isinstance(solid, sk.brep.Solid) and len(solid.faces) == 6
     assert len(occ.from_occ(occ.to_build123d(box_patches()).faces())) == 6
 
 
@@ -281,7 +285,7 @@ def test_from_occ_sphere_primitive_lies_on_the_sphere():
     import build123d as bd
 
     r, c = 2.0, np.array([1.0, 2.0, 3.0])
-    surfaces = sk.occ.from_occ(bd.Pos(*c) * bd.Sphere(r))
+    surfaces = sk.occ.from_occ(bd.Pos(*c) * bd.Sphere(r), surfaces=True)
     assert len(surfaces) == 1
     (s,) = surfaces
     assert isinstance(s, sk.NurbsSurface)
@@ -296,7 +300,7 @@ def test_from_occ_cylinder_primitive_lies_on_the_cylinder():
     import build123d as bd
 
     r, h = 1.5, 4.0
-    surfaces = sk.occ.from_occ(bd.Cylinder(r, h))
+    surfaces = sk.occ.from_occ(bd.Cylinder(r, h), surfaces=True)
     assert len(surfaces) == 3
     lateral = [s for s in surfaces if np.ptp(_sample(s)[:, 2]) > 1e-9]
     assert len(lateral) == 1
@@ -313,7 +317,7 @@ def test_from_occ_box_primitive_gives_its_six_planes():
     import build123d as bd
 
     a, b, c = 1.0, 2.0, 3.0
-    surfaces = sk.occ.from_occ(bd.Box(a, b, c))
+    surfaces = sk.occ.from_occ(bd.Box(a, b, c), surfaces=True)
     assert len(surfaces) == 6 and all(isinstance(s, sk.BSplineSurface) for s in surfaces)
     half = np.array([a, b, c]) / 2
     faces_hit = set()
@@ -347,7 +351,7 @@ def test_from_occ_of_a_compound_gives_faces_then_only_the_free_edges():
     # a box (6 faces, 12 edges that bound them) with a loose segment and a loose two-segment wire
     loose = [((5.0, 0.0, 0.0), (6.0, 1.0, 2.0)), ((0.0, 0.0, 9.0), (1.0, 0.0, 9.0)), ((1.0, 0.0, 9.0), (1.0, 3.0, 9.0))]
     wire = bd.Wire([bd.Edge.make_line(*loose[1]), bd.Edge.make_line(*loose[2])])
-    shapes = occ.from_occ(bd.Compound(children=[bd.Box(1, 2, 3), bd.Edge.make_line(*loose[0]), wire]))
+    shapes = occ.from_occ(bd.Compound(children=[bd.Box(1, 2, 3), bd.Edge.make_line(*loose[0]), wire]), surfaces=True)
     assert len(shapes) == 6 + 3
     assert all(isinstance(s, sk.BSplineSurface) for s in shapes[:6])
     ends = sorted(
@@ -360,7 +364,7 @@ def test_from_occ_round_trips_faces_and_edges_exactly():
     rng = np.random.default_rng(504)
     for rational in (False, True):
         surf = make_surface(rng, rational)
-        back = occ.from_occ(occ.to_shape(surf))
+        back = occ.from_occ(occ.to_shape(surf), surfaces=True)
         assert back.almost_equal(surf, 1e-14)
         curve = make_curve(rng, rational)
         back = occ.from_occ(occ.to_build123d(curve))
@@ -394,7 +398,7 @@ def test_from_occ_oriented_surfaces_point_outward():
     center = np.array([0.5, 1.0, 1.5])
     solid = occ.to_shape(box_patches(outward=False))
     for oriented, sign in ((True, 1.0), (False, -1.0)):
-        for s in occ.from_occ(solid, oriented=oriented):
+        for s in occ.from_occ(solid, oriented=oriented, surfaces=True):
             n = s.normal(np.array([0.5]), np.array([0.5]))[0]
             p = s.evaluate(np.array([0.5]), np.array([0.5]))[0]
             assert sign * np.dot(n, p - center) > 0

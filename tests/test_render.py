@@ -173,6 +173,10 @@ def test_each_model_renders(tmp_path, name):
     if model.bodies:
         patches = [p for body in model.bodies for p in body]
         render_patches(patches, path, size=SMALL, title=name)
+    elif model.solids:  # exact B-rep solids are drawn as their tessellation
+        from splinekit.cli import model_mesh
+
+        render_mesh(model_mesh(model, 0.1)[0], path, size=SMALL, title=name)
     else:
         render_mesh(model.mesh, path, size=SMALL, title=name)
     assert_good_picture(path, min_coverage=0.05)

@@ -80,7 +80,7 @@ def test_round_trip_is_exact(tmp_path, seed, rational):
     names = [f"surface {i}" for i in range(8)] + [f"curve {i}" for i in range(8)]
     path = tmp_path / "round.step"
     assert export_step(path, surfaces + curves, names=names) == str(path)
-    items = import_step(path)
+    items = import_step(path, surfaces=True)
     assert all(isinstance(it, StepItem) for it in items)
     assert [it.name for it in items] == names
     for i, (ours, (name, back)) in enumerate(zip(surfaces + curves, items)):
@@ -98,7 +98,7 @@ def test_unnamed_objects_keep_their_order_and_curves(tmp_path):
     c0, c1 = random_curve(rng, True), random_curve(rng, False)
     path = tmp_path / "mixed.step"
     export_step(path, [s0, c0, box_patches(), s1, c1], names=[None, None, "box", None, None])
-    items = import_step(path)
+    items = import_step(path, surfaces=True)
     assert [it.name for it in items][2:8] == ["box"] * 6
     assert len(items) == 10
     assert_same_surface(s0, items[0].geometry, "s0")
@@ -112,7 +112,7 @@ def test_round_trip_keeps_extreme_values(tmp_path):
     P = np.array([[[1e-200, -3e150, 0.0], [1.0, 2.0, 3.0]], [[-1e-5, 123456.789, 7e101], [0.1, 0.2, 0.3]]])
     surf = sk.NurbsSurface(1, 1, [0, 0, 1, 1], [0, 0, 1, 1], P, [[1.0, 0.5], [2.0, 1e-3]])
     export_step(tmp_path / "x.step", surf)
-    (item,) = import_step(tmp_path / "x.step")
+    (item,) = import_step(tmp_path / "x.step", surfaces=True)
     rel = np.abs(item.geometry.control_points - P) / np.maximum(np.abs(P), 1e-300)
     assert rel.max() <= 1e-15
     assert np.abs(item.geometry.weights - surf.weights).max() <= 1e-15
@@ -122,7 +122,7 @@ def test_bezier_geometry_round_trips_as_the_same_shape(tmp_path):
     rng = np.random.default_rng(602)
     bez = sk.BezierSurface(rng.uniform(-1, 1, (4, 3, 3)), rng.uniform(0.5, 2, (4, 3)))
     export_step(tmp_path / "b.step", [bez])
-    (item,) = import_step(tmp_path / "b.step")
+    (item,) = import_step(tmp_path / "b.step", surfaces=True)
     u, v = rng.uniform(0, 1, (2, 50))
     assert np.abs(item.geometry.evaluate(u, v) - bez.evaluate(u, v)).max() < 1e-13
 
@@ -146,7 +146,7 @@ def test_closed_bodies_open_in_build123d(tmp_path):
     assert volumes[0] == pytest.approx(1.0, rel=1e-6)
     assert volumes[1] == pytest.approx(4.0 / 3.0 * math.pi * r**3, rel=1e-6)
     # and import_step gives one item per face, named after its body
-    names = [it.name for it in import_step(path)]
+    names = [it.name for it in import_step(path, surfaces=True)]
     assert names == ["ball"] * 8 + ["brick"] * 6 + ["sheet"]
 
 
@@ -158,7 +158,7 @@ def test_names_survive_a_round_trip(tmp_path):
     text = path.read_bytes()
     assert text.isascii()  # non-ASCII characters are written as STEP \X2\ / \X4\ escapes
     assert b"PRODUCT('plain'" in text
-    assert [it.name for it in import_step(path)] == names
+    assert [it.name for it in import_step(path, surfaces=True)] == names
 
 
 NAME_TEXT = st.text(st.characters(blacklist_categories=("Cc", "Cs")), min_size=1, max_size=40)
@@ -174,7 +174,7 @@ def test_any_printable_name_survives_or_is_refused(tmp_path, name):
         # only names whose escaped STEP form is too long for one line are refused
         assert len(step_module._step_string(name)) > step_module._MAX_ESCAPED_NAME, str(exc)
         return
-    assert [it.name for it in import_step(path)] == [name]
+    assert [it.name for it in import_step(path, surfaces=True)] == [name]
 
 
 def test_units_are_declared_and_converted(tmp_path):
@@ -186,11 +186,11 @@ def test_units_are_declared_and_converted(tmp_path):
     assert "SI_UNIT($,.METRE.)" in m_text and ".MILLI." not in m_text
     P = patch.control_points
     # coordinates are written as given, in the declared unit
-    assert np.array_equal(import_step(tmp_path / "mm.step")[0].geometry.control_points, P)
-    assert np.array_equal(import_step(tmp_path / "m.step", unit="m")[0].geometry.control_points, P)
+    assert np.array_equal(import_step(tmp_path / "mm.step", surfaces=True)[0].geometry.control_points, P)
+    assert np.array_equal(import_step(tmp_path / "m.step", unit="m", surfaces=True)[0].geometry.control_points, P)
     # and converted when read in another unit
-    assert np.allclose(import_step(tmp_path / "m.step")[0].geometry.control_points, 1000 * P, rtol=1e-15, atol=0)
-    assert np.allclose(import_step(tmp_path / "mm.step", unit="m")[0].geometry.control_points, P / 1000, rtol=1e-15, atol=0)
+    assert np.allclose(import_step(tmp_path / "m.step", surfaces=True)[0].geometry.control_points, 1000 * P, rtol=1e-15, atol=0)
+    assert np.allclose(import_step(tmp_path / "mm.step", unit="m", surfaces=True)[0].geometry.control_points, P / 1000, rtol=1e-15, atol=0)
 
 
 def test_occ_and_build123d_shapes_export_as_they_are(tmp_path):
@@ -198,7 +198,7 @@ def test_occ_and_build123d_shapes_export_as_they_are(tmp_path):
 
     path = tmp_path / "mixed.step"
     export_step(path, [bd.Box(1, 2, 3), sk.occ.to_shape(box_patches()[0])], names=["b123d box", "face"])
-    items = import_step(path)
+    items = import_step(path, surfaces=True)
     assert [it.name for it in items] == ["b123d box"] * 6 + ["face"]
     box = bd.import_step(str(path)).solids()
     assert len(box) == 1 and box[0].volume == pytest.approx(6.0, rel=1e-9)
@@ -215,7 +215,7 @@ def test_import_walks_assemblies_with_their_placements(tmp_path):
     top = bd.Compound(children=[bd.Compound(children=[cube, ball], label="inner"), lifted], label="top")
     path = tmp_path / "assembly.step"
     bd.export_step(top, str(path))
-    items = import_step(path)
+    items = import_step(path, surfaces=True)
     by_name = {}
     for name, g in items:
         by_name.setdefault(name, []).append(g)
@@ -311,7 +311,7 @@ def test_bad_export_arguments(tmp_path):
     with pytest.raises(ParameterError, match=r"names\[0\] = 'ÜÜÜ.* at most 64"):
         export_step(tmp_path / "a.step", [patch], names=["Ü" * 20])
     export_step(tmp_path / "long.step", [patch], names=["a" * 300])  # plain ASCII: any length
-    assert import_step(tmp_path / "long.step")[0].name == "a" * 300
+    assert import_step(tmp_path / "long.step", surfaces=True)[0].name == "a" * 300
     (tmp_path / "long.step").unlink()
     with pytest.raises(ParameterError, match="empty"):
         export_step(tmp_path / "a.step", [])

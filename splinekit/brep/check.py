@@ -33,7 +33,8 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from ..errors import BRepError, TrimError
-from .classify import OUTSIDE, _classify_uv, _face_mesh, trim_pieces, uv_tolerance
+from .coarse_mesh import face_mesh
+from .trims import OUTSIDE, classify_uv, sample_trims, segment_distance, trim_pieces, uv_tolerance
 from .topology import surface_points
 
 __all__ = ["Problem", "Checkable", "check_face", "check_shell", "check_solid", "FACE_KINDS"]
@@ -84,19 +85,30 @@ def _face_label(face, index=None) -> str:
 def _loop_polylines(face):
     """Per loop: ``(points (k, 2), edge index of each segment (k,))``; segment ``i`` runs from
     point ``i`` to point ``i + 1`` (cyclically)."""
+    return _split_long_segments([(p, e) for p, e, _ in sample_trims(face, _PER_PIECE)])
+
+
+def _split_long_segments(polys):
+    """Cut segments longer than twice the median into equal parts (exactly on them), so that a
+    KD-tree radius of the longest segment pairs each segment with its neighbours only."""
+    lengths = np.concatenate([np.linalg.norm(np.roll(p, -1, axis=0) - p, axis=1) for p, _ in polys])
+    h = 2.0 * float(np.median(lengths))
+    if not h > 0:
+        return polys
     out = []
-    t = np.linspace(0.0, 1.0, _PER_PIECE + 1)[:-1]
-    for loop in face.boundary_loops():
-        pts, owner = [], []
-        for ei, e in enumerate(loop):
-            br = e.pcurve.bezier_breakpoints()
-            par = (br[:-1, None] + (br[1:] - br[:-1])[:, None] * t[None]).ravel()
-            if e.pcurve.degree == 1:
-                par = br[:-1]
-            pts.append(e.pcurve.evaluate(par))
-            owner.append(np.full(len(par), ei))
-        out.append((np.concatenate(pts), np.concatenate(owner)))
+    for p, owner in polys:
+        q = np.roll(p, -1, axis=0)
+        k = np.maximum(1, np.ceil(np.linalg.norm(q - p, axis=1) / h)).astype(np.intp)
+        seg = np.repeat(np.arange(len(p)), k)
+        frac = (np.arange(k.sum()) - np.repeat(np.cumsum(k) - k, k)) / np.repeat(k, k)
+        out.append((p[seg] + frac[:, None] * (q[seg] - p[seg]), owner[seg]))
     return out
+
+
+def _surface_derivatives(face, uv):
+    """First derivatives ``(2, 2, n, 3)`` of the face's surface at ``uv`` clamped into its domain."""
+    (u0, u1), (v0, v1) = face.domain
+    return face.surface.derivatives(np.clip(uv[:, 0], u0, u1), np.clip(uv[:, 1], v0, v1), 1)
 
 
 def _signed_area(p):
@@ -107,16 +119,14 @@ def _signed_area(p):
 def _segment_distances(a0, a1, b0, b1):
     """Distances ``(n,)`` between segments ``a0 a1`` and ``b0 b1`` (all ``(n, 2)``): 0 when they
     cross, else the smallest end point to segment distance."""
-    from .classify import _segment_distance
-
     def orient(p, q, r):
         return (q[:, 0] - p[:, 0]) * (r[:, 1] - p[:, 1]) - (q[:, 1] - p[:, 1]) * (r[:, 0] - p[:, 0])
 
     d1, d2 = orient(a0, a1, b0), orient(a0, a1, b1)
     d3, d4 = orient(b0, b1, a0), orient(b0, b1, a1)
     cross = (d1 * d2 < 0) & (d3 * d4 < 0)
-    d = np.minimum.reduce([_segment_distance(a0, a1, b0), _segment_distance(a0, a1, b1),
-                           _segment_distance(b0, b1, a0), _segment_distance(b0, b1, a1)])
+    d = np.minimum.reduce([segment_distance(a0, a1, b0), segment_distance(a0, a1, b1),
+                           segment_distance(b0, b1, a0), segment_distance(b0, b1, a1)])
     return np.where(cross, 0.0, d)
 
 
@@ -132,31 +142,54 @@ def check_face(face) -> list:
     loops = face.boundary_loops()
     explicit = face.is_trimmed
 
-    # closure: each edge's end against the next edge's start, in 3-D through the surface and in uv
+    # closure: each edge's end against the next edge's start, within the two edges' tolerances
+    # (each end lies within its edge's tolerance of the shared vertex). Measured in 3-D through
+    # the surface, both as the distance of the two surface points and as the length of the
+    # (u, v) gap mapped by the surface's derivatives there: the first misses a jump across a
+    # seam (same 3-D point), the second forgives a gap along a pole (no 3-D length).
     for li, loop in enumerate(loops):
         ends = np.array([e.end_uv for e in loop])
-        starts = np.array([e.start_uv for e in np.roll(np.array(loop, dtype=object), -1)])
+        starts = np.array([e.start_uv for e in loop[1:] + loop[:1]])
+        etol = np.array([e.tolerance for e in loop])
+        limit = np.maximum(tol, etol + np.roll(etol, -1))
         gap3 = np.linalg.norm(surface_points(face, ends) - surface_points(face, starts), axis=1)
-        gap_uv = np.linalg.norm(ends - starts, axis=1)
-        for ei in np.flatnonzero((gap3 > tol) | (gap_uv > 10.0 * tol_uv + 1e-12 * max(u1 - u0, v1 - v0))):
+        d = _surface_derivatives(face, 0.5 * (ends + starts))
+        duv = starts - ends
+        gap_lin = np.linalg.norm(d[1, 0] * duv[:, :1] + d[0, 1] * duv[:, 1:], axis=1)
+        for ei in np.flatnonzero((gap3 > limit) | (gap_lin > limit)):
             nxt = (ei + 1) % len(loop)
-            what = f"{gap3[ei]:.3g} in 3-D" if gap3[ei] > tol else f"{gap_uv[ei]:.3g} in (u, v) (closed in 3-D only: across a seam?)"
-            problems.append(Problem("open-loop", f"{label}: loop {li} is open between edges {ei} and {nxt}: gap {what} (tolerance {tol:g})",
-                                    float(gap3[ei] if gap3[ei] > tol else gap_uv[ei]), face=index, loop=li, edge=int(ei)))
+            if gap3[ei] > limit[ei]:
+                what, value = f"{gap3[ei]:.3g} in 3-D", gap3[ei]
+            else:
+                what, value = (f"{np.linalg.norm(duv[ei]):.3g} in (u, v), {gap_lin[ei]:.3g} in 3-D along the surface "
+                               "(the ends meet in space only: across a seam?)"), gap_lin[ei]
+            problems.append(Problem("open-loop", f"{label}: loop {li} is open between edges {ei} and {nxt}: gap {what} "
+                                    f"(tolerance {limit[ei]:g})", float(value), face=index, loop=li, edge=int(ei)))
     if not explicit:
         return problems
 
     polys = _loop_polylines(face)
     span = max(u1 - u0, v1 - v0)
-    # inside the surface's domain
+    # inside the surface's domain: the excursion's length in 3-D, mapped by the derivatives at the
+    # nearest domain point (so a step in u at a pole, which has no length, is forgiven), within
+    # twice the edge's tolerance (the clamped point and the true one each within it)
+    etols = [np.array([e.tolerance for e in lp]) for lp in loops]
     for li, (p, owner) in enumerate(polys):
-        over = np.maximum.reduce([u0 - p[:, 0], p[:, 0] - u1, v0 - p[:, 1], p[:, 1] - v1])
-        bad = over > tol_uv + 1e-12 * span
+        clamped = np.stack([np.clip(p[:, 0], u0, u1), np.clip(p[:, 1], v0, v1)], axis=1)
+        out_of = np.flatnonzero(np.any(clamped != p, axis=1))
+        if out_of.size == 0:
+            continue
+        d = _surface_derivatives(face, clamped[out_of])
+        step = p[out_of] - clamped[out_of]
+        over = np.linalg.norm(d[1, 0] * step[:, :1] + d[0, 1] * step[:, 1:], axis=1)
+        bad = over > 2.0 * np.maximum(tol, etols[li][owner[out_of]])
         if bad.any():
-            k = int(np.argmax(over))
+            k = out_of[int(np.argmax(np.where(bad, over, -np.inf)))]
+            far = float(np.abs(step).max())
             problems.append(Problem("trim-outside-domain", f"{label}: loop {li}, edge {int(owner[k])} leaves the surface's domain "
-                                    f"[{u0:g}, {u1:g}] x [{v0:g}, {v1:g}] by {over[k]:.3g} at (u, v) = ({p[k, 0]:.6g}, {p[k, 1]:.6g})",
-                                    float(over[k]), face=index, loop=li, edge=int(owner[k])))
+                                    f"[{u0:g}, {u1:g}] x [{v0:g}, {v1:g}] at (u, v) = ({p[k, 0]:.6g}, {p[k, 1]:.6g}): "
+                                    f"{far:.3g} in (u, v), {float(over.max()):.3g} in 3-D (tolerance {2.0 * max(tol, float(etols[li][owner[k]])):g})", float(over.max()),
+                                    face=index, loop=li, edge=int(owner[k])))
 
     # orientation by signed area: outer counter-clockwise, inner clockwise
     areas = [_signed_area(p) for p, _ in polys]
@@ -166,13 +199,19 @@ def check_face(face) -> list:
             problems.append(Problem("wrong-loop-orientation", f"{label}: loop {li} runs the wrong way: signed area {a:.6g} in (u, v), "
                                     f"expected {want}", float(a), face=index, loop=li))
 
-    # crossings and touchings among all segments, candidates paired by a KD-tree on mid points
-    P0 = np.concatenate([p for p, _ in polys])
-    P1 = np.concatenate([np.roll(p, -1, axis=0) for p, _ in polys])
-    loop_of = np.concatenate([np.full(len(p), li) for li, (p, _) in enumerate(polys)])
-    pos = np.concatenate([np.arange(len(p)) for p, _ in polys])
-    length = np.array([len(p) for p, _ in polys])[loop_of]
-    edge_of = np.concatenate([o for _, o in polys])
+    # crossings and touchings among all segments, candidates paired by a KD-tree on mid points;
+    # degenerate edges (a pole's side, or a point) are left out: the loop steps over them, since
+    # their ends are one point in space whatever their (u, v)
+    kept = []
+    for li, (p, owner) in enumerate(polys):
+        solid = ~np.array([loops[li][k].degenerate for k in owner], dtype=bool) if len(owner) else np.zeros(0, bool)
+        kept.append((p[solid], owner[solid]) if solid.sum() >= 2 else (p, owner))
+    P0 = np.concatenate([p for p, _ in kept])
+    P1 = np.concatenate([np.roll(p, -1, axis=0) for p, _ in kept])
+    loop_of = np.concatenate([np.full(len(p), li) for li, (p, _) in enumerate(kept)])
+    pos = np.concatenate([np.arange(len(p)) for p, _ in kept])
+    length = np.array([len(p) for p, _ in kept])[loop_of]
+    edge_of = np.concatenate([o for _, o in kept])
     mid = 0.5 * (P0 + P1)
     half = 0.5 * np.linalg.norm(P1 - P0, axis=1)
     pairs = cKDTree(mid).query_pairs(2.0 * float(half.max()) + tol_uv, output_type="ndarray")
@@ -199,19 +238,27 @@ def check_face(face) -> list:
                 problems.append(Problem("crossing-loops", f"{label}: loops {li} and {lj} cross or touch {where}",
                                         float(d[k]), face=index, loop=li, edge=int(edge_of[i[k]])))
 
-    # holes inside the outer loop and not inside one another (their vertices, by winding)
-    for li in range(1, len(polys)):
-        pts = polys[li][0]
-        outer = _classify_uv(trim_pieces(face, 0), pts, tol_uv)
-        if np.any(outer == OUTSIDE):
+    # holes inside the outer loop (all their points, by winding) and not inside one another (a
+    # hole's first point, tested only against the holes whose box holds it)
+    if len(polys) > 1:
+        holes = np.concatenate([p for p, _ in polys[1:]])
+        owner = np.concatenate([np.full(len(p), li) for li, (p, _) in enumerate(polys) if li > 0])
+        outer = classify_uv(trim_pieces(face, 0), holes, tol_uv)
+        for li in np.unique(owner[outer == OUTSIDE]):
             problems.append(Problem("inner-loop-outside", f"{label}: inner loop {li} is not inside the outer loop",
-                                    float(np.mean(outer == OUTSIDE)), face=index, loop=li))
-        for lk in range(1, len(polys)):
-            if lk != li and np.all(_classify_uv(trim_pieces(face, lk), pts[:1], tol_uv) != OUTSIDE):
-                problems.append(Problem("inner-loop-outside", f"{label}: inner loop {li} lies inside inner loop {lk}",
-                                        None, face=index, loop=li))
+                                    float(np.mean(outer[owner == li] == OUTSIDE)), face=index, loop=int(li)))
+        lo = np.array([p.min(axis=0) for p, _ in polys[1:]])
+        hi = np.array([p.max(axis=0) for p, _ in polys[1:]])
+        first = np.array([p[0] for p, _ in polys[1:]])
+        inbox = np.all((first[:, None] >= lo[None]) & (first[:, None] <= hi[None]), axis=2)
+        np.fill_diagonal(inbox, False)
+        for i, k in zip(*np.nonzero(inbox)):
+            if classify_uv(trim_pieces(face, int(k) + 1), first[i:i + 1], tol_uv)[0] != OUTSIDE:
+                problems.append(Problem("inner-loop-outside", f"{label}: inner loop {i + 1} lies inside inner loop {k + 1}",
+                                        None, face=index, loop=int(i) + 1))
 
-    # pcurve against 3-D curve
+    # pcurve against 3-D curve at the same parameter (the data model's SameParameter); when they
+    # disagree, say whether the curves are at least the same point set (only the parameter off)
     for li, loop in enumerate(loops):
         for ei, e in enumerate(loop):
             if e.curve is None:
@@ -220,12 +267,18 @@ def check_face(face) -> list:
             a, b = e.domain
             br = br[(br >= a) & (br <= b)]
             t = (br[:-1, None] + (br[1:] - br[:-1])[:, None] * np.linspace(0.0, 1.0, 17)[None]).ravel()
-            uv = e.pcurve.evaluate(t)
-            dev = float(np.linalg.norm(surface_points(face, uv) - e.curve.evaluate(t), axis=1).max())
+            on_surface = surface_points(face, e.pcurve.evaluate(t))
+            dev = float(np.linalg.norm(on_surface - e.curve.evaluate(t), axis=1).max())
             limit = max(e.tolerance, tol)
             if dev > limit:
+                from ..closest import project
+
+                apart = float(project(e.curve, on_surface).distances.max())
+                how = (f"; as point sets they are {apart:.3g} apart (only the parameters differ)" if apart <= limit
+                       else f"; {apart:.3g} apart as point sets")
                 problems.append(Problem("pcurve-deviation", f"{label}: loop {li}, edge {ei}: the surface at the pcurve is {dev:.3g} "
-                                        f"from the 3-D curve (tolerance {limit:g})", dev, face=index, loop=li, edge=ei))
+                                        f"from the 3-D curve at the same parameter (tolerance {limit:g}){how}", dev,
+                                        face=index, loop=li, edge=ei))
     return problems
 
 
@@ -256,7 +309,7 @@ def _signed_volume(shell) -> float:
     """Signed volume of the shell's faces' meshes (divergence theorem): a cheap estimate."""
     total = 0.0
     for f in shell.faces:
-        P, T, _ = _face_mesh(f)
+        P, T, _ = face_mesh(f)
         if len(T):
             total += float(np.einsum("ij,ij->i", P[T[:, 0]], np.cross(P[T[:, 1]], P[T[:, 2]])).sum()) / 6.0
     return total

@@ -3,19 +3,9 @@
 Both return ``int8`` arrays of :class:`Location` codes: ``INSIDE = 1``, ``ON = 0``, ``OUTSIDE = -1``.
 
 Faces (:func:`contains_uv`)
-    The trims are cut into Bézier pieces. A point's crossings with the ``+u`` ray are counted on
-    each piece's chord, which is exact whenever the point lies outside the piece's bounding box
-    (the piece and its chord then wind around the point equally: both lie in the convex hull of
-    the control points). Pieces whose box holds the point are halved (de Casteljau, vectorized over
-    all such point/piece pairs) until the point is clear of the box or the piece is shorter than
-    an eighth of the tolerance; the point is then ON when it lies within the tolerance of that
-    short chord. Inside is decided by the even-odd rule on the summed crossings (so a face with a
-    loop turned the wrong way still classifies as its loops are drawn; :mod:`check` reports the
-    orientation).
-
-    The ON rule is measured in ``(u, v)``: a point is ON when its ``(u, v)`` distance to a trim
-    is at most ``tol_uv = tolerance / speed`` with ``speed`` the surface's largest parametric speed
-    ``max(|Su|, |Sv|)`` (sampled), so every ON point is within ``tolerance`` of the trim in 3-D.
+    Winding of the trims' Bézier pieces, halved where a point is close (:mod:`.trims`). A point
+    is ON when its ``(u, v)`` distance to a trim is at most ``tolerance / speed``, ``speed`` the
+    surface's largest parametric speed, so every ON point is within ``tolerance`` in 3-D.
 
 Solids (:func:`contains`)
     A bounding-box prefilter, then the generalized winding number of the boundary on a triangle
@@ -28,152 +18,16 @@ Solids (:func:`contains`)
 
 from __future__ import annotations
 
-from enum import IntEnum
-
 import numpy as np
-from scipy.spatial import Delaunay, cKDTree
+from scipy.spatial import cKDTree
 
 from .. import limits
 from .._validate import as_float_array
 from ..errors import ParameterError
-from .topology import surface_points
+from .coarse_mesh import face_cap, face_mesh, point_triangle_distance, winding_numbers
+from .trims import INSIDE, ON, OUTSIDE, Location, classify_uv, trim_pieces, uv_tolerance
 
 __all__ = ["Location", "INSIDE", "ON", "OUTSIDE", "contains_uv", "contains", "uv_tolerance"]
-
-
-class Location(IntEnum):
-    """Where a point lies relative to a face or a solid."""
-
-    OUTSIDE = -1
-    ON = 0
-    INSIDE = 1
-
-
-INSIDE, ON, OUTSIDE = Location.INSIDE, Location.ON, Location.OUTSIDE
-
-_MAX_LEVELS = 64  # halvings of a trim piece: far below any tolerance of a unit-sized piece
-
-
-# -- faces ----------------------------------------------------------------------------------------
-def uv_tolerance(face, tolerance: float | None = None) -> float:
-    """The ``(u, v)`` distance that is at most ``tolerance`` (default the face's) in 3-D:
-    ``tolerance / max(|Su|, |Sv|)`` over a grid of the surface's domain (cached per face)."""
-    tol = face.tolerance if tolerance is None else float(tolerance)
-    if "speed" not in face._cache:
-        (u0, u1), (v0, v1) = face.domain
-        s = face.surface
-        nu = 4 * max(1, len(s.knots_u) - 2 * s.degree_u - 1) + 1
-        nv = 4 * max(1, len(s.knots_v) - 2 * s.degree_v - 1) + 1
-        d = s.derivatives_grid(np.linspace(u0, u1, nu), np.linspace(v0, v1, nv), 1)
-        speed = max(float(np.linalg.norm(d[1, 0], axis=-1).max()), float(np.linalg.norm(d[0, 1], axis=-1).max()))
-        face._cache["speed"] = speed if speed > 0 else 1.0
-    return tol / face._cache["speed"]
-
-
-def trim_pieces(face, loop: int | None = None) -> dict:
-    """The face's trims (or loop ``loop`` alone) as homogeneous Bézier pieces grouped by degree:
-    ``{p: (m, p + 1, 3)}`` with rows ``(w u, w v, w)``. Each loop is closed exactly: an edge's
-    first point is moved onto the previous edge's last (gaps beyond tolerance are
-    :mod:`check`'s business). Cached on the face."""
-    key = ("trim_pieces", loop)
-    if key in face._cache:
-        return face._cache[key]
-    loops = face.boundary_loops()
-    groups: dict[int, list] = {}
-    for lp in (loops if loop is None else [loops[loop]]):
-        prev_end = lp[-1].end_uv
-        for edge in lp:
-            pieces = edge.pcurve.to_bezier()
-            for k, b in enumerate(pieces):
-                P = np.array(b.control_points, dtype=np.float64)
-                w = np.ones(len(P)) if b.weights is None else np.array(b.weights, dtype=np.float64)
-                if k == 0:
-                    P[0] = prev_end
-                groups.setdefault(b.degree, []).append(np.concatenate([P * w[:, None], w[:, None]], axis=1))
-            prev_end = pieces[-1].control_points[-1]
-    out = {p: np.array(hs) for p, hs in groups.items()}
-    face._cache[key] = out
-    return out
-
-
-def _halve(H: np.ndarray):
-    """De Casteljau at 1/2 of homogeneous Bézier pieces ``(m, p + 1, k)``: ``(left, right)``."""
-    p = H.shape[1] - 1
-    left = np.empty_like(H)
-    right = np.empty_like(H)
-    Q = H.copy()
-    left[:, 0] = Q[:, 0]
-    right[:, p] = Q[:, p]
-    for r in range(1, p + 1):
-        Q = 0.5 * (Q[:, :-1] + Q[:, 1:])
-        left[:, r] = Q[:, 0]
-        right[:, p - r] = Q[:, -1]
-    return left, right
-
-
-def _chord_crossings(a, b, q):
-    """Signed crossings ``(n,)`` of the ``+u`` rays from ``q`` with the chords ``a -> b`` (all
-    ``(n, 2)``): +1 upward with ``q`` on the left, -1 downward with ``q`` on the right."""
-    side = (b[:, 0] - a[:, 0]) * (q[:, 1] - a[:, 1]) - (b[:, 1] - a[:, 1]) * (q[:, 0] - a[:, 0])
-    up = (a[:, 1] <= q[:, 1]) & (b[:, 1] > q[:, 1]) & (side > 0)
-    down = (a[:, 1] > q[:, 1]) & (b[:, 1] <= q[:, 1]) & (side < 0)
-    return up.astype(np.int64) - down.astype(np.int64)
-
-
-def _segment_distance(a, b, q):
-    """Distances ``(n,)`` from points ``q`` to segments ``a -> b`` (all ``(n, d)``)."""
-    ab = b - a
-    L2 = np.einsum("ij,ij->i", ab, ab)
-    t = np.divide(np.einsum("ij,ij->i", q - a, ab), L2, out=np.zeros(len(q)), where=L2 > 0)
-    t = np.clip(t, 0.0, 1.0)
-    return np.linalg.norm(q - (a + t[:, None] * ab), axis=1)
-
-
-def _classify_uv(pieces: dict, uv: np.ndarray, tol: float) -> np.ndarray:
-    """Location codes of ``uv`` ``(n, 2)`` against closed trims given as Bézier pieces."""
-    n = len(uv)
-    crossings = np.zeros(n, dtype=np.int64)
-    on = np.zeros(n, dtype=bool)
-    small = tol / 8.0
-    for H in pieces.values():
-        m = len(H)
-        # all point/piece pairs, in chunks within the memory budget
-        chunk = max(1, int(4e6 // max(m, 1)))
-        for s in range(0, n, chunk):
-            idx = np.arange(s, min(n, s + chunk))
-            limits.check(len(idx) * m * 8 * 4, "point/trim pairs")
-            pt = np.repeat(idx, m)
-            pc = np.tile(np.arange(m), len(idx))
-            Hs = H
-            for level in range(_MAX_LEVELS + 1):
-                if pt.size == 0:
-                    break
-                C = Hs[:, :, :2] / Hs[:, :, 2:]
-                lo, hi = C.min(axis=1), C.max(axis=1)
-                q = uv[pt]
-                inbox = np.all((q >= lo[pc] - tol) & (q <= hi[pc] + tol), axis=1)
-                a, b = C[pc, 0], C[pc, -1]
-                clear = ~inbox
-                np.add.at(crossings, pt[clear], _chord_crossings(a[clear], b[clear], q[clear]))
-                diag = np.linalg.norm(hi - lo, axis=1)
-                short = inbox & ((diag[pc] <= small) | (level == _MAX_LEVELS))
-                if short.any():
-                    near = _segment_distance(a[short], b[short], q[short]) <= tol
-                    on[pt[short][near]] = True
-                    far = ~near
-                    np.add.at(crossings, pt[short][far], _chord_crossings(a[short][far], b[short][far], q[short][far]))
-                split = inbox & ~short
-                if not split.any():
-                    break
-                # halve only the pieces some point still needs, then pair each point with both halves
-                used, inv = np.unique(pc[split], return_inverse=True)
-                left, right = _halve(Hs[used])
-                Hs = np.concatenate([left, right])
-                pt = np.concatenate([pt[split], pt[split]])
-                pc = np.concatenate([inv, inv + len(used)])
-    out = np.where(crossings % 2 == 1, np.int8(INSIDE), np.int8(OUTSIDE))
-    out[on] = ON
-    return out
 
 
 def contains_uv(face, uv, tolerance: float | None = None) -> np.ndarray:
@@ -195,152 +49,35 @@ def contains_uv(face, uv, tolerance: float | None = None) -> np.ndarray:
         raise ParameterError(f"uv must have shape (n, 2), got {arr.shape}")
     if not np.isfinite(pts).all():
         raise ParameterError("uv has non-finite values")
-    out = _classify_uv(trim_pieces(face), pts, uv_tolerance(face, tolerance))
+    out = classify_uv(trim_pieces(face), pts, uv_tolerance(face, tolerance))
     return out[0] if single else out
 
 
 # -- solids ---------------------------------------------------------------------------------------
-def _face_mesh(face, per_span: int = 8):
-    """A triangle mesh of the trimmed face: ``(vertices (k, 3), triangles (t, 3), deviation)``.
-
-    Vertices are the trims sampled per Bézier piece plus a ``(u, v)`` grid kept clear of the trims
-    by half a cell: ``per_span`` cells per knot span in a curved direction, one in a straight one,
-    more where needed for cells about as long as wide in 3-D. A Delaunay triangulation of them is
-    kept where the triangles' centroids are inside the trims (dense trim samples make every trim
-    chord a Delaunay edge). ``deviation`` bounds the mesh's distance from the face, estimated at
-    edge mid points. Triangles face outward (flipped on reversed faces). Cached on the face.
-    """
-    if "mesh" in face._cache:
-        return face._cache["mesh"]
-    s = face.surface
-    axes = []
-    for knots, degree in ((s.knots_u, s.degree_u), (s.knots_v, s.degree_v)):
-        br = np.unique(knots[degree:len(knots) - degree])
-        axes.append((br, per_span if degree > 1 else 1))
-    # equalize the 3-D cell sizes: cells as long as wide within a factor 2
-    coarse = [np.unique(np.concatenate([np.linspace(a, b, k + 1) for a, b in zip(br[:-1], br[1:])])) for br, k in axes]
-    G = s.evaluate_grid(coarse[0], coarse[1])
-    hu = float(np.linalg.norm(np.diff(G, axis=0), axis=-1).max()) if G.shape[0] > 1 else 0.0
-    hv = float(np.linalg.norm(np.diff(G, axis=1), axis=-1).max()) if G.shape[1] > 1 else 0.0
-    h = max(min(hu, hv), 1e-300)
-    counts = [max(1, min(256, int(np.ceil(hu / (2.0 * h)))) ) * axes[0][1],
-              max(1, min(256, int(np.ceil(hv / (2.0 * h))))) * axes[1][1]]
-    lines = [np.unique(np.concatenate([np.linspace(a, b, k + 1) for a, b in zip(br[:-1], br[1:])]))
-             for (br, _), k in zip(axes, counts)]
-    cell = np.array([np.diff(lines[0]).max(), np.diff(lines[1]).max()])
-    trim, trim_mid = [], []
-    for loop in face.boundary_loops():
-        for e in loop:
-            for k, b in enumerate(e.pcurve.to_bezier()):
-                ext = np.ptp(np.asarray(b.control_points), axis=0)
-                n = max(per_span if b.degree > 1 else 1, int(np.ceil((ext / cell).max())))
-                t = np.linspace(0.0, 1.0, n + 1)
-                trim.append(b.evaluate(t[:-1]))
-                trim_mid.append((b.evaluate(t[:-1]), b.evaluate(t[1:]), b.evaluate(0.5 * (t[:-1] + t[1:]))))
-    trim = np.concatenate(trim)
-    scale = 1.0 / np.maximum(cell, 1e-300)  # u and v in cells: "half a cell" the same both ways
-    U, V = np.meshgrid(lines[0], lines[1], indexing="ij")
-    grid = np.stack([U.ravel(), V.ravel()], axis=1)
-    inside = _classify_uv(trim_pieces(face), grid, uv_tolerance(face)) == INSIDE
-    grid = grid[inside]
-    if len(grid):
-        d, _ = cKDTree(trim * scale).query(grid * scale)
-        grid = grid[d > 0.5]
-    pts2 = np.unique(np.concatenate([trim, grid]), axis=0)
-    if len(pts2) < 3:
-        out = (np.zeros((0, 3)), np.zeros((0, 3), dtype=np.intp), 0.0)
-        face._cache["mesh"] = out
-        return out
-    tri = Delaunay(pts2 * scale).simplices
-    cen = pts2[tri].mean(axis=1)
-    tri = tri[_classify_uv(trim_pieces(face), cen, uv_tolerance(face)) == INSIDE]
-    # counter-clockwise in (u, v): the normal Su x Sv side
-    a, b, c = pts2[tri[:, 0]], pts2[tri[:, 1]], pts2[tri[:, 2]]
-    ccw = (b[:, 0] - a[:, 0]) * (c[:, 1] - a[:, 1]) - (b[:, 1] - a[:, 1]) * (c[:, 0] - a[:, 0]) > 0
-    tri = np.where(ccw[:, None], tri, tri[:, [0, 2, 1]])
-    if face.reversed:
-        tri = tri[:, [0, 2, 1]]
-    P = surface_points(face, pts2)
-    # deviation: the surface at the (u, v) mid points of triangle edges against the 3-D chords'
-    # mid points, and the trims' mid points against their chords
-    e = np.concatenate([tri[:, [0, 1]], tri[:, [1, 2]], tri[:, [2, 0]]])
-    mid_uv = 0.5 * (pts2[e[:, 0]] + pts2[e[:, 1]])
-    dev = np.linalg.norm(surface_points(face, mid_uv) - 0.5 * (P[e[:, 0]] + P[e[:, 1]]), axis=1)
-    a2, b2, m2 = (np.concatenate(x) for x in zip(*trim_mid))
-    S = [surface_points(face, x) for x in (a2, b2, m2)]
-    dev_trim = np.linalg.norm(S[2] - 0.5 * (S[0] + S[1]), axis=1)
-    out = (P, tri, float(max(dev.max(initial=0.0), dev_trim.max(initial=0.0))))
-    face._cache["mesh"] = out
-    return out
-
-
-def _winding_numbers(points, V, T):
-    """Generalized winding numbers ``(n,)`` of the triangle mesh ``V[T]`` at ``points`` ``(n, 3)``:
-    sum of the triangles' signed solid angles (Van Oosterom and Strackee) over 4 pi."""
-    n = len(points)
-    w = np.zeros(n)
-    if len(T) == 0 or n == 0:
-        return w
-    A, B, C = (V[T[:, i]].T[:, None, :] for i in range(3))  # (3, 1, t) each
-    chunk = max(1, int(1e6 // len(T)))
-    for s in range(0, n, chunk):
-        p = points[s:s + chunk].T[:, :, None]  # (3, c, 1)
-        limits.check(p.shape[1] * len(T) * 8 * 16, "winding-number pairs")
-        a, b, c = A - p, B - p, C - p  # (3, c, t)
-        la = np.sqrt((a * a).sum(axis=0))
-        lb = np.sqrt((b * b).sum(axis=0))
-        lc = np.sqrt((c * c).sum(axis=0))
-        det = (a[0] * (b[1] * c[2] - b[2] * c[1]) + a[1] * (b[2] * c[0] - b[0] * c[2])
-               + a[2] * (b[0] * c[1] - b[1] * c[0]))
-        den = la * lb * lc + (a * b).sum(axis=0) * lc + (b * c).sum(axis=0) * la + (c * a).sum(axis=0) * lb
-        w[s:s + chunk] = np.arctan2(det, den).sum(axis=1)
-    return w / (2.0 * np.pi)
-
-
-def _point_triangle_distance(p, a, b, c):
-    """Distances ``(n,)`` from points ``p`` to triangles ``(a, b, c)`` (all ``(n, 3)``): the
-    closest point by Voronoi regions of the vertices, edges and interior (Ericson 5.1.5)."""
-    ab, ac, ap = b - a, c - a, p - a
-    d1, d2 = np.einsum("ij,ij->i", ab, ap), np.einsum("ij,ij->i", ac, ap)
-    bp, cp = p - b, p - c
-    d3, d4 = np.einsum("ij,ij->i", ab, bp), np.einsum("ij,ij->i", ac, bp)
-    d5, d6 = np.einsum("ij,ij->i", ab, cp), np.einsum("ij,ij->i", ac, cp)
-    va, vb, vc = d3 * d6 - d5 * d4, d5 * d2 - d1 * d6, d1 * d4 - d3 * d2
-    denom = va + vb + vc
-    with np.errstate(divide="ignore", invalid="ignore"):
-        v = np.where(denom != 0, vb / denom, 0.0)
-        w = np.where(denom != 0, vc / denom, 0.0)
-    q = a + v[:, None] * ab + w[:, None] * ac
-    # outside the interior: the nearest of the three edges (clamped segments) is the answer
-    outside = (va < 0) | (vb < 0) | (vc < 0) | (denom == 0)
-    d = np.linalg.norm(p - q, axis=1)
-    if outside.any():
-        o = outside
-        d[o] = np.minimum.reduce([_segment_distance(a[o], b[o], p[o]), _segment_distance(b[o], c[o], p[o]),
-                                  _segment_distance(c[o], a[o], p[o])])
-    return d
-
-
 def _near_mesh(solid, Q, tol):
     """Boolean mask ``(n,)``: points within ``3 deviation + 2 tol`` of a face's mesh (where the
     mesh's winding number may differ from the exact one, or the point may be ON)."""
     near = np.zeros(len(Q), dtype=bool)
     for f in solid.faces:
-        P, T, dev = _face_mesh(f)
+        P, T, dev = face_mesh(f)
         if len(T) == 0:
             continue
         band = 3.0 * dev + 2.0 * tol
+        # the mesh lies in the box of the surface's control points: only points near it count
+        sel = np.flatnonzero(_box_distance(Q, f.surface.control_points.reshape(-1, 3)) <= band)
+        if sel.size == 0:
+            continue
         A, B, C = P[T[:, 0]], P[T[:, 1]], P[T[:, 2]]
         cen = (A + B + C) / 3.0
         R = float(np.max([np.linalg.norm(X - cen, axis=1).max() for X in (A, B, C)]))
-        lists = cKDTree(cen).query_ball_point(Q, band + R)
-        counts = np.fromiter((len(x) for x in lists), dtype=np.intp, count=len(Q))
+        lists = cKDTree(cen).query_ball_point(Q[sel], band + R)
+        counts = np.fromiter((len(x) for x in lists), dtype=np.intp, count=len(sel))
         if not counts.any():
             continue
-        qi = np.repeat(np.arange(len(Q)), counts)
+        qi = np.repeat(sel, counts)
         ti = np.fromiter((j for x in lists for j in x), dtype=np.intp, count=int(counts.sum()))
         limits.check(len(ti) * 8 * 30, "point/triangle distance pairs")
-        d = _point_triangle_distance(Q[qi], A[ti], B[ti], C[ti])
+        d = point_triangle_distance(Q[qi], A[ti], B[ti], C[ti])
         near[qi[d <= band]] = True
     return near
 
@@ -348,11 +85,30 @@ def _near_mesh(solid, Q, tol):
 def _solid_mesh(solid):
     """All faces' meshes as one ``(V, T)`` (cached on the solid)."""
     if "mesh" not in solid._cache:
-        meshes = [_face_mesh(f) for f in solid.faces]
+        meshes = [face_mesh(f) for f in solid.faces]
         offsets = np.cumsum([0] + [len(m[0]) for m in meshes])
         solid._cache["mesh"] = (np.concatenate([m[0] for m in meshes]),
                                 np.concatenate([m[1] + o for m, o in zip(meshes, offsets)]))
     return solid._cache["mesh"]
+
+
+def _solid_winding_numbers(solid, Q, tol):
+    """Winding numbers ``(n,)`` of the solid's boundary at ``Q``: per face, its mesh for the points
+    inside the box of its control points and, where it has fewer triangles, its cap (the same
+    value, exactly) for the points outside."""
+    w = np.zeros(len(Q))
+    for f in solid.faces:
+        P, T, _ = face_mesh(f)
+        cV, cT = face_cap(f)
+        if len(cT) >= len(T):
+            w += winding_numbers(Q, P, T)
+            continue
+        cp = f.surface.control_points.reshape(-1, 3)
+        margin = tol + 1e-9 * float(np.ptp(cp, axis=0).max())
+        near = np.all((Q >= cp.min(axis=0) - margin) & (Q <= cp.max(axis=0) + margin), axis=1)
+        w[near] += winding_numbers(Q[near], P, T)
+        w[~near] += winding_numbers(Q[~near], cV, cT)
+    return w
 
 
 def _bounding_box(solid):
@@ -387,9 +143,8 @@ def contains(solid, points, tolerance: float | None = None) -> np.ndarray:
     cand = np.flatnonzero(np.all((P >= lo - tol) & (P <= hi + tol), axis=1))
     if cand.size == 0:
         return out[0] if single else out
-    V, T = _solid_mesh(solid)
     Q = P[cand]
-    w = _winding_numbers(Q, V, T)
+    w = _solid_winding_numbers(solid, Q, tol)
     out[cand] = np.where(np.rint(w) % 2 == 1, np.int8(INSIDE), np.int8(OUTSIDE))
     # near the mesh, its chord error may decide wrongly: settle those points exactly
     near = np.flatnonzero(_near_mesh(solid, Q, tol))
@@ -406,15 +161,23 @@ def _closest_feature_side(solid, Q, tol, fallback, project):
     best = np.full(n, np.inf)
     side = np.zeros(n)
     faces = solid.faces
+    # the mesh's vertices lie on the boundary: their nearest one bounds the closest distance, so
+    # faces and edges whose box is further away are skipped
+    V, _ = _solid_mesh(solid)
+    bound = cKDTree(V).query(Q)[0] * (1.0 + 1e-9) + tol
     for f in faces:
-        pr = project(f.surface, Q)
-        uv = np.asarray(pr.parameters).reshape(n, 2)
+        sel = np.flatnonzero(_box_distance(Q, f.surface.control_points.reshape(-1, 3)) < np.minimum(best, bound))
+        if sel.size == 0:
+            continue
+        pr = project(f.surface, Q[sel])
+        uv = np.asarray(pr.parameters).reshape(len(sel), 2)
         ok = contains_uv(f, uv) != OUTSIDE
-        better = ok & (pr.distances < best)
+        better = ok & (pr.distances < best[sel])
         if better.any():
             nrm = f.normals(uv[better, 0], uv[better, 1])
-            best[better] = pr.distances[better]
-            side[better] = np.einsum("ij,ij->i", Q[better] - pr.points[better], nrm)
+            idx = sel[better]
+            best[idx] = pr.distances[better]
+            side[idx] = np.einsum("ij,ij->i", Q[idx] - pr.points[better], nrm)
     vertex = np.zeros(n, dtype=bool)
     for shell in solid.shells:
         topo = shell.topology
@@ -426,23 +189,27 @@ def _closest_feature_side(solid, Q, tol, fallback, project):
             e = sf[fi].boundary_loops()[li][ei]
             if e.curve is None:
                 continue
-            pr = project(e.curve, Q)
-            better = pr.distances < best
-            if not better.any():
+            sel = np.flatnonzero(_box_distance(Q, e.curve.control_points) < np.minimum(best, bound))
+            if sel.size == 0:
                 continue
-            t = np.asarray(pr.parameters).reshape(n)[better]
+            pr = project(e.curve, Q[sel])
+            hit = pr.distances < best[sel]
+            if not hit.any():
+                continue
+            better = sel[hit]
+            t = np.asarray(pr.parameters).reshape(len(sel))[hit]
+            feet = pr.points[hit]
+            dist = pr.distances[hit]
             a, b = e.domain
             at_end = (np.abs(t - a) <= 1e-9 * max(1.0, abs(b - a))) | (np.abs(t - b) <= 1e-9 * max(1.0, abs(b - a)))
-            nsum = np.zeros((int(better.sum()), 3))
+            nsum = np.zeros((len(better), 3))
             for (fj, lj, ej) in g.uses:
                 use = sf[fj].boundary_loops()[lj][ej]
-                # the use's parameter at the same 3-D point: the uses of the primitives and of OCC
-                # share the edge's parameter range; project onto this use's curve when they differ
-                tu = t if use is e else _use_parameter(use, pr.points[better], project)
-                uvu = use.pcurve.evaluate(tu)
+                # the other use's (u, v) at the same 3-D point: through its own curve's parameter
+                uvu = _use_uv(sf[fj], use, t if use is e else None, feet, project)
                 nsum += sf[fj].normals(uvu[:, 0], uvu[:, 1])
-            best[better] = pr.distances[better]
-            side[better] = np.einsum("ij,ij->i", Q[better] - pr.points[better], nsum)
+            best[better] = dist
+            side[better] = np.einsum("ij,ij->i", Q[better] - feet, nsum)
             vertex[better] = at_end
     result = np.where(side > 0, np.int8(OUTSIDE), np.int8(INSIDE))
     result[vertex] = fallback[vertex]
@@ -451,8 +218,19 @@ def _closest_feature_side(solid, Q, tol, fallback, project):
     return result
 
 
-def _use_parameter(use, points, project):
-    """Parameters of ``points`` (on the edge) on another use's 3-D curve (or pcurve image)."""
-    if use.curve is not None:
-        return np.asarray(project(use.curve, points).parameters).reshape(len(points))
-    return np.full(len(points), 0.5 * sum(use.domain))
+def _box_distance(Q, pts):
+    """Distances ``(n,)`` from points ``Q`` to the bounding box of ``pts`` (a lower bound of the
+    distance to a curve or surface with these control points)."""
+    lo, hi = pts.min(axis=0), pts.max(axis=0)
+    return np.linalg.norm(np.maximum(lo - Q, 0.0) + np.maximum(Q - hi, 0.0), axis=1)
+
+
+def _use_uv(face, use, t, points, project):
+    """``(u, v)`` ``(n, 2)`` on ``face`` of ``points`` lying on the edge ``use``: from the edge
+    parameter ``t`` when known, else by projecting onto the use's 3-D curve, or (no curve) onto
+    the face's surface."""
+    if t is None and use.curve is not None:
+        t = np.asarray(project(use.curve, points).parameters).reshape(len(points))
+    if t is not None:
+        return use.pcurve.evaluate(t)
+    return np.asarray(project(face.surface, points).parameters).reshape(len(points), 2)

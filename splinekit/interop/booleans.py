@@ -5,8 +5,11 @@ Every operand is a closed, consistently oriented triangle or polygon
 their first corner, so they should be convex, or at least star-shaped from that
 corner), a ``manifold3d.Manifold``, or anything
 :func:`splinekit.tessellate.tessellate` turns into such a mesh (the
-``tolerance`` keyword is passed on to it). The result is always a triangle
-``PolyMesh`` in the operands' length unit.
+``tolerance`` keyword is passed on to it), such as a
+:class:`splinekit.brep.Solid`, whose trimmed faces tessellate watertight. The
+result is always a triangle ``PolyMesh`` in the operands' length unit. These
+are the fast path; :func:`splinekit.brep.fuse` / ``cut`` / ``common`` are the
+exact booleans of solids (through OpenCascade).
 
 Checks before manifold3d sees a mesh (vectorized over edges, no loop per face):
 

@@ -120,11 +120,16 @@ def _knots_mults(knots):
     return _array1_real(values), _array1_int(counts)
 
 
-def to_occ(obj):
-    """An OCP ``Geom_*`` handle for a splinekit curve or surface (3-D only)."""
+def to_occ(obj, *, tolerance: float = 1e-7):
+    """An OCP ``Geom_*`` handle for a splinekit curve or surface (3-D only); for a B-rep
+    ``TrimmedFace`` / ``Shell`` / ``Solid`` the ``TopoDS_Face`` / ``TopoDS_Shell`` /
+    ``TopoDS_Solid`` (see :func:`to_shape`)."""
     from ..curves import BezierCurve, SplineCurve
     from ..surfaces import BezierSurface, SplineSurface
+    from .occ_brep import is_brep
 
+    if is_brep(obj):
+        return to_shape(obj, tolerance=tolerance)
     Geom, TColgp, TColStd, _ = require_ocp()
     if isinstance(obj, BezierCurve):
         P = _points3(obj.control_points)
@@ -323,7 +328,7 @@ def _compound(shapes):
     return comp
 
 
-def from_occ(handle, *, oriented: bool = False):
+def from_occ(handle, *, oriented: bool = False, surfaces: bool = False):
     """splinekit geometry from OpenCascade geometry or topology.
 
     ``handle`` may be
@@ -334,25 +339,33 @@ def from_occ(handle, *, oriented: bool = False):
       ``GeomConvert`` to its exact (rational) B-spline form;
     * a ``TopoDS_Edge``: the B-spline form of its 3-D curve over the edge's
       parameter range (a curve);
-    * a ``TopoDS_Face``: the B-spline form of its surface over the face's UV
-      bounding box (a surface). Trimming loops inside that box (holes,
-      non-rectangular boundaries) are not kept: splinekit surfaces are untrimmed;
-    * any other ``TopoDS_Shape`` (shell, solid, compound...), a build123d or
-      cadquery object (anything holding the shape in ``.wrapped``), a cadquery
-      ``Workplane`` or a list of these: a list with one surface per distinct
-      face, followed by one curve per non-degenerate edge that bounds no face
-      (the edges of a wire or loose edges; a solid gives surfaces only).
+    * a ``TopoDS_Face`` / ``TopoDS_Shell`` / ``TopoDS_Solid``: a
+      :class:`~splinekit.brep.TrimmedFace` / ``Shell`` / ``Solid`` keeping every
+      trimming loop, every face orientation (``reversed``) and the edges the faces
+      share (``Edge.key``: the edge's index in one map of the whole shape). The
+      shape is converted to NURBS first (``BRepBuilderAPI_NurbsConvert``), so
+      analytic surfaces and their pcurves become B-splines consistently;
+    * a compound, a build123d or cadquery object (anything holding the shape in
+      ``.wrapped``), a cadquery ``Workplane`` or a list of these: one B-rep object
+      per solid, shell and face of a compound (a list), and one curve per edge of
+      a wire or loose edge; a single face, shell or solid gives the object itself.
+
+    With ``surfaces=True`` topology gives plain untrimmed surfaces as before the
+    B-rep layer: a face gives the B-spline form of its surface over the face's UV
+    bounding box (trims dropped) and any other shape a list with one surface per
+    distinct face, followed by one curve per non-degenerate edge that bounds no face.
 
     Periodic OCC B-splines are returned on a clamped, non-periodic equivalent:
     ``SetNotPeriodic`` on a copy (the caller's handle is untouched), whose
     unclamped end knots are then clamped by knot insertion; the geometry and
     the parameter domain are unchanged.
-    By default surfaces keep the parametrization OCC stores, whatever the face
-    orientation; with ``oriented=True`` a surface of a reversed face is reversed
-    in u, so that ``Su x Sv`` follows the face normal (outward on a solid).
+    With ``surfaces=True``, surfaces keep the parametrization OCC stores, whatever
+    the face orientation; ``oriented=True`` (which implies ``surfaces=True``) reverses
+    the surface of a reversed face in u, so that ``Su x Sv`` follows the face normal.
     """
-    if not isinstance(oriented, (bool, np.bool_)):
-        raise ParameterError(f"oriented must be True or False, got {oriented!r}")
+    for flag, value in (("oriented", oriented), ("surfaces", surfaces)):
+        if not isinstance(value, (bool, np.bool_)):
+            raise ParameterError(f"{flag} must be True or False, got {value!r}")
     Geom, _, _, _ = require_ocp()
     direct = _from_geom(handle)
     if direct is not None:
@@ -388,13 +401,17 @@ def from_occ(handle, *, oriented: bool = False):
         raise ParameterError("from_occ: the OCC shape is null (empty)")
     (TopAbs,) = _ocp("TopAbs")
     kind = shape.ShapeType()
-    if kind == TopAbs.TopAbs_ShapeEnum.TopAbs_FACE:
-        return _face_to_surface(_sub_shapes(shape, "FACE")[0], oriented)
     if kind == TopAbs.TopAbs_ShapeEnum.TopAbs_EDGE:
         curve = _edge_to_curve(_sub_shapes(shape, "EDGE")[0])
         if curve is None:
             raise ParameterError("from_occ: the edge is degenerate (it has no 3-D curve)")
         return curve
+    if not (surfaces or oriented):  # oriented=True only means something for plain surfaces
+        from .occ_brep import brep_from_shape
+
+        return brep_from_shape(shape)
+    if kind == TopAbs.TopAbs_ShapeEnum.TopAbs_FACE:
+        return _face_to_surface(_sub_shapes(shape, "FACE")[0], oriented)
     surfaces = [_face_to_surface(f, oriented) for f in _sub_shapes(shape, "FACE")]
     curves = (_edge_to_curve(e) for e in _free_edges(shape))
     return surfaces + [c for c in curves if c is not None]
@@ -536,13 +553,26 @@ def to_shape(obj, *, tolerance: float = 1e-7):
       several disconnected pieces give a ``TopoDS_Compound`` of them. Shells and
       solids are checked with ``BRepCheck_Analyzer``; an invalid result raises
       BackendError naming the failing sub-shapes;
+    * a :class:`~splinekit.brep.TrimmedFace` / ``Shell`` / ``Solid`` -> ``TopoDS_Face``
+      / ``TopoDS_Shell`` / ``TopoDS_Solid`` built from the surfaces and pcurves, each
+      shared edge built once (see :mod:`splinekit.interop.occ_brep`), checked with
+      ``BRepCheck_Analyzer`` (an invalid result raises BackendError); a list of
+      them -> a ``TopoDS_Compound``;
     * an OCC shape, or a build123d / cadquery object: its ``TopoDS_Shape``.
 
     ``tolerance`` (model units, mm by default in STEP) is the face tolerance and
     the sewing tolerance: patch edges farther apart than that are not joined.
     """
+    from .occ_brep import brep_to_shape, is_brep
+
     tol = _tolerance(tolerance)
+    if is_brep(obj):
+        shape = brep_to_shape(obj, tolerance=tol)
+        _check_valid(shape, type(obj).__name__)
+        return shape
     if isinstance(obj, (list, tuple)):
+        if obj and all(is_brep(o) for o in obj):
+            return _compound([to_shape(o, tolerance=tol) for o in obj])
         return _sewn(list(obj), tol)
     if _is_curve(obj):
         return _edge(obj)
