@@ -50,11 +50,6 @@ class EdgeUse:
     def __init__(self, f, loop, pos, edge, face):
         self.f, self.loop, self.pos, self.edge, self.face = f, loop, pos, edge, face
 
-    def on_surface(self, t):
-        """``((k, 2) uv, (k, 3) points)`` of the pcurve parameters ``t`` on the face's surface."""
-        uv = self.edge.pcurve.evaluate(np.asarray(t, dtype=np.float64))
-        return uv, self.face.surface.evaluate(uv[:, 0], uv[:, 1])
-
 
 def _face_name(face, f):
     return f"face {f}" + (f" ({face.name!r})" if face.name else "")

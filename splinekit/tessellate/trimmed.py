@@ -357,7 +357,7 @@ def tessellate_faces(faces, tol: float, angle_tol, size: float) -> Tessellation:
     bad = _crossing(layout.place(pface[:nb], puv[:nb]), segs)
     if bad >= 0:
         f = int(pface[segs[bad, 0]])
-        raise ParameterError(f"{_face_name(faces[f], f)}: its trimming loops cross each other (or themselves)")
+        raise ParameterError(f"{_face_name(faces[f], f)}: its trimming loops cross or touch each other (or themselves)")
     max_dev = 0.0
     for round_ in range(MAX_ROUNDS):
         nP = len(pface)
@@ -369,7 +369,7 @@ def tessellate_faces(faces, tol: float, angle_tol, size: float) -> Tessellation:
         if len(r["vertices"]) != nP:  # Triangle split crossing segments at new points
             x = r["vertices"][nP, 0]
             f = int(np.searchsorted(layout.x0, x, side="right") - 1)
-            raise ParameterError(f"{_face_name(faces[f], f)}: its trimming loops cross each other (or themselves)")
+            raise ParameterError(f"{_face_name(faces[f], f)}: its trimming loops cross or touch each other (or themselves)")
         T = np.asarray(r["triangles"], dtype=np.int64)
         N = np.asarray(r["neighbors"], dtype=np.int64)
         keep, conflict, along = _keep_inside(T, N, nxt)
