@@ -24,6 +24,7 @@ from .._validate import (
     frozen,
     homogeneous,
 )
+from .. import limits
 from ..basis import algebra
 from ..basis.bspline import basis_ders_t, basis_funs_t, combine, find_span, span_bounds
 from ..basis.jit import kernels
@@ -228,6 +229,10 @@ class SplineSurface:
     def _grid_basis(self, us, vs, order=0):
         """Per direction: ``(span (m,), values (order + 1, p + 1, m))``."""
         (du, dv) = self.domain
+        mu, mv = float(np.size(us)), float(np.size(vs))
+        # the grid (and its per-order partials, and one temporary each) before any of it exists
+        limits.check(16.0 * mu * mv * (self._coefs.shape[-1] + 1) * (order + 1) ** 2,
+                     f"a {mu:.0f} x {mv:.0f} surface grid")
         out = []
         for p, U, x, name in ((self._pu, self._ku, us, "us"), (self._pv, self._kv, vs, "vs")):
             x = as_params(x, du if name == "us" else dv, name).ravel()
