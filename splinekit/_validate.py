@@ -50,6 +50,39 @@ def as_int(value, name: str, minimum: int | None = None, error=ParameterError) -
     return int(result)
 
 
+def as_indices(value, name: str, count: int | None = None, error=ParameterError, range_error=None) -> np.ndarray:
+    """Integer indices as an int64 array of ``value``'s shape.
+
+    Refuses what is not an integer (``0.5``, and also ``1.0``, ``True``, ``"0"``,
+    NaN) with ``error``; with ``count``, an index outside ``0 .. count - 1``
+    (including one beyond int64) with ``range_error`` (default ``error``).
+    """
+    range_error = error if range_error is None else range_error
+    try:
+        arr = np.asarray(value)
+    except (ValueError, TypeError, OverflowError):  # ragged or unconvertible
+        raise error(f"{name} must be integer indices, got {value!r}") from None
+    if arr.dtype == object:  # Python ints beyond int64, or mixed objects
+        flat = arr.ravel().tolist()
+        for x in flat:
+            if isinstance(x, bool) or not hasattr(x, "__index__"):
+                raise error(f"{name} must be integer indices, got {x!r}")
+        big = [int(x) for x in flat if not -(2**63) <= int(x) < 2**63]
+        if big:
+            raise range_error(f"{name} {big[0]} is outside 0..{'' if count is None else count - 1}")
+        arr = np.array([int(x) for x in flat], dtype=np.int64).reshape(arr.shape)
+    if arr.size and arr.dtype.kind not in "iu":
+        raise error(f"{name} must be integer indices, got {arr.ravel()[0]!r} (dtype {arr.dtype})")
+    if arr.dtype.kind == "u" and arr.size and arr.max() > np.iinfo(np.int64).max:
+        raise range_error(f"{name} {int(arr.max())} is outside 0..{'' if count is None else count - 1}")
+    arr = arr.astype(np.int64)
+    if count is not None and arr.size:
+        bad = (arr < 0) | (arr >= count)
+        if bad.any():
+            raise range_error(f"{name} {int(arr[bad][0])} is outside 0..{count - 1}")
+    return arr
+
+
 MAX_DEGREE = 128
 """Largest degree (and derivative order) accepted. Cost grows like p**2 per
 point (p**3 for derivatives) and Bernstein coefficients of higher degree are

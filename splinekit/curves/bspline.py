@@ -23,6 +23,7 @@ from .._validate import (
     as_order,
     as_params,
     as_points,
+    as_positive,
     as_weights,
     finite_points,
     frozen,
@@ -158,6 +159,7 @@ class SplineCurve:
 
     def almost_equal(self, other, tol: float = 1e-12) -> bool:
         """Same kind, degree and knot count, knots and coefficients within ``tol``."""
+        tol = as_positive(tol, "tol", allow_zero=True)
         return (
             isinstance(other, SplineCurve)
             and self._rational == other._rational
@@ -405,6 +407,7 @@ class SplineCurve:
         halved uniformly until two successive estimates agree to ``tol``
         (relative); at most 2**10 pieces per span.
         """
+        tol = as_positive(tol, "tol")
         a, b = self.domain
         s = a if start is None else float(self._params(start, "start"))
         e = b if end is None else float(self._params(end, "end"))

@@ -43,6 +43,8 @@ def as_face_arrays(faces) -> tuple[np.ndarray, np.ndarray]:
     except ValueError:  # ragged nested lists
         arr = None
     if arr is not None and arr.dtype != object and arr.ndim == 2:
+        # before any copy: the flat indices, and the topology built from them, scale with arr.size
+        limits.check(arr.size * BYTES_PER_CORNER, f"a mesh of {arr.shape[0]:,} faces")
         if arr.dtype.kind == "u" and arr.size and arr.max() > np.iinfo(np.int64).max:
             raise MeshTopologyError(f"face index {int(arr.max())} is too large for a vertex index")
         if arr.size and arr.dtype.kind not in "iu":

@@ -19,6 +19,7 @@ from .._validate import (
     as_order,
     as_params,
     as_points,
+    as_positive,
     as_weights,
     finite_points,
     frozen,
@@ -154,6 +155,7 @@ class SplineSurface:
         return hash((self._rational, self._pu, self._pv, self._ku.tobytes(), self._kv.tobytes(), self._coefs.tobytes()))
 
     def almost_equal(self, other, tol: float = 1e-12) -> bool:
+        tol = as_positive(tol, "tol", allow_zero=True)
         return (
             isinstance(other, SplineSurface)
             and (self._rational, self._pu, self._pv) == (other._rational, other._pu, other._pv)
@@ -229,13 +231,12 @@ class SplineSurface:
     def _grid_basis(self, us, vs, order=0):
         """Per direction: ``(span (m,), values (order + 1, p + 1, m))``."""
         (du, dv) = self.domain
-        mu, mv = float(np.size(us)), float(np.size(vs))
+        us, vs = as_params(us, du, "us").ravel(), as_params(vs, dv, "vs").ravel()
         # the grid (and its per-order partials, and one temporary each) before any of it exists
-        limits.check(16.0 * mu * mv * (self._coefs.shape[-1] + 1) * (order + 1) ** 2,
-                     f"a {mu:.0f} x {mv:.0f} surface grid")
+        limits.check(16.0 * us.size * vs.size * (self._coefs.shape[-1] + 1) * (order + 1) ** 2,
+                     f"a {us.size} x {vs.size} surface grid")
         out = []
-        for p, U, x, name in ((self._pu, self._ku, us, "us"), (self._pv, self._kv, vs, "vs")):
-            x = as_params(x, du if name == "us" else dv, name).ravel()
+        for p, U, x in ((self._pu, self._ku, us), (self._pv, self._kv, vs)):
             span = find_span(p, U, x)
             out.append((span, basis_ders_t(p, U, span, x, order)))
         return out
