@@ -8,6 +8,7 @@ subclass naming the argument when it cannot.
 from __future__ import annotations
 
 import operator
+import os
 
 import numpy as np
 
@@ -83,6 +84,23 @@ def as_indices(value, name: str, count: int | None = None, error=ParameterError,
     return arr
 
 
+def as_path(value, name: str = "path") -> str | bytes:
+    """A file-system path (``str``, ``bytes`` or ``os.PathLike``) as ``os.fspath`` gives it.
+
+    Refuses with ParameterError what the operating system would refuse with a
+    bare ValueError or TypeError: a non-path, an empty path, a NUL byte.
+    """
+    try:
+        path = os.fspath(value)
+    except TypeError:
+        raise ParameterError(f"{name} must be a str, bytes or os.PathLike, got {type(value).__name__}") from None
+    if len(path) == 0:
+        raise ParameterError(f"{name} is empty")
+    if ("\0" if isinstance(path, str) else b"\0") in path:
+        raise ParameterError(f"{name} {path!r} contains a NUL byte, which no file name may hold")
+    return path
+
+
 MAX_DEGREE = 128
 """Largest degree (and derivative order) accepted. Cost grows like p**2 per
 point (p**3 for derivatives) and Bernstein coefficients of higher degree are
@@ -153,6 +171,34 @@ def finite_points(points: np.ndarray, what: str) -> np.ndarray:
     if not np.isfinite(points).all():
         raise ControlPointError(f"{what} gives non-finite control points (overflow)")
     return points
+
+
+def overflow_safe(geometry, compute, points: np.ndarray, lead: int) -> np.ndarray:
+    """``compute(geometry)`` without overflow: evaluated on ``geometry._scaled(-k)``
+    (coordinates times ``2**-k``, exact, ``k`` such that every control point is
+    below 1 in size) and scaled back by ``2**k``.
+
+    ``compute`` returns points ``(..., dim)`` (``lead`` = 0) or derivatives with
+    ``lead`` leading order axes (1 for curves, 2 for surfaces), whose entry
+    ``[0]`` (``[0, 0]``) holds the points. Points are convex combinations of the
+    control ``points`` ``(..., dim)``: they are clipped to the control points'
+    bounding box, which holds the exact point (so only rounding is removed), and
+    are always finite. A derivative whose true size exceeds the float range
+    raises DomainError.
+    """
+    flat = points.reshape(-1, points.shape[-1])
+    k = int(np.frexp(max(float(np.abs(flat).max()), 1.0))[1])  # max |P| < 2**k
+    lo, hi = np.ldexp(flat.min(axis=0), -k), np.ldexp(flat.max(axis=0), -k)
+    out = np.array(compute(geometry._scaled(-k)), dtype=np.float64)
+    first = (0,) * lead
+    out[first] = np.clip(out[first], lo, hi)
+    with np.errstate(over="ignore"):
+        out = np.ldexp(out, k)
+    if not np.isfinite(out).all():
+        raise DomainError(
+            "a derivative exceeds the float range (about 1.8e308) at the requested parameters; scale the geometry down"
+        )
+    return out
 
 
 def as_params(value, domain: tuple, name: str = "u", rtol: float = DEFAULT.param) -> np.ndarray:
