@@ -10,6 +10,8 @@ import os
 import tempfile
 from typing import Callable
 
+from ._validate import as_path
+
 
 def _default_mode() -> int:
     mask = os.umask(0)
@@ -23,7 +25,7 @@ def atomic_write(path, write: Callable[[str], None]) -> str:
     The file gets the permissions an ordinary ``open(path, "w")`` would give
     (not mkstemp's 0600). Returns ``path`` as a string.
     """
-    path = os.fspath(path)
+    path = as_path(path)
     directory = os.path.dirname(os.path.abspath(path))
     suffix = os.path.splitext(path)[1]
     fd, tmp = tempfile.mkstemp(prefix=".splinekit-", suffix=suffix, dir=directory)

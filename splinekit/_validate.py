@@ -8,6 +8,7 @@ subclass naming the argument when it cannot.
 from __future__ import annotations
 
 import operator
+import os
 
 import numpy as np
 
@@ -48,6 +49,56 @@ def as_int(value, name: str, minimum: int | None = None, error=ParameterError) -
     if minimum is not None and result < minimum:
         raise error(f"{name} must be >= {minimum}, got {result}")
     return int(result)
+
+
+def as_indices(value, name: str, count: int | None = None, error=ParameterError, range_error=None) -> np.ndarray:
+    """Integer indices as an int64 array of ``value``'s shape.
+
+    Refuses what is not an integer (``0.5``, and also ``1.0``, ``True``, ``"0"``,
+    NaN) with ``error``; with ``count``, an index outside ``0 .. count - 1``
+    (including one beyond int64) with ``range_error`` (default ``error``).
+    """
+    range_error = error if range_error is None else range_error
+    try:
+        arr = np.asarray(value)
+    except (ValueError, TypeError, OverflowError):  # ragged or unconvertible
+        raise error(f"{name} must be integer indices, got {value!r}") from None
+    if arr.dtype == object:  # Python ints beyond int64, or mixed objects
+        flat = arr.ravel().tolist()
+        for x in flat:
+            if isinstance(x, bool) or not hasattr(x, "__index__"):
+                raise error(f"{name} must be integer indices, got {x!r}")
+        big = [int(x) for x in flat if not -(2**63) <= int(x) < 2**63]
+        if big:
+            raise range_error(f"{name} {big[0]} is outside 0..{'' if count is None else count - 1}")
+        arr = np.array([int(x) for x in flat], dtype=np.int64).reshape(arr.shape)
+    if arr.size and arr.dtype.kind not in "iu":
+        raise error(f"{name} must be integer indices, got {arr.ravel()[0]!r} (dtype {arr.dtype})")
+    if arr.dtype.kind == "u" and arr.size and arr.max() > np.iinfo(np.int64).max:
+        raise range_error(f"{name} {int(arr.max())} is outside 0..{'' if count is None else count - 1}")
+    arr = arr.astype(np.int64)
+    if count is not None and arr.size:
+        bad = (arr < 0) | (arr >= count)
+        if bad.any():
+            raise range_error(f"{name} {int(arr[bad][0])} is outside 0..{count - 1}")
+    return arr
+
+
+def as_path(value, name: str = "path") -> str | bytes:
+    """A file-system path (``str``, ``bytes`` or ``os.PathLike``) as ``os.fspath`` gives it.
+
+    Refuses with ParameterError what the operating system would refuse with a
+    bare ValueError or TypeError: a non-path, an empty path, a NUL byte.
+    """
+    try:
+        path = os.fspath(value)
+    except TypeError:
+        raise ParameterError(f"{name} must be a str, bytes or os.PathLike, got {type(value).__name__}") from None
+    if len(path) == 0:
+        raise ParameterError(f"{name} is empty")
+    if ("\0" if isinstance(path, str) else b"\0") in path:
+        raise ParameterError(f"{name} {path!r} contains a NUL byte, which no file name may hold")
+    return path
 
 
 MAX_DEGREE = 128
@@ -120,6 +171,34 @@ def finite_points(points: np.ndarray, what: str) -> np.ndarray:
     if not np.isfinite(points).all():
         raise ControlPointError(f"{what} gives non-finite control points (overflow)")
     return points
+
+
+def overflow_safe(geometry, compute, points: np.ndarray, lead: int) -> np.ndarray:
+    """``compute(geometry)`` without overflow: evaluated on ``geometry._scaled(-k)``
+    (coordinates times ``2**-k``, exact, ``k`` such that every control point is
+    below 1 in size) and scaled back by ``2**k``.
+
+    ``compute`` returns points ``(..., dim)`` (``lead`` = 0) or derivatives with
+    ``lead`` leading order axes (1 for curves, 2 for surfaces), whose entry
+    ``[0]`` (``[0, 0]``) holds the points. Points are convex combinations of the
+    control ``points`` ``(..., dim)``: they are clipped to the control points'
+    bounding box, which holds the exact point (so only rounding is removed), and
+    are always finite. A derivative whose true size exceeds the float range
+    raises DomainError.
+    """
+    flat = points.reshape(-1, points.shape[-1])
+    k = int(np.frexp(max(float(np.abs(flat).max()), 1.0))[1])  # max |P| < 2**k
+    lo, hi = np.ldexp(flat.min(axis=0), -k), np.ldexp(flat.max(axis=0), -k)
+    out = np.array(compute(geometry._scaled(-k)), dtype=np.float64)
+    first = (0,) * lead
+    out[first] = np.clip(out[first], lo, hi)
+    with np.errstate(over="ignore"):
+        out = np.ldexp(out, k)
+    if not np.isfinite(out).all():
+        raise DomainError(
+            "a derivative exceeds the float range (about 1.8e308) at the requested parameters; scale the geometry down"
+        )
+    return out
 
 
 def as_params(value, domain: tuple, name: str = "u", rtol: float = DEFAULT.param) -> np.ndarray:

@@ -592,7 +592,7 @@ class TestRobustness:
         with pytest.raises(ParameterError, match="subdivisions"):
             icosphere(1.5)
         with pytest.raises(ParameterError, match="exceeds"):
-            icosphere(11)
+            icosphere(17)
         with pytest.raises(ParameterError, match="smaller than R"):
             torus(8, 8, 1.0, 1.0)
         with pytest.raises(ParameterError, match="nv"):

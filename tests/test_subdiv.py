@@ -1435,8 +1435,7 @@ def test_loop_needs_triangles_even_for_zero_levels():
     lambda: subdivide(box(), "catmull-clark", 13),
     lambda: subdivide(box(), "catmull-clark", -1),
     lambda: subdivide(box(), "catmull-clark", 1.5),
-    lambda: subdivide(box(), "catmull-clark", 12),  # 100 million faces
-    lambda: subdivide(icosphere(0), "loop", 12),
+    # (levels whose face count exceeds the memory budget raise ResourceLimitError: tests/test_limits.py)
     lambda: subdivide(box().topology, "catmull-clark"),
     lambda: Refinement(box(), "catmull-clark", 1).apply(np.zeros((7, 3))),
     lambda: SubdivisionSurface(box(), "doo-sabin").limit_points(),

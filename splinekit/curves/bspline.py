@@ -23,10 +23,12 @@ from .._validate import (
     as_order,
     as_params,
     as_points,
+    as_positive,
     as_weights,
     finite_points,
     frozen,
     homogeneous,
+    overflow_safe,
 )
 from ..basis import algebra
 from ..basis.bspline import basis_ders_t, basis_funs_t, combine, find_span, span_bounds
@@ -62,6 +64,9 @@ class SplineCurve:
         """Build without checks from (homogeneous, if rational) coefficients."""
         if rational and cls is BSplineCurve:
             cls = NurbsCurve
+        # knot algebra on coordinates near the float limit can overflow (differences,
+        # products): refused here, so that no curve holds a non-finite control point
+        finite_points(coefs, "the operation")
         obj = object.__new__(cls)
         obj._set(int(degree), knots, coefs, bool(rational))
         return obj
@@ -158,6 +163,7 @@ class SplineCurve:
 
     def almost_equal(self, other, tol: float = 1e-12) -> bool:
         """Same kind, degree and knot count, knots and coefficients within ``tol``."""
+        tol = as_positive(tol, "tol", allow_zero=True)
         return (
             isinstance(other, SplineCurve)
             and self._rational == other._rational
@@ -181,21 +187,43 @@ class SplineCurve:
         return as_params(u, self.domain, name)
 
     def evaluate(self, u) -> np.ndarray:
-        """Points ``u.shape + (dim,)`` at the parameters ``u``."""
+        """Points ``u.shape + (dim,)`` at the parameters ``u``.
+
+        Always finite: a point is a convex combination of the control points, so
+        only rounding near the float limit can overflow; such points are
+        evaluated again on the curve scaled by a power of two (see
+        :func:`splinekit._validate.overflow_safe`).
+        """
         u = self._params(u)
         flat = u.ravel()
+        with np.errstate(over="ignore", invalid="ignore"):
+            pts = self._points(flat)
+        if not np.isfinite(pts).all():
+            pts = overflow_safe(self, lambda c: c._points(flat), self.control_points, 0)
+        return pts.reshape(u.shape + (self.dim,))
+
+    def _points(self, flat):
+        """Points ``(n, dim)`` at the checked parameters ``flat`` (no overflow handling)."""
         p, U = self._degree, self._knots
         jit = kernels(flat.size)
         if jit is not None:
             pts = np.empty((flat.size, self.dim))
             jit.curve_points(p, U, *span_bounds(p, U), self._coefs, flat, self._rational, pts)
-            return pts.reshape(u.shape + (self.dim,))
+            return pts
         span = find_span(p, U, flat)
         N = basis_funs_t(p, U, span, flat)
         pts = combine(self._coefs, p, span, N)
         if self._rational:
             pts = pts[:, :-1] / pts[:, -1:]
-        return pts.reshape(u.shape + (self.dim,))
+        return pts
+
+    def _scaled(self, k: int):
+        """This curve with its coordinates multiplied by ``2**k`` (exact; weights unchanged)."""
+        coefs = np.array(self._coefs)
+        coefs[:, : self.dim] = np.ldexp(coefs[:, : self.dim], k)
+        obj = object.__new__(type(self))
+        obj._set(self._degree, self._knots, coefs, self._rational)
+        return obj
 
     __call__ = evaluate
 
@@ -207,18 +235,26 @@ class SplineCurve:
         order = as_order(order)
         u = self._params(u)
         flat = u.ravel()
+        with np.errstate(over="ignore", invalid="ignore"):
+            ders = self._derivatives(flat, order)
+        if not np.isfinite(ders).all():
+            ders = overflow_safe(self, lambda c: c._derivatives(flat, order), self.control_points, 1)
+        return ders.reshape((order + 1,) + u.shape + (self.dim,))
+
+    def _derivatives(self, flat, order):
+        """``(order + 1, n, dim)`` at the checked parameters ``flat`` (no overflow handling)."""
         p, U = self._degree, self._knots
         jit = kernels(flat.size)
         if jit is not None:
             ders = np.empty((order + 1, flat.size, self.dim))
             binom = np.array([[comb(k, j) for j in range(order + 1)] for k in range(order + 1)], dtype=np.float64)
             jit.curve_derivatives(p, U, *span_bounds(p, U), self._coefs, flat, order, self._rational, binom, ders)
-        else:
-            span = find_span(p, U, flat)
-            ders = combine(self._coefs, p, span, basis_ders_t(p, U, span, flat, order))
-            if self._rational:
-                ders = rational_curve_derivatives(ders)
-        return ders.reshape((order + 1,) + u.shape + (self.dim,))
+            return ders
+        span = find_span(p, U, flat)
+        ders = combine(self._coefs, p, span, basis_ders_t(p, U, span, flat, order))
+        if self._rational:
+            ders = rational_curve_derivatives(ders)
+        return ders
 
     def tangent(self, u) -> np.ndarray:
         """Unit tangent vectors ``u.shape + (dim,)``.
@@ -226,6 +262,9 @@ class SplineCurve:
         Where the first derivative vanishes (a cusp of the parametrization),
         the direction of the first non-vanishing higher derivative is used.
         """
+        big = float(np.abs(self.control_points).max())
+        if big >= 2.0**300:  # tangents do not depend on the scale; huge derivatives would overflow
+            return self._scaled(-int(np.frexp(big)[1])).tangent(u)
         u = self._params(u)
         order = max(self._degree, 1)
         d = self.derivatives(u.ravel(), order)[1:]
@@ -405,6 +444,7 @@ class SplineCurve:
         halved uniformly until two successive estimates agree to ``tol``
         (relative); at most 2**10 pieces per span.
         """
+        tol = as_positive(tol, "tol")
         a, b = self.domain
         s = a if start is None else float(self._params(start, "start"))
         e = b if end is None else float(self._params(end, "end"))

@@ -598,9 +598,11 @@ def _double_reflections(X: np.ndarray, T: np.ndarray, size: float):
     taking ``T[i]`` to ``T[i+1]``. Where ``T[i+1] - H1 T[i]`` vanishes the second
     reflection is skipped, as in the paper: quaternion ``(0, m1)``, sign -1.
     """
-    v1 = X[1:] - X[:-1]
+    # chords in units of the curve's size: squares of raw chords overflow beyond ~1e154
+    Xs = X / size if size > 0 else X
+    v1 = Xs[1:] - Xs[:-1]
     c1 = _dot(v1, v1)
-    close = c1 <= (_COINCIDENT * size) ** 2
+    close = c1 <= _COINCIDENT**2
     m1 = np.where(close[:, None], T[:-1], v1 / np.sqrt(np.where(close, 1.0, c1))[:, None])
     tL = T[:-1] - (2.0 * _dot(m1, T[:-1]))[:, None] * m1
     v2 = T[1:] - tL

@@ -37,6 +37,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from .. import limits
 from .._validate import as_float_array, as_int, as_real
 from ..errors import (
     MissingDependencyError,
@@ -81,6 +82,12 @@ def _origin3(origin) -> np.ndarray:
     return arr.astype(np.float64)
 
 
+BYTES_PER_GRID_POINT = 64
+"""Peak memory per grid sample charged to the memory budget (:mod:`splinekit.limits`):
+the float64 values plus the distances, flags, signs and evaluation temporaries of
+:func:`from_mesh` (the costliest builder)."""
+
+
 def _check_count(shape) -> None:
     count = int(np.prod([int(s) for s in shape], dtype=object))
     if count > MAX_GRID_POINTS:
@@ -88,6 +95,7 @@ def _check_count(shape) -> None:
             f"a grid of shape {tuple(int(s) for s in shape)} has {count} samples, more than "
             f"MAX_GRID_POINTS = {MAX_GRID_POINTS}; lower the resolution"
         )
+    limits.check(count * BYTES_PER_GRID_POINT, f"a grid of shape {tuple(int(s) for s in shape)}")
 
 
 def _interp_name(interpolation) -> str:

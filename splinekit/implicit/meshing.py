@@ -33,6 +33,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from .. import limits
 from ..errors import BackendError, ParameterError
 from ..mesh.polymesh import PolyMesh
 from .base import check_bounds, positive
@@ -102,6 +103,8 @@ def _grid_axes(lo, hi, edge_length):
             f"edge_length={edge_length!r} over a box of size {extent.tolist()} needs {total:.3g} grid points "
             f"(more than {MAX_GRID_POINTS:.3g}); use a longer edge length"
         )
+    # values of both grids, the evaluation chunks and manifold3d's output mesh
+    limits.check(32.0 * total, f"a level-set grid of {total:.3g} points (edge_length={edge_length!r})")
     n = counts.astype(np.int64)
     return n, extent / (n - 1)
 

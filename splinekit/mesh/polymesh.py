@@ -12,11 +12,24 @@ from functools import cached_property
 
 import numpy as np
 
+from .. import limits
 from .._validate import as_float_array
 from ..errors import MeshTopologyError
 from .topology import Topology
 
-__all__ = ["PolyMesh", "as_face_arrays"]
+__all__ = ["BYTES_PER_CORNER", "PolyMesh", "as_face_arrays", "check_mesh_size"]
+
+BYTES_PER_CORNER = 160
+"""Peak memory per face corner of building a PolyMesh (faces, the checked topology
+with its half-edges and edges, vertices): measured 130 bytes for an icosphere
+and for a quad torus of about a million faces, with a margin."""
+
+
+def check_mesh_size(n_faces, corners_per_face, what: str) -> None:
+    """Refuse (:func:`splinekit.limits.check`) a mesh of ``n_faces`` faces of
+    ``corners_per_face`` corners before its arrays exist. Counts may be floats
+    (an estimate, possibly ``inf``)."""
+    limits.check(float(n_faces) * corners_per_face * BYTES_PER_CORNER, f"{what} ({float(n_faces):,.0f} faces)")
 
 
 def as_face_arrays(faces) -> tuple[np.ndarray, np.ndarray]:
@@ -30,6 +43,8 @@ def as_face_arrays(faces) -> tuple[np.ndarray, np.ndarray]:
     except ValueError:  # ragged nested lists
         arr = None
     if arr is not None and arr.dtype != object and arr.ndim == 2:
+        # before any copy: the flat indices, and the topology built from them, scale with arr.size
+        limits.check(arr.size * BYTES_PER_CORNER, f"a mesh of {arr.shape[0]:,} faces")
         if arr.dtype.kind == "u" and arr.size and arr.max() > np.iinfo(np.int64).max:
             raise MeshTopologyError(f"face index {int(arr.max())} is too large for a vertex index")
         if arr.size and arr.dtype.kind not in "iu":
@@ -92,6 +107,8 @@ class PolyMesh:
             i = int(np.flatnonzero(bad)[0])
             raise MeshTopologyError(f"vertex {i} has non-finite coordinates {V[i].tolist()}")
         flat, offsets = as_face_arrays(faces)
+        # the topology costs ~20x the flat indices: refused before it is built
+        limits.check(flat.size * BYTES_PER_CORNER, f"a mesh of {offsets.size - 1:,} faces")
         self._init(V, Topology(len(V), flat, offsets, check=True))
 
     def _init(self, vertices, topology):

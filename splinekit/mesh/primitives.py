@@ -11,13 +11,14 @@ import numpy as np
 
 from .._validate import as_float_array, as_int, as_positive
 from ..errors import ParameterError
-from .polymesh import PolyMesh
+from .polymesh import PolyMesh, check_mesh_size
 from .topology import Topology
 
 __all__ = ["icosphere", "box", "torus", "grid"]
 
-MAX_ICOSPHERE_SUBDIVISIONS = 10
-"""20 * 4**10 = 21 million triangles; more would exhaust memory."""
+MAX_ICOSPHERE_SUBDIVISIONS = 16
+"""20 * 4**16 = 86 billion triangles, past any memory; below this the memory budget
+(:mod:`splinekit.limits`) decides."""
 
 
 def _positive(value, name):
@@ -46,6 +47,7 @@ def icosphere(subdivisions: int = 2, radius: float = 1.0, center=(0.0, 0.0, 0.0)
         raise ParameterError(f"subdivisions = {n} exceeds {MAX_ICOSPHERE_SUBDIVISIONS}")
     r = _positive(radius, "radius")
     c = _vector3(center, "center")
+    check_mesh_size(20 * 4**n, 3, f"icosphere({n})")
     t = (1.0 + 5.0**0.5) / 2.0
     V = np.array(
         [[-1, t, 0], [1, t, 0], [-1, -t, 0], [1, -t, 0],
@@ -112,6 +114,7 @@ def torus(nu: int = 32, nv: int = 16, R: float = 1.0, r: float = 0.25) -> PolyMe
     r = _positive(r, "r")
     if r >= R:
         raise ParameterError(f"the tube radius r = {r} must be smaller than R = {R}")
+    check_mesh_size(nu * nv, 4, f"torus({nu}, {nv})")
     s = 2.0 * np.pi * np.arange(nu) / nu
     t = 2.0 * np.pi * np.arange(nv) / nv
     S, T = np.meshgrid(s, t, indexing="ij")
@@ -135,6 +138,7 @@ def grid(nx: int = 4, ny: int = 4, size=(1.0, 1.0)) -> PolyMesh:
     sz = np.broadcast_to(sz, (2,)) if sz.ndim == 0 else sz
     if sz.shape != (2,) or not np.isfinite(sz).all() or (sz <= 0).any():
         raise ParameterError(f"size must be a number or 2 finite numbers > 0, got {size!r}")
+    check_mesh_size(nx * ny, 4, f"grid({nx}, {ny})")
     x = np.linspace(0.0, sz[0], nx + 1)
     y = np.linspace(0.0, sz[1], ny + 1)
     X, Y = np.meshgrid(x, y, indexing="ij")

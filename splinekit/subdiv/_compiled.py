@@ -19,6 +19,8 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
+from .. import limits
+from ..errors import ResourceLimitError
 from ..mesh.topology import Topology
 from .creases import child_sharpness, transition_weights, vertex_rules
 
@@ -150,7 +152,9 @@ class Level:
         np.cumsum(bound, out=bound)
         nnz = int(bound[-1])
         if max(nnz, self.V, self.n_rows) >= _I32:
-            raise MemoryError(f"a stencil with {nnz:,} entries is too large")
+            # the stencil's indices are int32 (scipy's CSR for sizes below 2**31), whatever the budget
+            raise ResourceLimitError(f"a subdivision stencil with {nnz:,} entries exceeds the int32 index range")
+        limits.check(12.0 * nnz, f"a subdivision stencil with {nnz:,} entries")
         indices = np.empty(nnz, np.int32)
         data = np.empty(nnz)
         counts = np.empty(self.n_rows, np.int64)

@@ -25,7 +25,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .._validate import as_float_array
+from .._validate import as_float_array, as_indices
 from ..errors import MeshTopologyError, ParameterError
 from ..mesh.topology import Topology
 
@@ -59,13 +59,20 @@ def edge_sharpness(topology: Topology, creases) -> np.ndarray:
     if creases is not None:
         if isinstance(creases, dict):
             items = list(creases.items())
-            pairs = np.array([k for k, _ in items], dtype=np.int64).reshape(-1, 2) if items else np.zeros((0, 2), np.int64)
+            keys = [k for k, _ in items]
+            if any(not isinstance(k, tuple) or len(k) != 2 for k in keys):
+                bad = next(k for k in keys if not isinstance(k, tuple) or len(k) != 2)
+                raise ParameterError(f"crease keys must be vertex pairs (v0, v1), got {bad!r}")
+            # flattened, so that numpy cannot promote a bool or round a float in a pair to an index
+            flat = np.empty(2 * len(keys), dtype=object)
+            flat[:] = [x for k in keys for x in k]
+            pairs = as_indices(flat, "crease vertex", range_error=MeshTopologyError).reshape(-1, 2)
             values = as_float_array([v for _, v in items], "crease sharpness")
         elif isinstance(creases, tuple) and len(creases) == 2:
-            try:
-                pairs = np.asarray(creases[0], dtype=np.int64).reshape(-1, 2)
-            except (TypeError, ValueError):
-                raise ParameterError("crease edges must be an (k, 2) array of vertex indices") from None
+            pairs = as_indices(creases[0], "crease vertex", range_error=MeshTopologyError)
+            if pairs.size % 2:
+                raise ParameterError(f"crease edges must be a (k, 2) array of vertex indices, got shape {pairs.shape}")
+            pairs = pairs.reshape(-1, 2)
             values = as_float_array(creases[1], "crease sharpness").ravel()
             if values.size == 1 and len(pairs) != 1:
                 values = np.full(len(pairs), float(values[0]))
@@ -100,16 +107,14 @@ def vertex_sharpness(topology: Topology, corners, boundary: str) -> np.ndarray:
     s = np.zeros(V)
     if corners is not None:
         if isinstance(corners, dict):
-            idx = np.array(list(corners.keys()), dtype=np.int64)
+            idx = as_indices(list(corners.keys()), "corner vertex", V, range_error=MeshTopologyError)
             values = as_float_array(list(corners.values()), "corner sharpness")
         else:
             values = as_float_array(corners, "corner sharpness")
             if values.shape != (V,):
                 raise ParameterError(f"corners must be a dict {{vertex: sharpness}} or {V} per-vertex values")
             idx = np.arange(V)
-        if idx.size and (idx.min() < 0 or idx.max() >= V):
-            raise MeshTopologyError(f"corner vertex {int(idx[(idx < 0) | (idx >= V)][0])} is outside 0..{V - 1}")
-        if not (values >= 0).all():
+        if not (values >= 0).all():  # False for NaN
             raise ParameterError("corner sharpness must be >= 0 (inf allowed)")
         s[idx] = values
     if boundary == "edge-and-corner":

@@ -44,6 +44,7 @@ from functools import cached_property
 import numpy as np
 import scipy.sparse as sp
 
+from .. import limits
 from .._validate import as_float_array, as_int
 from ..basis.bernstein import all_bernstein
 from ..errors import DomainError, MeshTopologyError, ParameterError
@@ -51,7 +52,7 @@ from ..mesh.polymesh import PolyMesh
 from ..mesh.topology import Topology, ranges
 from .creases import SMOOTH, vertex_rules
 from .limit import crease_normals, limit_matrix, tangent_matrices
-from .refiner import Refinement, _scheme
+from .refiner import BYTES_PER_CORNER, Refinement, _scheme
 
 __all__ = ["SubdivisionSurface", "regular_faces", "patch_indices", "BSPLINE_TO_BEZIER"]
 
@@ -225,9 +226,13 @@ class SubdivisionSurface:
 
     def _level_budget(self) -> int:
         """Most levels below the evaluation base that stay within EVAL_FACE_BUDGET faces
-        if the whole mesh were refined (see the module docstring)."""
+        if the whole mesh were refined (see the module docstring), and within the
+        memory budget (:mod:`splinekit.limits`), so a deep evaluation or conversion
+        asks for fewer levels rather than for more memory than the budget."""
         faces = self._level_data(self._eval_base_level)[0].n_faces
-        return max(int(math.floor(math.log(self.EVAL_FACE_BUDGET / max(faces, 1), 4))) - 1, 1)
+        affordable = limits.current_budget() / (4 * BYTES_PER_CORNER)
+        cap = min(self.EVAL_FACE_BUDGET, affordable)
+        return max(int(math.floor(math.log(max(cap / max(faces, 1), 1.0), 4))) - 1, 1)
 
     @cached_property
     def _eval_base_level(self) -> int:

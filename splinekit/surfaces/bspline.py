@@ -19,11 +19,14 @@ from .._validate import (
     as_order,
     as_params,
     as_points,
+    as_positive,
     as_weights,
     finite_points,
     frozen,
     homogeneous,
+    overflow_safe,
 )
+from .. import limits
 from ..basis import algebra
 from ..basis.bspline import basis_ders_t, basis_funs_t, combine, find_span, span_bounds
 from ..basis.jit import kernels
@@ -65,6 +68,7 @@ class SplineSurface:
     def _trusted(cls, pu, pv, ku, kv, coefs, rational):
         if rational and cls is BSplineSurface:
             cls = NurbsSurface
+        finite_points(coefs, "the operation")  # knot algebra near the float limit can overflow
         obj = object.__new__(cls)
         obj._set(int(pu), int(pv), ku, kv, coefs, bool(rational))
         return obj
@@ -153,6 +157,7 @@ class SplineSurface:
         return hash((self._rational, self._pu, self._pv, self._ku.tobytes(), self._kv.tobytes(), self._coefs.tobytes()))
 
     def almost_equal(self, other, tol: float = 1e-12) -> bool:
+        tol = as_positive(tol, "tol", allow_zero=True)
         return (
             isinstance(other, SplineSurface)
             and (self._rational, self._pu, self._pv) == (other._rational, other._pu, other._pv)
@@ -183,9 +188,27 @@ class SplineSurface:
         return u, v
 
     def evaluate(self, u, v) -> np.ndarray:
-        """Points at the pairs ``(u[i], v[i])``: ``u.shape + (dim,)``."""
+        """Points at the pairs ``(u[i], v[i])``: ``u.shape + (dim,)``.
+
+        Always finite (see :meth:`SplineCurve.evaluate <splinekit.curves.bspline.SplineCurve.evaluate>`)."""
         u, v = self._uv(u, v)
         fu, fv = u.ravel(), v.ravel()
+        with np.errstate(over="ignore", invalid="ignore"):
+            pts = self._points(fu, fv)
+        if not np.isfinite(pts).all():
+            pts = overflow_safe(self, lambda s: s._points(fu, fv), self.control_points, 0)
+        return pts.reshape(u.shape + (self.dim,))
+
+    def _scaled(self, k: int):
+        """This surface with its coordinates multiplied by ``2**k`` (exact; weights unchanged)."""
+        coefs = np.array(self._coefs)
+        coefs[..., : self.dim] = np.ldexp(coefs[..., : self.dim], k)
+        obj = object.__new__(type(self))
+        obj._set(self._pu, self._pv, self._ku, self._kv, coefs, self._rational)
+        return obj
+
+    def _points(self, fu, fv):
+        """Points ``(n, dim)`` at checked flat parameters (no overflow handling)."""
         jit = kernels(fu.size)
         if jit is not None:
             pts = np.empty((fu.size, self.dim))
@@ -196,7 +219,7 @@ class SplineSurface:
                 jit.surface_points4(*bases, self._coefs4(), fu, fv, self.dim, self._rational, pts)
             else:
                 jit.surface_points(*bases, self._coefs, fu, fv, self._rational, pts)
-            return pts.reshape(u.shape + (self.dim,))
+            return pts
         su = find_span(self._pu, self._ku, fu)
         sv = find_span(self._pv, self._kv, fv)
         Nu = basis_funs_t(self._pu, self._ku, su, fu)[None]
@@ -204,7 +227,7 @@ class SplineSurface:
         pts = _tensor_combine(self._coefs, self._pu, self._pv, su, sv, Nu, Nv)[0, 0]
         if self._rational:
             pts = pts[:, :-1] / pts[:, -1:]
-        return pts.reshape(u.shape + (self.dim,))
+        return pts
 
     __call__ = evaluate
 
@@ -216,6 +239,13 @@ class SplineSurface:
         order = as_order(order)
         u, v = self._uv(u, v)
         fu, fv = u.ravel(), v.ravel()
+        with np.errstate(over="ignore", invalid="ignore"):
+            ders = self._derivatives(fu, fv, order)
+        if not np.isfinite(ders).all():
+            ders = overflow_safe(self, lambda s: s._derivatives(fu, fv, order), self.control_points, 2)
+        return ders.reshape((order + 1, order + 1) + u.shape + (self.dim,))
+
+    def _derivatives(self, fu, fv, order):
         su = find_span(self._pu, self._ku, fu)
         sv = find_span(self._pv, self._kv, fv)
         Nu = basis_ders_t(self._pu, self._ku, su, fu, order)
@@ -223,14 +253,17 @@ class SplineSurface:
         ders = _tensor_combine(self._coefs, self._pu, self._pv, su, sv, Nu, Nv)
         if self._rational:
             ders = rational_surface_derivatives(ders)
-        return ders.reshape((order + 1, order + 1) + u.shape + (self.dim,))
+        return ders
 
     def _grid_basis(self, us, vs, order=0):
         """Per direction: ``(span (m,), values (order + 1, p + 1, m))``."""
         (du, dv) = self.domain
+        us, vs = as_params(us, du, "us").ravel(), as_params(vs, dv, "vs").ravel()
+        # the grid (and its per-order partials, and one temporary each) before any of it exists
+        limits.check(16.0 * us.size * vs.size * (self._coefs.shape[-1] + 1) * (order + 1) ** 2,
+                     f"a {us.size} x {vs.size} surface grid")
         out = []
-        for p, U, x, name in ((self._pu, self._ku, us, "us"), (self._pv, self._kv, vs, "vs")):
-            x = as_params(x, du if name == "us" else dv, name).ravel()
+        for p, U, x in ((self._pu, self._ku, us), (self._pv, self._kv, vs)):
             span = find_span(p, U, x)
             out.append((span, basis_ders_t(p, U, span, x, order)))
         return out
@@ -290,17 +323,27 @@ class SplineSurface:
         two parameter vectors, never point by point.
         """
         (su, Nu), (sv, Nv) = self._grid_basis(us, vs)
-        return self._grid_contract(su, Nu[0], sv, Nv[0], self._rational)
+        with np.errstate(over="ignore", invalid="ignore"):
+            out = self._grid_contract(su, Nu[0], sv, Nv[0], self._rational)
+        if not np.isfinite(out).all():
+            out = overflow_safe(self, lambda s: s._grid_contract(su, Nu[0], sv, Nv[0], s._rational), self.control_points, 0)
+        return out
 
     def derivatives_grid(self, us, vs, order: int = 1) -> np.ndarray:
         """Partial derivatives on a grid: ``(order + 1, order + 1, len(us), len(vs), dim)``."""
         order = as_order(order)
         (su, Nu), (sv, Nv) = self._grid_basis(us, vs, order)
-        ders = np.stack(
-            [np.stack([self._grid_contract(su, Nu[a], sv, Nv[b], False) for b in range(order + 1)]) for a in range(order + 1)]
-        )
-        if self._rational:
-            ders = rational_surface_derivatives(ders)
+
+        def compute(s):
+            ders = np.stack(
+                [np.stack([s._grid_contract(su, Nu[a], sv, Nv[b], False) for b in range(order + 1)]) for a in range(order + 1)]
+            )
+            return rational_surface_derivatives(ders) if s._rational else ders
+
+        with np.errstate(over="ignore", invalid="ignore"):
+            ders = compute(self)
+        if not np.isfinite(ders).all():
+            ders = overflow_safe(self, compute, self.control_points, 2)
         return ders
 
     @staticmethod
@@ -353,8 +396,16 @@ class SplineSurface:
         """Unit normals ``(Su x Sv) / |Su x Sv|`` at the pairs ``(u, v)``: ``u.shape + (3,)``."""
         self._require_3d()
         u, v = self._uv(u, v)
-        d = self.derivatives(u, v, 1)
-        return self._normalize(self._cross(d[1, 0], d[0, 1]), d[1, 0], d[0, 1], u, v)
+        s = self._unit_sized()
+        d = s.derivatives(u, v, 1)
+        return s._normalize(s._cross(d[1, 0], d[0, 1]), d[1, 0], d[0, 1], u, v)
+
+    def _unit_sized(self):
+        """This surface, or for coordinates beyond ``2**300`` a copy scaled by a power of two
+        to size about 1: normals do not depend on the scale, and ``Su x Sv`` of a huge
+        surface would overflow."""
+        big = float(np.abs(self.control_points).max())
+        return self if big < 2.0**300 else self._scaled(-int(np.frexp(big)[1]))
 
     def normal_grid(self, us, vs) -> np.ndarray:
         """Unit normals on the grid ``us x vs``: ``(len(us), len(vs), 3)``.
@@ -364,6 +415,8 @@ class SplineSurface:
         ``(Au - wu C) x (Av - wv C)``, so no full quotient rule is needed.
         """
         self._require_3d()
+        if self._unit_sized() is not self:
+            return self._unit_sized().normal_grid(us, vs)
         (su, Nu), (sv, Nv) = self._grid_basis(us, vs, 1)
         jit = kernels(su.size * sv.size)
         if jit is not None:

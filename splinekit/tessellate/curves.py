@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from .. import limits
 from ..basis import algebra
 from ..basis.bernstein import all_bernstein
 from ..mesh.topology import ranges
@@ -21,6 +22,9 @@ __all__ = ["tessellate_curve"]
 
 MAX_COUNT = 1 << 16
 MAX_ROUNDS = 8
+BYTES_PER_POINT = 64
+"""Peak memory per polyline point and coordinate (points, midpoints, tangents and
+their temporaries), charged to the memory budget (:mod:`splinekit.limits`)."""
 
 
 def _span_bounds(p, segs):
@@ -64,6 +68,8 @@ def tessellate_curve(curve, tol: float, angle_tol) -> Polyline:
             n = np.maximum(n, np.where(L > 0, M / (L * angle_tol), 0.0))
     counts = np.clip(np.ceil(np.nan_to_num(n, nan=MAX_COUNT, posinf=MAX_COUNT)), 1, MAX_COUNT).astype(np.int64)
     for _ in range(MAX_ROUNDS):
+        total = float(counts.sum()) + 1.0
+        limits.check(total * BYTES_PER_POINT * (curve.dim + 1), f"a polyline at tolerance {tol:.3g} ({total:,.0f} points)")
         t, span = _params(breaks, counts)
         X = curve.evaluate(t)
         mid = 0.5 * (t[:-1] + t[1:])
