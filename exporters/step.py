@@ -27,6 +27,7 @@ from splinekit.errors import ExportError, FileFormatError, ParameterError
 from splinekit.interop.occ import from_occ, require_ocp, to_shape
 
 from ._meshio import _fspath, check_target
+from ._stepscan import scan_step
 
 __all__ = ["export_step", "import_step", "StepItem", "STEP_UNITS"]
 
@@ -358,13 +359,16 @@ def import_step(path, *, unit: str = "mm") -> list[StepItem]:
     ``unit`` (millimetres by default), converted from the unit the file declares.
 
     Raises FileFormatError if ``path`` is missing, unreadable or not STEP, or
-    holds no geometry; ParameterError if ``path`` is not a path (``None``, an
+    holds no geometry, or nests parentheses deeper than OCC's parser survives
+    (see :mod:`exporters._stepscan`); ResourceLimitError if OCC's model of the
+    file would exceed the memory budget; ParameterError if ``path`` is not a path (``None``, an
     empty string) or ``unit`` is unknown.
     """
     path = _fspath(path)
     _, metres = _unit(unit)
     if not os.path.isfile(path):
         raise FileFormatError(f"STEP file {path!r} does not exist or is not a file")
+    scan_step(path)  # OCC's parser crashes the process on some inputs: refuse them first
     IFSelect, _, _, STEPCAFControl, _, _, TDataStd, TDF, _, XCAFDoc = _ocp_step()
     doc = _new_document(metres)
     with _occ_settings():
