@@ -18,6 +18,7 @@ import os
 
 import numpy as np
 
+from splinekit import limits
 from splinekit._atomic import atomic_write
 from splinekit.errors import (
     ExportError,
@@ -304,10 +305,13 @@ def format_polygons(prefix: str, corner: str, values: np.ndarray, offsets: np.nd
 
 # -- reading ----------------------------------------------------------------------------------
 def read_bytes(path, what: str) -> bytes:
-    """The whole file; a missing or unreadable file raises :class:`FileFormatError` naming it."""
+    """The whole file; a missing or unreadable file raises :class:`FileFormatError` naming it, one
+    larger than the memory budget :class:`~splinekit.errors.ResourceLimitError` before reading."""
     path = _fspath(path)
     try:
         with open(path, "rb") as fh:
+            size = os.fstat(fh.fileno()).st_size
+            limits.check(size, f"reading the {size}-byte {what} {path!r}")
             return fh.read()
     except OSError as exc:
         reason = exc.strerror or str(exc) or type(exc).__name__

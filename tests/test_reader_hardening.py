@@ -201,3 +201,189 @@ def test_step_scan_is_linear_on_a_large_file(tmp_path):
         times[mib] = (time.perf_counter() - start) / mib
         assert scan.depth == 3
     assert times[32] < 3 * times[4] + 0.01
+
+
+# -- 3MF ---------------------------------------------------------------------------------------
+CORE_NS = "http://schemas.microsoft.com/3dmanufacturing/core/2015/02"
+RELS = ('<?xml version="1.0"?><Relationships xmlns="http://schemas.openxmlformats.org/package/2006/relationships">'
+        '<Relationship Target="/3D/3dmodel.model" Id="rel0" '
+        'Type="http://schemas.microsoft.com/3dmanufacturing/2013/01/3dmodel"/></Relationships>')
+
+
+def write_3mf(path, model, rels=RELS, method=zipfile.ZIP_DEFLATED):
+    """A 3MF package whose model part is ``model`` (str, bytes, or an iterable of bytes chunks)."""
+    with zipfile.ZipFile(path, "w", compression=method) as z:
+        if rels is not None:
+            z.writestr("_rels/.rels", rels)
+        if isinstance(model, (str, bytes)):
+            z.writestr("3D/3dmodel.model", model)
+        else:
+            with z.open("3D/3dmodel.model", "w", force_zip64=True) as fh:
+                for chunk in model:
+                    fh.write(chunk)
+    return path
+
+
+def mesh_object(oid, V, T) -> str:
+    vs = "".join(f'<vertex x="{x!r}" y="{y!r}" z="{z!r}"/>' for x, y, z in np.asarray(V, dtype=float).tolist())
+    ts = "".join(f'<triangle v1="{a}" v2="{b}" v3="{c}"/>' for a, b, c in np.asarray(T).tolist())
+    return f'<object id="{oid}" type="model"><mesh><vertices>{vs}</vertices><triangles>{ts}</triangles></mesh></object>'
+
+
+def model_xml(resources: str, build: str = "") -> str:
+    return (f'<?xml version="1.0" encoding="UTF-8"?><model unit="millimeter" xmlns="{CORE_NS}">'
+            f"<resources>{resources}</resources><build>{build}</build></model>")
+
+
+TETRA_V = np.array([[0.0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]])
+TETRA_T = np.array([[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]])
+
+
+def _transform_text(M) -> str:
+    """3MF's transform attribute of a 4 x 4 row-vector affine matrix."""
+    return " ".join(repr(float(v)) for v in np.asarray(M)[:, :3].ravel())
+
+
+def _affine(rng) -> np.ndarray:
+    M = np.eye(4)
+    M[:3, :3] = rng.standard_normal((3, 3))
+    M[3, :3] = rng.standard_normal(3) * 10
+    return M
+
+
+def test_3mf_xml_is_parsed_in_linear_time(tmp_path):
+    """200 KB of unclosed <object tags took 19-22 s with the regular expressions; now milliseconds."""
+    head = f'<?xml version="1.0"?><model xmlns="{CORE_NS}"><resources>'.encode()
+    for body in (b"<object " * 25_600, b"".join(b'<object id="%d">' % i for i in range(14_000))):
+        path = write_3mf(tmp_path / "slow.3mf", head + body)
+        start = time.perf_counter()
+        with pytest.raises(FileFormatError, match=r"slow\.3mf.*(not well-formed|no element found)"):
+            exporters.import_3mf(path)
+        assert time.perf_counter() - start < 2.0
+
+
+def test_3mf_zip_bomb_is_refused_before_it_is_inflated(tmp_path):
+    """A model part that inflates to 256 MiB (from a few hundred KB) is refused from its declared
+    size; the reader's memory stays far below it."""
+    head = model_xml(mesh_object(1, TETRA_V, TETRA_T)).encode()
+    chunks = [head[:-len(b"</model>")]] + [b" " * 2**20] * 256 + [b"</model>"]
+    path = write_3mf(tmp_path / "bomb.3mf", chunks)
+    assert os.path.getsize(path) < 2**20
+    before = _peak_mb()
+    with limits.budget("128M"), pytest.raises(ResourceLimitError, match=r"bomb\.3mf"):
+        exporters.import_3mf(path)
+    assert _peak_mb() - before < 64
+
+
+def test_3mf_member_larger_than_its_header_says_is_refused(tmp_path):
+    """A zip whose headers understate the model part's size: reading stops at the declared size."""
+    model = model_xml(mesh_object(1, TETRA_V, TETRA_T)).encode() + b" " * 100_000
+    path = write_3mf(tmp_path / "liar.3mf", model)
+    raw = bytearray(path.read_bytes())
+    true = struct.pack("<I", len(model))
+    for at in [m.start() for m in re.finditer(re.escape(true), bytes(raw))]:  # local and central headers
+        raw[at:at + 4] = struct.pack("<I", 1000)
+    path.write_bytes(bytes(raw))
+    with pytest.raises(FileFormatError, match=r"liar\.3mf"):
+        exporters.import_3mf(path)
+
+
+def test_3mf_build_instancing_is_estimated_before_expanding(tmp_path):
+    """3,000 build items of one 1,000-vertex object (a 40 KB file) expand to 3M vertices: refused
+    under a 64 MiB budget before any copy is made."""
+    rng = np.random.default_rng(0)
+    V = rng.standard_normal((1000, 3))
+    T = np.stack([np.zeros(998, int), np.arange(1, 999), np.arange(2, 1000)], axis=1)
+    path = write_3mf(tmp_path / "items.3mf", model_xml(mesh_object(1, V, T), '<item objectid="1"/>' * 3000))
+    before = _peak_mb()
+    with limits.budget("64M"), pytest.raises(ResourceLimitError, match=r"3000000 vertices.*items\.3mf|items\.3mf.*3000000 vertices"):
+        exporters.import_3mf(path)
+    assert _peak_mb() - before < 48
+
+
+def test_3mf_component_bomb_is_refused(tmp_path):
+    """Twelve levels of ten components each: 10**12 copies of a tetrahedron from a 2 KB file."""
+    resources = mesh_object(1, TETRA_V, TETRA_T)
+    for level in range(2, 14):
+        resources += f'<object id="{level}"><components>' + f'<component objectid="{level - 1}"/>' * 10 + "</components></object>"
+    path = write_3mf(tmp_path / "nest.3mf", model_xml(resources, '<item objectid="13"/>'))
+    with pytest.raises(ResourceLimitError, match=r"4000000000000 vertices"):
+        exporters.import_3mf(path)
+    cyc = model_xml(mesh_object(1, TETRA_V, TETRA_T) + '<object id="2"><components><component objectid="3"/></components></object>'
+                    '<object id="3"><components><component objectid="2"/></components></object>', '<item objectid="2"/>')
+    with pytest.raises(FileFormatError, match="contains itself"):
+        exporters.import_3mf(write_3mf(tmp_path / "cycle.3mf", cyc))
+
+
+def test_3mf_components_are_placed_like_trimesh_places_them(tmp_path):
+    """An object of two placed copies of a tetrahedron, itself placed by a build item: the same
+    vertices as the transforms applied point by point, and as trimesh's 3MF loader finds."""
+    rng = np.random.default_rng(1)
+    A, B, item = _affine(rng), _affine(rng), _affine(rng)
+    resources = (mesh_object(1, TETRA_V, TETRA_T)
+                 + f'<object id="2"><components><component objectid="1" transform="{_transform_text(A)}"/>'
+                   f'<component objectid="1" transform="{_transform_text(B)}"/></components></object>')
+    path = write_3mf(tmp_path / "comp.3mf", model_xml(resources, f'<item objectid="2" transform="{_transform_text(item)}"/>'))
+    mesh = exporters.import_3mf(path)
+    expected = [[*(np.array([*p, 1.0]) @ C @ item)[:3]] for C in (A, B) for p in TETRA_V.tolist()]
+    np.testing.assert_allclose(mesh.vertices, expected, rtol=1e-12, atol=1e-12)
+    assert mesh.n_faces == 8
+    trimesh = pytest.importorskip("trimesh")
+    pytest.importorskip("lxml")
+    other = trimesh.load(str(path), force="mesh")
+    np.testing.assert_allclose(np.sort(other.vertices, axis=0), np.sort(mesh.vertices, axis=0), rtol=1e-9, atol=1e-9)
+
+
+def test_3mf_transform_that_overflows_is_refused(tmp_path):
+    big = "1e300 0 0 0 1e300 0 0 0 1e300 0 0 0"
+    path = write_3mf(tmp_path / "inf.3mf", model_xml(mesh_object(1, TETRA_V * 1e10, TETRA_T), f'<item objectid="1" transform="{big}"/>'))
+    with pytest.raises(FileFormatError, match=r"inf\.3mf.*beyond the float64 range"):
+        exporters.import_3mf(path)
+
+
+def test_3mf_dtd_and_entities_are_refused(tmp_path):
+    laughs = ('<?xml version="1.0"?><!DOCTYPE model [<!ENTITY a "aaaaaaaaaa"><!ENTITY b "&a;&a;&a;&a;&a;&a;&a;&a;&a;&a;">'
+              '<!ENTITY c "&b;&b;&b;&b;&b;&b;&b;&b;&b;&b;">]>'
+              f'<model xmlns="{CORE_NS}"><metadata name="x">&c;</metadata><resources>{mesh_object(1, TETRA_V, TETRA_T)}'
+              '</resources></model>')
+    with pytest.raises(FileFormatError, match=r"laughs\.3mf.*DOCTYPE"):
+        exporters.import_3mf(write_3mf(tmp_path / "laughs.3mf", laughs))
+    external = f'<?xml version="1.0"?><model xmlns="{CORE_NS}"><metadata>&ext;</metadata></model>'
+    with pytest.raises(FileFormatError, match="undefined entity"):
+        exporters.import_3mf(write_3mf(tmp_path / "ext.3mf", external))
+
+
+def test_3mf_broken_packages_raise_only_file_format_errors(tmp_path):
+    """Damage that leaked zlib.error, RuntimeError, NotImplementedError, UnicodeDecodeError or
+    AttributeError from the zip and regex reader."""
+    good = tmp_path / "good.3mf"
+    exporters.export_3mf(good, primitives.box())
+    raw = good.read_bytes()
+    cases = {}
+    # a corrupt deflate stream: flip bytes in the middle of the model's compressed data
+    at = raw.find(b"3D/3dmodel.model") + 40
+    cases["zlib"] = raw[:at] + bytes(b ^ 0x5A for b in raw[at:at + 64]) + raw[at + 64:]
+    # an encrypted member (flag bit 0 set in the local and central headers)
+    enc = bytearray(raw)
+    for m in re.finditer(rb"PK\x03\x04|PK\x01\x02", raw):
+        flag_at = m.start() + (6 if raw[m.start() + 2] == 3 else 8)
+        enc[flag_at] |= 1
+    cases["encrypted"] = bytes(enc)
+    # an unknown compression method (99)
+    odd = bytearray(raw)
+    for m in re.finditer(rb"PK\x03\x04|PK\x01\x02", raw):
+        method_at = m.start() + (8 if raw[m.start() + 2] == 3 else 10)
+        odd[method_at:method_at + 2] = struct.pack("<H", 99)
+    cases["method"] = bytes(odd)
+    for name, content in cases.items():
+        path = tmp_path / f"{name}.3mf"
+        path.write_bytes(content)
+        with pytest.raises(FileFormatError, match=re.escape(path.name)):
+            exporters.import_3mf(path)
+    # a relationship target that is not UTF-8 / missing
+    bad_rels = RELS.replace('Target="/3D/3dmodel.model" ', "").encode()
+    with pytest.raises(FileFormatError, match="no Target"):
+        exporters.import_3mf(write_3mf(tmp_path / "rels.3mf", model_xml(mesh_object(1, TETRA_V, TETRA_T)), rels=bad_rels))
+    latin = RELS.replace("/3D/3dmodel.model", "/3D/\xe9.model").encode("latin-1")
+    with pytest.raises(FileFormatError, match=r"latin\.3mf"):
+        exporters.import_3mf(write_3mf(tmp_path / "latin.3mf", model_xml(mesh_object(1, TETRA_V, TETRA_T)), rels=latin))
