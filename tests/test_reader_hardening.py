@@ -387,3 +387,111 @@ def test_3mf_broken_packages_raise_only_file_format_errors(tmp_path):
     latin = RELS.replace("/3D/3dmodel.model", "/3D/\xe9.model").encode("latin-1")
     with pytest.raises(FileFormatError, match=r"latin\.3mf"):
         exporters.import_3mf(write_3mf(tmp_path / "latin.3mf", model_xml(mesh_object(1, TETRA_V, TETRA_T)), rels=latin))
+
+
+# -- glTF binary -------------------------------------------------------------------------------
+def glb(doc, binary: bytes = b"") -> bytes:
+    """A GLB file of the JSON document ``doc`` (any JSON value, or raw bytes) and a BIN chunk."""
+    text = doc if isinstance(doc, bytes) else json.dumps(doc).encode()
+    text += b" " * (-len(text) % 4)
+    binary += b"\0" * (-len(binary) % 4)
+    chunks = struct.pack("<I4s", len(text), b"JSON") + text
+    if binary:
+        chunks += struct.pack("<I4s", len(binary), b"BIN\0") + binary
+    return struct.pack("<III", 0x46546C67, 2, 12 + len(chunks)) + chunks
+
+
+def tetra_gltf(nodes, scene_nodes, n_points: int = 4):
+    """A document with one triangle mesh of ``n_points`` points (a fan) and the given nodes."""
+    P = np.zeros((n_points, 3), dtype="<f4")
+    P[:, 0] = np.arange(n_points)
+    P[1::2, 1] = 1.0
+    T = np.stack([np.zeros(n_points - 2), np.arange(1, n_points - 1), np.arange(2, n_points)], axis=1).astype("<u4")
+    binary = P.tobytes() + T.tobytes()
+    doc = {
+        "asset": {"version": "2.0"}, "scene": 0, "scenes": [{"nodes": scene_nodes}], "nodes": nodes,
+        "meshes": [{"primitives": [{"attributes": {"POSITION": 0}, "indices": 1}]}],
+        "buffers": [{"byteLength": len(binary)}],
+        "bufferViews": [{"buffer": 0, "byteOffset": 0, "byteLength": P.nbytes},
+                        {"buffer": 0, "byteOffset": P.nbytes, "byteLength": T.nbytes}],
+        "accessors": [{"bufferView": 0, "componentType": 5126, "count": n_points, "type": "VEC3"},
+                      {"bufferView": 1, "componentType": 5125, "count": T.size, "type": "SCALAR"}],
+    }
+    return doc, binary
+
+
+def test_gltf_json_of_the_wrong_types_raises_file_format_errors(tmp_path):
+    """Each of these leaked AttributeError, TypeError, OverflowError or RecursionError, or read a
+    Python negative index as a valid one."""
+    doc, binary = tetra_gltf([{"mesh": 0}], [0])
+    exporters.import_glb(_write(tmp_path / "ok.glb", glb(doc, binary)))  # the base document reads
+
+    def variant(change):
+        d = json.loads(json.dumps(doc))
+        change(d)
+        return d
+
+    cases = {
+        "list": [doc],
+        "nodes": variant(lambda d: d.update(nodes={"0": {"mesh": 0}})),
+        "node": variant(lambda d: d.update(nodes=[5])),
+        "scene": variant(lambda d: d["scenes"].__setitem__(0, "all")),
+        "children": variant(lambda d: d["nodes"][0].update(children=[-1])),
+        "negmesh": variant(lambda d: d["nodes"][0].update(mesh=-1)),
+        "boolmesh": variant(lambda d: d["nodes"][0].update(mesh=True)),
+        "prims": variant(lambda d: d["meshes"][0].update(primitives={"a": 1})),
+        "attrs": variant(lambda d: d["meshes"][0]["primitives"][0].update(attributes=[0])),
+        "count": variant(lambda d: d["accessors"][0].update(count=1e400)),
+        "strcount": variant(lambda d: d["accessors"][0].update(count="4")),
+        "stride": variant(lambda d: d["bufferViews"][0].update(byteStride=-12)),
+        "matrix": variant(lambda d: d["nodes"][0].update(matrix=[[1, 0, 0, 0]] * 4)),
+        "nanscale": variant(lambda d: d["nodes"][0].update(scale=[1, float("nan"), 1])),
+        "floatidx": variant(lambda d: d["accessors"][1].update(componentType=5126)),
+        "ext": variant(lambda d: d.update(extensionsRequired="KHR_draco_mesh_compression")),
+    }
+    for name, bad in cases.items():
+        path = _write(tmp_path / f"{name}.glb", glb(bad, binary))
+        with pytest.raises(FileFormatError, match=re.escape(path.name)):
+            exporters.import_glb(path)
+    deep = _write(tmp_path / "deep.glb", glb(b"[" * 100_000 + b"]" * 100_000))
+    with pytest.raises(FileFormatError, match=r"deep\.glb.*nests too deeply"):
+        exporters.import_glb(deep)
+
+
+def _write(path, content: bytes):
+    path.write_bytes(content)
+    return path
+
+
+def test_gltf_node_graph_must_be_trees(tmp_path):
+    """A node listed twice as a child doubles the mesh per level: 40 levels gave 2**40 copies
+    from a 2 KB file. Such graphs (and cycles) are refused; glTF requires trees."""
+    nodes = [{"children": [i + 1, i + 1]} for i in range(40)] + [{"mesh": 0}]
+    doc, binary = tetra_gltf(nodes, [0])
+    with pytest.raises(FileFormatError, match=r"dag\.glb.*nodes\[1\] is a child of nodes\[0\] and nodes\[0\]"):
+        exporters.import_glb(_write(tmp_path / "dag.glb", glb(doc, binary)))
+    doc, binary = tetra_gltf([{"mesh": 0, "children": [1]}, {"children": [0]}], [0])
+    with pytest.raises(FileFormatError, match=r"cycle\.glb.*reached twice"):
+        exporters.import_glb(_write(tmp_path / "cycle.glb", glb(doc, binary)))
+
+
+def test_gltf_instancing_is_estimated_before_expanding(tmp_path):
+    """3,000 nodes placing one 1,000-point mesh (a 100 KB file) expand to 3M vertices: refused
+    under a 64 MiB budget before any copy; a tree of placed copies reads like trimesh reads it."""
+    nodes = [{"mesh": 0, "translation": [0, 0, float(i)]} for i in range(3000)]
+    doc, binary = tetra_gltf(nodes, list(range(3000)), n_points=1000)
+    path = _write(tmp_path / "many.glb", glb(doc, binary))
+    before = _peak_mb()
+    with limits.budget("64M"), pytest.raises(ResourceLimitError, match=r"3000000 vertices"):
+        exporters.import_glb(path)
+    assert _peak_mb() - before < 48
+    # a small tree: a parent that scales and two translated children
+    nodes = [{"scale": [2, 2, 2], "children": [1, 2]}, {"mesh": 0, "translation": [10, 0, 0]},
+             {"mesh": 0, "rotation": [0, 0, 0.6, 0.8]}]
+    doc, binary = tetra_gltf(nodes, [0])
+    path = _write(tmp_path / "tree.glb", glb(doc, binary))
+    mesh = exporters.import_glb(path)
+    assert len(mesh.vertices) == 8 and mesh.n_faces == 4
+    trimesh = pytest.importorskip("trimesh")
+    other = trimesh.load(str(path), force="mesh", process=False)
+    np.testing.assert_allclose(np.sort(mesh.vertices, axis=0), np.sort(other.vertices, axis=0), atol=1e-6)
