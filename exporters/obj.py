@@ -3,8 +3,9 @@
 The writer keeps polygons as they are (no triangulation) and writes coordinates as the shortest
 round-trip text of their float64 values, so writing and reading a mesh gives it back exactly. The
 reader accepts the ``v``, ``v/vt``, ``v//vn`` and ``v/vt/vn`` corner forms, negative (relative)
-indices, faces of any size and ``\\``-continued lines; texture coordinates, normals, groups,
-objects, materials, lines and points are checked or skipped but not returned.
+indices, faces of any size, ``\\``-continued lines and any line ending (``\\n``, ``\\r\\n``, ``\\r``);
+texture coordinates, normals, groups, objects, materials, lines and points are checked or skipped
+but not returned.
 """
 
 from __future__ import annotations
@@ -119,7 +120,10 @@ def import_obj(path):
     """
     data = _meshio.read_bytes(path, "OBJ file")
     what = f"OBJ file {_meshio._fspath(path)!r}"
-    text = data.replace(b"\\\r\n", b" ").replace(b"\\\n", b" ")  # continued lines
+    # lines may end in \n, \r\n or \r alone (classic Mac OS): one convention from here on
+    if b"\r" in data:
+        data = data.replace(b"\r\n", b"\n").replace(b"\r", b"\n")
+    text = data.replace(b"\\\n", b" ")  # continued lines
 
     kinds = np.array(_KIND_RE.findall(text), dtype="S2")
     is_v, is_vt, is_vn, is_f = (kinds == k for k in (b"v", b"vt", b"vn", b"f"))

@@ -495,3 +495,42 @@ def test_gltf_instancing_is_estimated_before_expanding(tmp_path):
     trimesh = pytest.importorskip("trimesh")
     other = trimesh.load(str(path), force="mesh", process=False)
     np.testing.assert_allclose(np.sort(mesh.vertices, axis=0), np.sort(other.vertices, axis=0), atol=1e-6)
+
+
+# -- PLY, OBJ, STL ------------------------------------------------------------------------------
+@pytest.mark.parametrize("binary", [True, False])
+def test_ply_header_ends_at_the_end_header_line_not_at_a_comment(tmp_path, binary):
+    """A comment mentioning end_header cut the header there: the body was read from the wrong
+    offset (silent garbage in binary files)."""
+    mesh = primitives.box()
+    path = tmp_path / "m.ply"
+    exporters.export_ply(path, mesh, binary=binary)
+    raw = path.read_bytes()
+    crafted = raw.replace(b"end_header\n", b"comment the line after this one is end_header\nend_header\n", 1)
+    crafted = crafted.replace(b"element vertex", b"comment end_header marks the end of the header\nelement vertex", 1)
+    path.write_bytes(crafted)
+    got = exporters.import_ply(path)
+    np.testing.assert_array_equal(got.vertices, mesh.vertices)
+    np.testing.assert_array_equal(got.face_indices, mesh.face_indices)
+
+
+@pytest.mark.parametrize("ending", [b"\r", b"\r\n", b"\n", b"mixed"])
+def test_obj_accepts_every_line_ending(tmp_path, ending):
+    """CR-only files (classic Mac OS) read as one vertex and no faces, silently."""
+    mesh = primitives.box()
+    path = tmp_path / "m.obj"
+    exporters.export_obj(path, mesh)
+    lines = path.read_bytes().split(b"\n")
+    if ending == b"mixed":
+        text = b"".join(line + (b"\r", b"\r\n", b"\n")[i % 3] for i, line in enumerate(lines))
+    else:
+        text = ending.join(lines)
+    text = text.replace(b"f 1//1", b"f \\" + (b"\r" if ending == b"\r" else b"\n") + b"1//1", 1)  # a continued line
+    path.write_bytes(text)
+    got = exporters.import_obj(path)
+    np.testing.assert_array_equal(got.vertices, mesh.vertices)
+    np.testing.assert_array_equal(got.face_indices, mesh.face_indices)
+    # error messages count lines the same way with any ending
+    path.write_bytes(ending.replace(b"mixed", b"\r").join([b"v 0 0 0", b"v 1 0 0", b"v 0 1", b"f 1 2 3"]))
+    with pytest.raises(FileFormatError, match=r"vertex 2 \(line 3\)"):
+        exporters.import_obj(path)
