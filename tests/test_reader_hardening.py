@@ -11,7 +11,6 @@ character-by-character reference on generated text.
 from __future__ import annotations
 
 import glob
-import io
 import json
 import os
 import re
@@ -20,7 +19,6 @@ import struct
 import subprocess
 import sys
 import time
-import zipfile
 
 import numpy as np
 import pytest
@@ -30,24 +28,17 @@ from hypothesis import strategies as st
 import exporters
 from exporters import _stepscan
 from splinekit import limits
-from splinekit.errors import FileFormatError, ResourceLimitError, SplineKitError
+from splinekit.errors import FileFormatError, ResourceLimitError
 from splinekit.mesh import primitives
+
+from _readerfiles import (
+    CORE_NS, RELS, STEP_HEAD, STEP_TAIL, TETRA_T, TETRA_V, glb, mesh_object, model_xml, nested_step, tetra_gltf,
+    write_3mf, write_bytes,
+)
 
 REPO = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 STEP_DATA = os.path.join(REPO, "..", "shared", "data", "step")
 STEP_FILES = sorted(f for f in glob.glob(os.path.join(STEP_DATA, "*")) if f.lower().endswith((".stp", ".step")))
-
-STEP_HEAD = (
-    "ISO-10303-21;\nHEADER;\nFILE_DESCRIPTION((''),'2;1');\n"
-    "FILE_NAME('x','2020-01-01T00:00:00',(''),(''),'','','');\n"
-    "FILE_SCHEMA(('AUTOMOTIVE_DESIGN'));\nENDSEC;\nDATA;\n"
-)
-STEP_TAIL = "ENDSEC;\nEND-ISO-10303-21;\n"
-
-
-def nested_step(depth: int) -> str:
-    """A syntactically valid STEP file whose one point nests its coordinates ``depth`` lists deep."""
-    return STEP_HEAD + "#1=CARTESIAN_POINT(''," + "(" * depth + "0." + ")" * depth + ");\n" + STEP_TAIL
 
 
 def _peak_mb() -> float:
@@ -204,41 +195,6 @@ def test_step_scan_is_linear_on_a_large_file(tmp_path):
 
 
 # -- 3MF ---------------------------------------------------------------------------------------
-CORE_NS = "http://schemas.microsoft.com/3dmanufacturing/core/2015/02"
-RELS = ('<?xml version="1.0"?><Relationships xmlns="http://schemas.openxmlformats.org/package/2006/relationships">'
-        '<Relationship Target="/3D/3dmodel.model" Id="rel0" '
-        'Type="http://schemas.microsoft.com/3dmanufacturing/2013/01/3dmodel"/></Relationships>')
-
-
-def write_3mf(path, model, rels=RELS, method=zipfile.ZIP_DEFLATED):
-    """A 3MF package whose model part is ``model`` (str, bytes, or an iterable of bytes chunks)."""
-    with zipfile.ZipFile(path, "w", compression=method) as z:
-        if rels is not None:
-            z.writestr("_rels/.rels", rels)
-        if isinstance(model, (str, bytes)):
-            z.writestr("3D/3dmodel.model", model)
-        else:
-            with z.open("3D/3dmodel.model", "w", force_zip64=True) as fh:
-                for chunk in model:
-                    fh.write(chunk)
-    return path
-
-
-def mesh_object(oid, V, T) -> str:
-    vs = "".join(f'<vertex x="{x!r}" y="{y!r}" z="{z!r}"/>' for x, y, z in np.asarray(V, dtype=float).tolist())
-    ts = "".join(f'<triangle v1="{a}" v2="{b}" v3="{c}"/>' for a, b, c in np.asarray(T).tolist())
-    return f'<object id="{oid}" type="model"><mesh><vertices>{vs}</vertices><triangles>{ts}</triangles></mesh></object>'
-
-
-def model_xml(resources: str, build: str = "") -> str:
-    return (f'<?xml version="1.0" encoding="UTF-8"?><model unit="millimeter" xmlns="{CORE_NS}">'
-            f"<resources>{resources}</resources><build>{build}</build></model>")
-
-
-TETRA_V = np.array([[0.0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]])
-TETRA_T = np.array([[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]])
-
-
 def _transform_text(M) -> str:
     """3MF's transform attribute of a 4 x 4 row-vector affine matrix."""
     return " ".join(repr(float(v)) for v in np.asarray(M)[:, :3].ravel())
@@ -390,41 +346,11 @@ def test_3mf_broken_packages_raise_only_file_format_errors(tmp_path):
 
 
 # -- glTF binary -------------------------------------------------------------------------------
-def glb(doc, binary: bytes = b"") -> bytes:
-    """A GLB file of the JSON document ``doc`` (any JSON value, or raw bytes) and a BIN chunk."""
-    text = doc if isinstance(doc, bytes) else json.dumps(doc).encode()
-    text += b" " * (-len(text) % 4)
-    binary += b"\0" * (-len(binary) % 4)
-    chunks = struct.pack("<I4s", len(text), b"JSON") + text
-    if binary:
-        chunks += struct.pack("<I4s", len(binary), b"BIN\0") + binary
-    return struct.pack("<III", 0x46546C67, 2, 12 + len(chunks)) + chunks
-
-
-def tetra_gltf(nodes, scene_nodes, n_points: int = 4):
-    """A document with one triangle mesh of ``n_points`` points (a fan) and the given nodes."""
-    P = np.zeros((n_points, 3), dtype="<f4")
-    P[:, 0] = np.arange(n_points)
-    P[1::2, 1] = 1.0
-    T = np.stack([np.zeros(n_points - 2), np.arange(1, n_points - 1), np.arange(2, n_points)], axis=1).astype("<u4")
-    binary = P.tobytes() + T.tobytes()
-    doc = {
-        "asset": {"version": "2.0"}, "scene": 0, "scenes": [{"nodes": scene_nodes}], "nodes": nodes,
-        "meshes": [{"primitives": [{"attributes": {"POSITION": 0}, "indices": 1}]}],
-        "buffers": [{"byteLength": len(binary)}],
-        "bufferViews": [{"buffer": 0, "byteOffset": 0, "byteLength": P.nbytes},
-                        {"buffer": 0, "byteOffset": P.nbytes, "byteLength": T.nbytes}],
-        "accessors": [{"bufferView": 0, "componentType": 5126, "count": n_points, "type": "VEC3"},
-                      {"bufferView": 1, "componentType": 5125, "count": T.size, "type": "SCALAR"}],
-    }
-    return doc, binary
-
-
 def test_gltf_json_of_the_wrong_types_raises_file_format_errors(tmp_path):
     """Each of these leaked AttributeError, TypeError, OverflowError or RecursionError, or read a
     Python negative index as a valid one."""
     doc, binary = tetra_gltf([{"mesh": 0}], [0])
-    exporters.import_glb(_write(tmp_path / "ok.glb", glb(doc, binary)))  # the base document reads
+    exporters.import_glb(write_bytes(tmp_path / "ok.glb", glb(doc, binary)))  # the base document reads
 
     def variant(change):
         d = json.loads(json.dumps(doc))
@@ -450,17 +376,12 @@ def test_gltf_json_of_the_wrong_types_raises_file_format_errors(tmp_path):
         "ext": variant(lambda d: d.update(extensionsRequired="KHR_draco_mesh_compression")),
     }
     for name, bad in cases.items():
-        path = _write(tmp_path / f"{name}.glb", glb(bad, binary))
+        path = write_bytes(tmp_path / f"{name}.glb", glb(bad, binary))
         with pytest.raises(FileFormatError, match=re.escape(path.name)):
             exporters.import_glb(path)
-    deep = _write(tmp_path / "deep.glb", glb(b"[" * 100_000 + b"]" * 100_000))
+    deep = write_bytes(tmp_path / "deep.glb", glb(b"[" * 100_000 + b"]" * 100_000))
     with pytest.raises(FileFormatError, match=r"deep\.glb.*nests too deeply"):
         exporters.import_glb(deep)
-
-
-def _write(path, content: bytes):
-    path.write_bytes(content)
-    return path
 
 
 def test_gltf_node_graph_must_be_trees(tmp_path):
@@ -469,10 +390,10 @@ def test_gltf_node_graph_must_be_trees(tmp_path):
     nodes = [{"children": [i + 1, i + 1]} for i in range(40)] + [{"mesh": 0}]
     doc, binary = tetra_gltf(nodes, [0])
     with pytest.raises(FileFormatError, match=r"dag\.glb.*nodes\[1\] is a child of nodes\[0\] and nodes\[0\]"):
-        exporters.import_glb(_write(tmp_path / "dag.glb", glb(doc, binary)))
+        exporters.import_glb(write_bytes(tmp_path / "dag.glb", glb(doc, binary)))
     doc, binary = tetra_gltf([{"mesh": 0, "children": [1]}, {"children": [0]}], [0])
     with pytest.raises(FileFormatError, match=r"cycle\.glb.*reached twice"):
-        exporters.import_glb(_write(tmp_path / "cycle.glb", glb(doc, binary)))
+        exporters.import_glb(write_bytes(tmp_path / "cycle.glb", glb(doc, binary)))
 
 
 def test_gltf_instancing_is_estimated_before_expanding(tmp_path):
@@ -480,7 +401,7 @@ def test_gltf_instancing_is_estimated_before_expanding(tmp_path):
     under a 64 MiB budget before any copy; a tree of placed copies reads like trimesh reads it."""
     nodes = [{"mesh": 0, "translation": [0, 0, float(i)]} for i in range(3000)]
     doc, binary = tetra_gltf(nodes, list(range(3000)), n_points=1000)
-    path = _write(tmp_path / "many.glb", glb(doc, binary))
+    path = write_bytes(tmp_path / "many.glb", glb(doc, binary))
     before = _peak_mb()
     with limits.budget("64M"), pytest.raises(ResourceLimitError, match=r"3000000 vertices"):
         exporters.import_glb(path)
@@ -489,7 +410,7 @@ def test_gltf_instancing_is_estimated_before_expanding(tmp_path):
     nodes = [{"scale": [2, 2, 2], "children": [1, 2]}, {"mesh": 0, "translation": [10, 0, 0]},
              {"mesh": 0, "rotation": [0, 0, 0.6, 0.8]}]
     doc, binary = tetra_gltf(nodes, [0])
-    path = _write(tmp_path / "tree.glb", glb(doc, binary))
+    path = write_bytes(tmp_path / "tree.glb", glb(doc, binary))
     mesh = exporters.import_glb(path)
     assert len(mesh.vertices) == 8 and mesh.n_faces == 4
     trimesh = pytest.importorskip("trimesh")
