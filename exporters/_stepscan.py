@@ -7,14 +7,15 @@ which no Python code can catch. :func:`scan_step` therefore reads the file once 
 refuses, with a :class:`~splinekit.errors.FileFormatError` naming the problem and the limit:
 
 - parentheses nested deeper than :data:`MAX_NESTING` outside strings and comments;
+- a reference ``#n`` to an entity that is not defined, or an entity defined twice (OCC reports
+  the unresolved reference, then crashes or hangs in the transfer);
 - a file or entity count whose OCC model would not fit the memory budget
   (:func:`splinekit.limits.check`; OCC holds each entity as several C++ objects).
 
-Parentheses inside STEP strings (``'...'``, where ``''`` is an escaped quote) and comments
-(``/* ... */``) do not count. Without comments a character lies inside a string exactly when an
-odd number of quotes precede it (an escaped quote adds two), so one cumulative count suffices;
-a file with comments is split into strings and comments by one left-to-right pass (a Python step
-per string, only for such files).
+Parentheses, semicolons and ``#`` inside STEP strings (``'...'``, where ``''`` is an escaped
+quote) and comments (``/* ... */``) do not count. A character lies inside a string exactly when
+an odd number of quotes outside comments precede it (an escaped quote adds two), so one
+cumulative count suffices, plus a step per comment.
 """
 
 from __future__ import annotations
@@ -55,38 +56,46 @@ class StepScan(NamedTuple):
     depth: int
 
 
-_STRING_OR_COMMENT = re.compile(rb"'|/\*")
-_STRING_TAIL = re.compile(rb"[^']*(?:''[^']*)*'")  # the rest of a string after its opening quote
+def _inside(data: bytes, a: np.ndarray) -> np.ndarray:
+    """``(len(data),)`` bool: the byte lies inside a string or a comment (quotes and comment
+    marks included).
 
-
-def _skipped_ranges(data: bytes) -> tuple[np.ndarray, np.ndarray]:
-    """``(starts, ends)`` of the strings and comments of ``data``, left to right (a string
-    or comment left open runs to the end)."""
-    starts, ends, pos = [], [], 0
-    while True:
-        m = _STRING_OR_COMMENT.search(data, pos)
-        if m is None:
-            break
-        start = m.start()
-        if m.group() == b"'":
-            tail = _STRING_TAIL.match(data, m.end())
-            end = len(data) if tail is None else tail.end()
-        else:
-            close = data.find(b"*/", m.end())
+    A byte is inside a string when an odd number of counted quotes precede it (an escaped quote
+    ``''`` adds two); the count is kept modulo 256 in uint8, which preserves its parity, so the
+    temporaries are one byte per byte. Quotes inside comments do not count: comments are found
+    one at a time, each ``/*`` tested by the parity of the quotes before it (a step per comment,
+    or per string holding ``/*``; none for the usual file without comments).
+    """
+    quote = a == ord("'")
+    if b"/*" in data:
+        q = np.flatnonzero(quote)
+        candidates = np.flatnonzero((a[:-1] == ord("/")) & (a[1:] == ord("*")))
+        removed, k, comments = 0, 0, []
+        while k < candidates.size:
+            c = int(candidates[k])
+            before = int(np.searchsorted(q, c))
+            if (before - removed) & 1:  # inside a string: go on after its next quote
+                if before == q.size:
+                    break
+                k = int(np.searchsorted(candidates, q[before], side="right"))
+                continue
+            close = data.find(b"*/", c + 2)
             end = len(data) if close < 0 else close + 2
-        starts.append(start)
-        ends.append(end)
-        pos = end
-    return np.array(starts, dtype=np.int64), np.array(ends, dtype=np.int64)
+            removed += int(np.searchsorted(q, end)) - before
+            comments.append((c, end))
+            k = int(np.searchsorted(candidates, end))
+        for start, end in comments:
+            quote[start:end] = False
+    inside = (np.cumsum(quote, dtype=np.uint8) & 1).astype(bool)
+    inside |= quote
+    if b"/*" in data:
+        for start, end in comments:
+            inside[start:end] = True
+    return inside
 
 
-def _outside(data: bytes, a: np.ndarray, positions: np.ndarray) -> np.ndarray:
-    """Boolean mask over ``positions`` (sorted byte offsets): not inside a string or comment."""
-    if b"/*" not in data:
-        quotes = np.flatnonzero(a == ord("'"))
-        return (np.searchsorted(quotes, positions) & 1) == 0
-    starts, ends = _skipped_ranges(data)
-    return np.searchsorted(starts, positions, side="right") == np.searchsorted(ends, positions, side="right")
+_DEFINITION = re.compile(rb"#(\d+)\s*=")
+_REFERENCE = re.compile(rb"#(\d+)")
 
 
 def scan_step(path, what: str | None = None) -> StepScan:
@@ -114,8 +123,8 @@ def scan_step(path, what: str | None = None) -> StepScan:
         reason = exc.strerror or str(exc) or type(exc).__name__
         raise FileFormatError(f"cannot read {what}: {reason}") from exc
     a = np.frombuffer(data, dtype=np.uint8)
-    marks = np.flatnonzero((a == ord("(")) | (a == ord(")")) | (a == ord(";")))
-    marks = marks[_outside(data, a, marks)]
+    inside = _inside(data, a)
+    marks = np.flatnonzero(((a == ord("(")) | (a == ord(")")) | (a == ord(";"))) & ~inside)
     kinds = a[marks]
     entities = int(np.count_nonzero(kinds == ord(";")))
     limits.check(entities * BYTES_PER_ENTITY, f"reading the {entities} entities of {what} with OpenCascade")
@@ -135,4 +144,29 @@ def scan_step(path, what: str | None = None) -> StepScan:
             f"line {line}); at most {MAX_NESTING} are accepted, since OpenCascade's parser crashes "
             "on deep nesting and CAD systems write only a few levels"
         )
+    _check_references(np.where(inside, np.uint8(32), a).tobytes(), what)
     return StepScan(size, entities, depth)
+
+
+def _check_references(text: bytes, what: str) -> None:
+    """Refuse a reference ``#n`` to an entity the file does not define, and an entity defined
+    twice (``text``: the file with strings and comments blanked). OpenCascade reports an
+    unresolved reference and then dereferences it: a segmentation fault or a hang in the
+    transfer."""
+    defined = np.array(_DEFINITION.findall(text), dtype=bytes)
+    used = np.array(_REFERENCE.findall(text), dtype=bytes)
+    if defined.size == 0:
+        return  # no DATA entities: OCC refuses the file on its own
+    too_long = next((n for n in (defined, used) if n.dtype.itemsize > 18), None)
+    if too_long is not None:
+        raise FileFormatError(f"{what}: an entity number has more than 18 digits")
+    defined, used = defined.astype(np.int64), used.astype(np.int64)
+    ids, counts = np.unique(defined, return_counts=True)
+    if (counts > 1).any():
+        raise FileFormatError(f"{what}: entity #{int(ids[counts > 1][0])} is defined {int(counts.max())} times")
+    missing = ~np.isin(used, ids)
+    if missing.any():
+        raise FileFormatError(
+            f"{what}: entity #{int(used[missing][0])} is referenced but not defined "
+            f"({int(np.unique(used[missing]).size)} undefined references in all)"
+        )

@@ -186,7 +186,7 @@ def _accessor(d: _Doc, binary: bytes, k: int, cache: dict) -> tuple:
     if acc.get("normalized", False) is not False:
         d.fail(where, "is normalized, which import_glb does not support")
     ctype = acc.get("componentType")
-    if isinstance(ctype, bool) or ctype not in _COMPONENTS:
+    if isinstance(ctype, bool) or not isinstance(ctype, int) or ctype not in _COMPONENTS:
         d.fail(f"{where}.componentType", f"must be one of {sorted(_COMPONENTS)}, got {ctype!r:.40}")
     kind = acc.get("type")
     if not isinstance(kind, str) or kind not in _WIDTH:

@@ -153,6 +153,14 @@ def _parse_header(data: bytes, what: str):
             raise FileFormatError(f"{what}: malformed PLY header line {number}: {raw!r}") from None
     if fmt is None:
         raise FileFormatError(f"{what}: PLY header has no 'format' line")
+    names = [el.name for el in elements]
+    for el in elements:
+        if el.name in ("vertex", "face") and names.count(el.name) > 1:
+            raise FileFormatError(f"{what}: PLY header declares {names.count(el.name)} '{el.name}' elements; one is expected")
+        props = [p[0] for p in el.props]
+        twice = next((p for p in props if props.count(p) > 1), None)
+        if twice is not None:
+            raise FileFormatError(f"{what}: PLY element '{el.name}' declares the property {twice!r} twice")
     return fmt, elements, body + 1
 
 

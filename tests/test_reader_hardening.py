@@ -182,15 +182,16 @@ def test_real_step_files_pass_the_scan_and_still_read(capsys):
 
 def test_step_scan_is_linear_on_a_large_file(tmp_path):
     """32 MiB of entities with strings: time per MiB within a factor of 3 of a 4 MiB file's."""
-    entity = "#1=PRODUCT('name (1)','it''s',(1.,(2.,3.)),$);\n"
+    entity = "#%d=PRODUCT('name (1) #7','it''s',(1.,(2.,3.)),#1);\n"
     times = {}
     for mib in (4, 32):
         path = tmp_path / f"big{mib}.step"
-        path.write_text(STEP_HEAD + entity * (mib * 2**20 // len(entity)) + STEP_TAIL)
+        count = mib * 2**20 // len(entity % 10**5)
+        path.write_text(STEP_HEAD + "".join(entity % i for i in range(1, count + 1)) + STEP_TAIL)
         start = time.perf_counter()
         scan = _stepscan.scan_step(path)
         times[mib] = (time.perf_counter() - start) / mib
-        assert scan.depth == 3
+        assert scan.depth == 3 and scan.entities == count + 9
     assert times[32] < 3 * times[4] + 0.01
 
 
@@ -455,3 +456,34 @@ def test_obj_accepts_every_line_ending(tmp_path, ending):
     path.write_bytes(ending.replace(b"mixed", b"\r").join([b"v 0 0 0", b"v 1 0 0", b"v 0 1", b"f 1 2 3"]))
     with pytest.raises(FileFormatError, match=r"vertex 2 \(line 3\)"):
         exporters.import_obj(path)
+
+
+def test_step_with_an_undefined_reference_is_refused(tmp_path):
+    """A reference to an entity the file does not define: OCC reports it, then its transfer
+    crashed (segmentation fault) or hung. Found by the fuzz suite (an entity renumbered #-177)."""
+    pytest.importorskip("OCP")
+    from splinekit import BSplineSurface
+
+    net = np.stack(np.meshgrid(np.linspace(0, 2, 3), np.linspace(0, 1, 3), indexing="ij"), axis=-1)
+    net = np.concatenate([net, net[..., :1] * net[..., 1:]], axis=-1)
+    good = tmp_path / "good.step"
+    exporters.export_step(good, [BSplineSurface(2, 2, [0, 0, 0, 1, 1, 1], [0, 0, 0, 1, 1, 1], net)])
+    text = good.read_text()
+    vector = re.search(r"#(\d+) = VECTOR", text)
+    bad = tmp_path / "bad.step"
+    bad.write_text(text.replace(vector.group(0), "#-177 = VECTOR"))
+    code = ("import sys\nfrom OCP.STEPControl import STEPControl_Reader\nr = STEPControl_Reader()\n"
+            "r.ReadFile(sys.argv[1])\nr.TransferRoots()\nprint('alive')")
+    occ = _run(code, bad)  # what the scan protects against (a crash today; alive if OCC gets fixed)
+    done = _run("import sys, exporters\ntry:\n    exporters.import_step(sys.argv[1])\n"
+                "except exporters.step.FileFormatError as exc:\n    print('refused:', exc)", bad)
+    assert done.returncode == 0, f"import_step crashed (status {done.returncode}); bare OCC: {occ.returncode}"
+    assert f"entity #{vector.group(1)} is referenced but not defined" in done.stdout
+    twice = tmp_path / "twice.step"
+    twice.write_text(text.replace(vector.group(0), "#12 = VECTOR"))
+    with pytest.raises(FileFormatError, match="entity #12 is defined 2 times"):
+        _stepscan.scan_step(twice)
+    quoted = tmp_path / "quoted.step"  # '#999' inside a string is text, not a reference
+    quoted.write_text(text.replace("PRODUCT('", "PRODUCT('part #999 ", 1))
+    assert "'part #999 " in quoted.read_text()
+    assert _stepscan.scan_step(quoted).entities == _stepscan.scan_step(good).entities
