@@ -7,8 +7,9 @@ which no Python code can catch. :func:`scan_step` therefore reads the file once 
 refuses, with a :class:`~splinekit.errors.FileFormatError` naming the problem and the limit:
 
 - parentheses nested deeper than :data:`MAX_NESTING` outside strings and comments;
-- a reference ``#n`` to an entity that is not defined, or an entity defined twice (OCC reports
-  the unresolved reference, then crashes or hangs in the transfer);
+- a statement whose parentheses do not balance, a reference ``#n`` to an entity that is not
+  defined, or an entity defined twice (OCC reports these syntax errors, then its transfer
+  crashes or hangs on what it made of them);
 - a file or entity count whose OCC model would not fit the memory budget
   (:func:`splinekit.limits.check`; OCC holds each entity as several C++ objects).
 
@@ -131,10 +132,9 @@ def scan_step(path, what: str | None = None) -> StepScan:
     step = np.zeros(marks.size, dtype=np.int32)
     step[kinds == ord("(")] = 1
     step[kinds == ord(")")] = -1
-    level = np.cumsum(step, dtype=np.int32)
-    if level.size:
-        # a surplus ")" must not hide deeper nesting after it: count as from zero again
-        level -= np.minimum(np.minimum.accumulate(level), 0)
+    raw = np.cumsum(step, dtype=np.int32)
+    # a surplus ")" must not hide deeper nesting after it: count as from zero again
+    level = raw - np.minimum(np.minimum.accumulate(raw), 0) if raw.size else raw
     depth = int(level.max()) if level.size else 0
     if depth > MAX_NESTING:
         at = int(marks[np.argmax(level > MAX_NESTING)])
@@ -144,6 +144,14 @@ def scan_step(path, what: str | None = None) -> StepScan:
             f"line {line}); at most {MAX_NESTING} are accepted, since OpenCascade's parser crashes "
             "on deep nesting and CAD systems write only a few levels"
         )
+    # every statement (up to its ";") closes what it opens; OCC's parser reports a statement that
+    # does not, then its transfer can crash on what it made of it
+    bad = (raw < 0) | ((kinds == ord(";")) & (raw != 0))
+    if bad.any() or (raw.size and raw[-1] != 0):
+        at = int(marks[np.argmax(bad)]) if bad.any() else len(data)
+        problem = "a ')' closes nothing" if bad.any() and raw[np.argmax(bad)] < 0 else "a '(' is not closed"
+        line = data.count(b"\n", 0, at) + 1
+        raise FileFormatError(f"{what}: unbalanced parentheses: {problem} in the statement ending at line {line} (byte {at})")
     _check_references(np.where(inside, np.uint8(32), a).tobytes(), what)
     return StepScan(size, entities, depth)
 

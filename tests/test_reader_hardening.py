@@ -89,10 +89,12 @@ def test_nesting_limit_is_far_below_what_occ_survives(tmp_path):
     assert done.returncode == 0 and "alive" in done.stdout
 
 
-def _reference_depth(text: str) -> int:
-    """Deepest parenthesis nesting outside strings and comments, one character at a time
-    (an independent reference for the vectorized scan; a surplus ')' counts from zero again)."""
+def _reference_scan(text: str) -> tuple[int, bool]:
+    """``(deepest nesting, balanced)`` of the parentheses outside strings and comments, one
+    character at a time (an independent reference for the vectorized scan). Balanced: no ')'
+    closes nothing, and nothing is open at a ';' or at the end."""
     depth = best = 0
+    balanced = True
     i, n = 0, len(text)
     while i < n:
         c = text[i]
@@ -112,19 +114,27 @@ def _reference_depth(text: str) -> int:
             depth += 1
             best = max(best, depth)
         elif c == ")":
+            balanced &= depth > 0
             depth = max(depth - 1, 0)
+        elif c == ";":
+            balanced &= depth == 0
         i += 1
-    return best
+    return best, balanced and depth == 0
 
 
 @settings(max_examples=300, deadline=None)
-@given(st.lists(st.sampled_from(["(", ")", "'", "''", "/*", "*/", "*", "/", ";", "a", " ", "\n", "((", "))"]),
+@given(st.lists(st.sampled_from(["(", ")", "'", "''", "/*", "*/", "*", "/", ";", "a", " ", "\n", "((", "))", "();"]),
                 max_size=80))
-def test_scan_depth_matches_a_character_by_character_reference(tmp_path_factory, pieces):
+def test_scan_matches_a_character_by_character_reference(tmp_path_factory, pieces):
     text = "".join(pieces)
     path = tmp_path_factory.mktemp("scan") / "t.step"
     path.write_bytes(text.encode())
-    assert _stepscan.scan_step(path).depth == _reference_depth(text)
+    depth, balanced = _reference_scan(text)
+    if balanced:
+        assert _stepscan.scan_step(path).depth == depth
+    else:
+        with pytest.raises(FileFormatError, match="unbalanced parentheses"):
+            _stepscan.scan_step(path)
 
 
 def test_parentheses_in_strings_and_comments_do_not_count(tmp_path):
@@ -138,7 +148,11 @@ def test_parentheses_in_strings_and_comments_do_not_count(tmp_path):
         path = tmp_path / f"{name}.step"
         path.write_text(STEP_HEAD + body + STEP_TAIL)
         assert _stepscan.scan_step(path).depth == 2, name
-    # a quote in a comment must not hide nesting after the comment
+    # a quote in a comment must not hide nesting after the comment; a statement left open is refused
+    path = tmp_path / "open.step"
+    path.write_text(STEP_HEAD + "#1=A((1.);\n" + STEP_TAIL)
+    with pytest.raises(FileFormatError, match=r"a '\(' is not closed in the statement ending at line 8"):
+        _stepscan.scan_step(path)
     path = tmp_path / "hidden.step"
     path.write_text(STEP_HEAD + "/* ' */\n#1=A(" + "(" * 300 + ")" * 300 + ");\n" + STEP_TAIL)
     with pytest.raises(FileFormatError, match="nest 301 levels"):
@@ -458,9 +472,10 @@ def test_obj_accepts_every_line_ending(tmp_path, ending):
         exporters.import_obj(path)
 
 
-def test_step_with_an_undefined_reference_is_refused(tmp_path):
-    """A reference to an entity the file does not define: OCC reports it, then its transfer
-    crashed (segmentation fault) or hung. Found by the fuzz suite (an entity renumbered #-177)."""
+def test_step_with_an_undefined_reference_or_unbalanced_statement_is_refused(tmp_path):
+    """A reference to an entity the file does not define, or a statement with a surplus ')': OCC
+    reports the syntax error, then import_step crashed (segmentation fault) or hung. Found by the
+    fuzz suite (an entity renumbered #-177; a deleted "'',2,(")."""
     pytest.importorskip("OCP")
     from splinekit import BSplineSurface
 
@@ -479,6 +494,12 @@ def test_step_with_an_undefined_reference_is_refused(tmp_path):
                 "except exporters.step.FileFormatError as exc:\n    print('refused:', exc)", bad)
     assert done.returncode == 0, f"import_step crashed (status {done.returncode}); bare OCC: {occ.returncode}"
     assert f"entity #{vector.group(1)} is referenced but not defined" in done.stdout
+    unbalanced = tmp_path / "unbalanced.step"  # a statement that closes one list too many
+    unbalanced.write_text(re.sub(r"B_SPLINE_CURVE_WITH_KNOTS\('',2,\(", "B_SPLINE_CURVE_WITH_KNOTS(", text, count=1))
+    done = _run("import sys, exporters\ntry:\n    exporters.import_step(sys.argv[1])\n"
+                "except exporters.step.FileFormatError as exc:\n    print('refused:', exc)", unbalanced)
+    assert done.returncode == 0, f"import_step crashed (status {done.returncode})"
+    assert "unbalanced parentheses: a ')' closes nothing" in done.stdout
     twice = tmp_path / "twice.step"
     twice.write_text(text.replace(vector.group(0), "#12 = VECTOR"))
     with pytest.raises(FileFormatError, match="entity #12 is defined 2 times"):
