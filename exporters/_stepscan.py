@@ -97,6 +97,7 @@ def _inside(data: bytes, a: np.ndarray) -> np.ndarray:
 
 _DEFINITION = re.compile(rb"#(\d+)\s*=")
 _REFERENCE = re.compile(rb"#(\d+)")
+_NOT_A_NAME = re.compile(rb"#(?!\d)")
 
 
 def scan_step(path, what: str | None = None) -> StepScan:
@@ -161,6 +162,10 @@ def _check_references(text: bytes, what: str) -> None:
     twice (``text``: the file with strings and comments blanked). OpenCascade reports an
     unresolved reference and then dereferences it: a segmentation fault or a hang in the
     transfer."""
+    stray = _NOT_A_NAME.search(text)
+    if stray is not None:
+        line = text.count(b"\n", 0, stray.start()) + 1
+        raise FileFormatError(f"{what}: a '#' not followed by an entity number at line {line} (byte {stray.start()})")
     defined = np.array(_DEFINITION.findall(text), dtype=bytes)
     used = np.array(_REFERENCE.findall(text), dtype=bytes)
     if defined.size == 0:

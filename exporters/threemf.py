@@ -144,7 +144,7 @@ _VERTEX = (_CORE + "vertex", "vertex")
 _TRIANGLE = (_CORE + "triangle", "triangle")
 _ZIP_ERRORS = (zipfile.BadZipFile, zipfile.LargeZipFile, zlib.error, EOFError, NotImplementedError,
                RuntimeError, OSError, ValueError, OverflowError, struct.error, UnicodeError, KeyError,
-               IndexError, TypeError, LookupError, MemoryError)
+               IndexError, TypeError, LookupError)
 
 
 def _local(name: str):

@@ -486,7 +486,7 @@ def test_step_with_an_undefined_reference_or_unbalanced_statement_is_refused(tmp
     text = good.read_text()
     vector = re.search(r"#(\d+) = VECTOR", text)
     bad = tmp_path / "bad.step"
-    bad.write_text(text.replace(vector.group(0), "#-177 = VECTOR"))
+    bad.write_text(text.replace(vector.group(0), "#177 = VECTOR"))  # renumbered: its users refer to nothing
     code = ("import sys\nfrom OCP.STEPControl import STEPControl_Reader\nr = STEPControl_Reader()\n"
             "r.ReadFile(sys.argv[1])\nr.TransferRoots()\nprint('alive')")
     occ = _run(code, bad)  # what the scan protects against (a crash today; alive if OCC gets fixed)
@@ -500,6 +500,11 @@ def test_step_with_an_undefined_reference_or_unbalanced_statement_is_refused(tmp
                 "except exporters.step.FileFormatError as exc:\n    print('refused:', exc)", unbalanced)
     assert done.returncode == 0, f"import_step crashed (status {done.returncode})"
     assert "unbalanced parentheses: a ')' closes nothing" in done.stdout
+    minus = tmp_path / "minus.step"  # '#-0': import_step hung (over a minute)
+    minus.write_text(re.sub(r"(LINE\('',#\d+,)#\d+", r"\1#-0", text, count=1))
+    assert "#-0" in minus.read_text()
+    with pytest.raises(FileFormatError, match="a '#' not followed by an entity number at line"):
+        _stepscan.scan_step(minus)
     twice = tmp_path / "twice.step"
     twice.write_text(text.replace(vector.group(0), "#12 = VECTOR"))
     with pytest.raises(FileFormatError, match="entity #12 is defined 2 times"):
@@ -508,3 +513,14 @@ def test_step_with_an_undefined_reference_or_unbalanced_statement_is_refused(tmp
     quoted.write_text(text.replace("PRODUCT('", "PRODUCT('part #999 ", 1))
     assert "'part #999 " in quoted.read_text()
     assert _stepscan.scan_step(quoted).entities == _stepscan.scan_step(good).entities
+
+
+@pytest.mark.parametrize("suffix", [".stl", ".obj", ".ply", ".3mf", ".glb"])
+def test_mesh_files_are_checked_against_the_budget_before_reading(tmp_path, suffix):
+    path = tmp_path / ("m" + suffix)
+    exporters.export_mesh(path, primitives.box())
+    size = os.path.getsize(path)
+    with limits.budget(size * exporters._meshio.READ_BYTES_FACTOR - 1), pytest.raises(ResourceLimitError, match=path.name):
+        exporters.import_mesh(path)
+    with limits.budget(size * exporters._meshio.READ_BYTES_FACTOR * 100):
+        assert exporters.import_mesh(path).n_faces >= 6
