@@ -45,7 +45,7 @@ from splinekit.mesh import PolyMesh, primitives
 
 from _readerfiles import RELS, TETRA_T, TETRA_V, glb, mesh_object, model_xml, tetra_gltf
 
-QUICK = 300
+QUICK = 200
 LONG = 20_000
 CASE_SECONDS = 10.0
 
