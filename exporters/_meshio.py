@@ -15,6 +15,7 @@ with ``float()`` is bit-for-bit the value that was written.
 from __future__ import annotations
 
 import os
+import stat
 
 import numpy as np
 
@@ -316,9 +317,13 @@ def read_bytes(path, what: str) -> bytes:
     :class:`~splinekit.errors.ResourceLimitError` before reading."""
     path = _fspath(path)
     try:
-        with open(path, "rb") as fh:
-            size = os.fstat(fh.fileno()).st_size
-            limits.check(size * READ_BYTES_FACTOR, f"reading the {size}-byte {what} {path!r}")
+        # non-blocking open: a FIFO would otherwise wait for a writer; only regular files are read
+        # (a device such as /dev/zero never ends)
+        with open(os.open(path, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0)), "rb") as fh:
+            info = os.fstat(fh.fileno())
+            if not stat.S_ISREG(info.st_mode):
+                raise FileFormatError(f"cannot read {what} {path!r}: it is not a regular file")
+            limits.check(info.st_size * READ_BYTES_FACTOR, f"reading the {info.st_size}-byte {what} {path!r}")
             return fh.read()
     except OSError as exc:
         reason = exc.strerror or str(exc) or type(exc).__name__

@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import os
 import re
+import stat
 from typing import NamedTuple
 
 import numpy as np
@@ -117,7 +118,10 @@ def scan_step(path, what: str | None = None) -> StepScan:
     path = os.fspath(path)
     what = what or f"STEP file {path!r}"
     try:
-        size = os.stat(path).st_size
+        info = os.stat(path)
+        if not stat.S_ISREG(info.st_mode):  # a FIFO or device would block or never end
+            raise FileFormatError(f"cannot read {what}: it is not a regular file")
+        size = info.st_size
         limits.check(size * BYTES_PER_FILE_BYTE, f"reading the {size}-byte {what} with OpenCascade")
         with open(path, "rb") as fh:
             data = fh.read()

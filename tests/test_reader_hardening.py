@@ -524,3 +524,14 @@ def test_mesh_files_are_checked_against_the_budget_before_reading(tmp_path, suff
         exporters.import_mesh(path)
     with limits.budget(size * exporters._meshio.READ_BYTES_FACTOR * 100):
         assert exporters.import_mesh(path).n_faces >= 6
+
+
+def test_readers_refuse_what_is_not_a_regular_file(tmp_path):
+    """A FIFO blocked the readers forever (open waits for a writer); /dev/zero never ends."""
+    fifo = tmp_path / "pipe.stl"
+    os.mkfifo(fifo)
+    for path in (fifo, "/dev/zero", tmp_path):
+        with pytest.raises(FileFormatError, match="not a regular file|is a directory|Is a directory"):
+            exporters.import_stl(path)
+    with pytest.raises(FileFormatError, match="not a regular file"):
+        _stepscan.scan_step(fifo)
