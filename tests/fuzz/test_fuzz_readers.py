@@ -36,7 +36,7 @@ import zipfile
 
 import numpy as np
 import pytest
-from hypothesis import HealthCheck, given, settings
+from hypothesis import HealthCheck, Phase, given, settings
 from hypothesis import strategies as st
 
 import exporters
@@ -386,9 +386,10 @@ def test_fuzz_reader(reader, examples, bases, tmp_path, request):
     worker = StepWorker().start() if reader == "step" else None
     counts = OUTCOMES[(reader, examples)]
     failures = []
+    report = os.environ.get("SPLINEKIT_FUZZ_REPORT")
 
-    @settings(max_examples=examples, deadline=None, database=None,
-              suppress_health_check=list(HealthCheck))
+    @settings(max_examples=examples, deadline=None, database=None, suppress_health_check=list(HealthCheck),
+              phases=[Phase.generate] if examples > QUICK else settings.default.phases)
     @given(mutation(reader)(bases[reader]))
     def case(content):
         with open(path, "wb") as fh:
@@ -400,6 +401,8 @@ def test_fuzz_reader(reader, examples, bases, tmp_path, request):
         elapsed = time.perf_counter() - start
         SLOWEST[(reader, examples)] = max(SLOWEST[(reader, examples)], elapsed)
         counts[outcome.split(":")[0]] += 1
+        if report and sum(counts.values()) % 250 == 0:
+            _write_report(f"{report}.{reader}.progress", reader, examples, counts, failures, worker, replace=True)
         if outcome.startswith("other") or elapsed > CASE_SECONDS:
             failures.append((outcome, round(elapsed, 2), content[:300]))
             if examples <= QUICK:  # the quick run stops and shrinks; the long run counts on
@@ -419,9 +422,17 @@ def test_fuzz_reader(reader, examples, bases, tmp_path, request):
         if examples > QUICK:
             with request.config.pluginmanager.get_plugin("capturemanager").global_and_fixture_disabled():
                 print("\n" + line)
-        report = os.environ.get("SPLINEKIT_FUZZ_REPORT")
         if report:
-            with open(report, "a") as fh:
-                fh.write(json.dumps({"reader": reader, "examples": examples, "cases": sum(counts.values()),
-                                     **counts, "slowest_s": SLOWEST[(reader, examples)], "peak_mib": peak,
-                                     "failures": [f[:2] for f in failures[:5]]}) + "\n")
+            _write_report(report, reader, examples, counts, failures, None, replace=False, peak=peak)
+
+
+def _write_report(path, reader, examples, counts, failures, worker, replace, peak=None):
+    """One JSON line of figures (SPLINEKIT_FUZZ_REPORT names the file; the long run also keeps a
+    progress file per reader, rewritten every 250 cases)."""
+    if peak is None:
+        peak = max(_peak_mb(), worker.peak_mb() if worker else 0.0)
+    record = {"reader": reader, "examples": examples, "cases": sum(counts.values()), **counts,
+              "slowest_s": round(SLOWEST[(reader, examples)], 3), "peak_mib": round(peak),
+              "failures": [f[:2] for f in failures[:5]]}
+    with open(path, "w" if replace else "a") as fh:
+        fh.write(json.dumps(record) + "\n")
