@@ -1,9 +1,9 @@
 """A linear-time check of a STEP file before OpenCascade parses it.
 
 OCC's STEP parser builds nested parameter lists recursively, about 150 bytes of C stack per
-level: a few hundred KB of balanced parentheses (about 60,000 levels on an 8 MB main-thread
-stack, about 3,000 on a 512 KB thread stack) crash the whole process with a segmentation fault,
-which no Python code can catch. :func:`scan_step` therefore reads the file once with numpy and
+level: a few hundred KB of balanced parentheses crash the whole process with a segmentation
+fault, which no Python code can catch (measured with OCP 7.9: an 8 MB main-thread stack survives
+50,000 levels and crashes at 60,000; a 512 KB thread stack survives 2,000 and crashes at 5,000). :func:`scan_step` therefore reads the file once with numpy and
 refuses, with a :class:`~splinekit.errors.FileFormatError` naming the problem and the limit:
 
 - parentheses nested deeper than :data:`MAX_NESTING` outside strings and comments;
@@ -34,18 +34,19 @@ from splinekit.errors import FileFormatError
 __all__ = ["MAX_NESTING", "StepScan", "scan_step"]
 
 MAX_NESTING = 200
-"""Deepest parenthesis nesting accepted. CAD systems write at most a handful of levels (the
-deepest of fifteen files from thirteen systems is 4: an entity, a list, a list of lists); OCC
-crashes somewhere between 850 levels (a 128 KB thread stack) and 60,000 (an 8 MB stack), so 200
-leaves both a wide margin for real files and one of four or more below the crash."""
+"""Deepest parenthesis nesting accepted. CAD systems write a handful of levels (the deepest of
+fifteen files from thirteen systems is 4: an entity, a list, a list of lists); at 150 bytes a
+level OCC would crash near 800 levels on a 128 KB thread stack (musl's default), so 200 leaves a
+wide margin on both sides."""
 
 BYTES_PER_FILE_BYTE = 40
-"""Memory OCC needs per byte of STEP text while reading and translating (measured: 15 to 25 on
-the files of thirteen CAD systems, peak resident size over file size; rounded up)."""
+"""Memory charged per byte of STEP text for OCC's reading and translation (measured peak
+resident size over file size: 18 to 36 on the real files above 500 KB, where OCC's fixed 10 MB
+no longer dominates)."""
 
 BYTES_PER_ENTITY = 4096
-"""Memory OCC needs per entity (measured: 1 to 2 KB per entity on real files; a file of tiny
-entities costs more per byte than :data:`BYTES_PER_FILE_BYTE` assumes)."""
+"""Memory charged per entity (measured: 1.2 to 4 KB per entity on the same files), so that a
+file of tiny entities, which costs more per byte, is charged enough."""
 
 
 class StepScan(NamedTuple):
