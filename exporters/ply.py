@@ -218,7 +218,7 @@ def _read_element(stream: _Stream, pos: int, el: _Element, wanted: set):
             if pos + off + stream.width(cdt) > stream.size:
                 raise FileFormatError(f"{what}: PLY {el.name} {done} is truncated")
             k = stream.scalar(pos + off, cdt)
-            if not (k >= 0 and k == int(k)):
+            if not (np.isfinite(k) and k >= 0 and k == int(k)):  # an ASCII length may be inf or nan
                 raise FileFormatError(f"{what}: PLY {el.name} {done} has an invalid list length {k!r}")
             k = int(k)
             layout.append((name, dt, off + stream.width(cdt), k))

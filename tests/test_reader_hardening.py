@@ -535,3 +535,13 @@ def test_readers_refuse_what_is_not_a_regular_file(tmp_path):
             exporters.import_stl(path)
     with pytest.raises(FileFormatError, match="not a regular file"):
         _stepscan.scan_step(fifo)
+
+
+def test_ascii_ply_list_length_that_is_not_finite_is_refused(tmp_path):
+    """An ASCII list length of inf leaked OverflowError (found by the long fuzz run)."""
+    head = ("ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+            "element face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n")
+    for length in ("inf", "nan", "-inf"):
+        path = write_bytes(tmp_path / "f.ply", (head + f"{length} 0 1 2\n").encode())
+        with pytest.raises(FileFormatError, match="invalid list length"):
+            exporters.import_ply(path)
