@@ -131,9 +131,14 @@ def import_obj(path):
 
     coords = _VERTEX_RE.findall(text)
     if len(coords) != n_v:
-        bad = next(i for i, line in enumerate(re.finditer(rb"^[ \t]*v(?=[ \t\r\n#]|$)(.*)$", text, re.MULTILINE))
-                   if len(line.group(1).split(b"#")[0].split()) < 3)
-        raise FileFormatError(f"{what}: vertex {bad} (line {_line_number(text, b'v', bad)}) has fewer than 3 coordinates")
+        # error path only: the first v line the vertex pattern does not match (tokens are separated
+        # by spaces or tabs only, so "1\x0c2" is one token, as it is above)
+        lines = re.finditer(rb"^[ \t]*v(?=[ \t\r\n#]|$)", text, re.MULTILINE)
+        bad = next(i for i, line in enumerate(lines) if not _VERTEX_RE.match(text, line.start()))
+        raise FileFormatError(
+            f"{what}: vertex {bad} (line {_line_number(text, b'v', bad)}) has fewer than 3 coordinates "
+            "(separated by spaces or tabs)"
+        )
     V = np.array(coords, dtype=bytes).reshape(-1, 3)
     try:
         V = V.astype(np.float64)

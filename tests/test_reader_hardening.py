@@ -545,3 +545,10 @@ def test_ascii_ply_list_length_that_is_not_finite_is_refused(tmp_path):
         path = write_bytes(tmp_path / "f.ply", (head + f"{length} 0 1 2\n").encode())
         with pytest.raises(FileFormatError, match="invalid list length"):
             exporters.import_ply(path)
+
+
+def test_obj_vertex_with_other_whitespace_is_refused_with_its_line(tmp_path):
+    """A form feed between coordinates leaked StopIteration (found by the long fuzz run)."""
+    path = write_bytes(tmp_path / "ff.obj", b"v 0 0 0\nv 1\x0c0 0\nv 0 1 0\nf 1 2 3\n")
+    with pytest.raises(FileFormatError, match=r"vertex 1 \(line 2\) has fewer than 3 coordinates"):
+        exporters.import_obj(path)
