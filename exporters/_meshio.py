@@ -15,9 +15,11 @@ with ``float()`` is bit-for-bit the value that was written.
 from __future__ import annotations
 
 import os
+import stat
 
 import numpy as np
 
+from splinekit import limits
 from splinekit._atomic import atomic_write
 from splinekit.errors import (
     ExportError,
@@ -303,11 +305,25 @@ def format_polygons(prefix: str, corner: str, values: np.ndarray, offsets: np.nd
 
 
 # -- reading ----------------------------------------------------------------------------------
+READ_BYTES_FACTOR = 10
+"""Memory a mesh reader needs per byte of its file, charged to the budget before reading: the peak
+of an import over the file size is 4.5 (ASCII STL, OBJ) to 8 (binary STL and PLY) on a
+330k-triangle mesh."""
+
+
 def read_bytes(path, what: str) -> bytes:
-    """The whole file; a missing or unreadable file raises :class:`FileFormatError` naming it."""
+    """The whole file; a missing or unreadable file raises :class:`FileFormatError` naming it, one
+    whose import would exceed the memory budget (:data:`READ_BYTES_FACTOR` times its size)
+    :class:`~splinekit.errors.ResourceLimitError` before reading."""
     path = _fspath(path)
     try:
-        with open(path, "rb") as fh:
+        # non-blocking open: a FIFO would otherwise wait for a writer; only regular files are read
+        # (a device such as /dev/zero never ends)
+        with open(os.open(path, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0)), "rb") as fh:
+            info = os.fstat(fh.fileno())
+            if not stat.S_ISREG(info.st_mode):
+                raise FileFormatError(f"cannot read {what} {path!r}: it is not a regular file")
+            limits.check(info.st_size * READ_BYTES_FACTOR, f"reading the {info.st_size}-byte {what} {path!r}")
             return fh.read()
     except OSError as exc:
         reason = exc.strerror or str(exc) or type(exc).__name__

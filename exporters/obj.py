@@ -3,8 +3,9 @@
 The writer keeps polygons as they are (no triangulation) and writes coordinates as the shortest
 round-trip text of their float64 values, so writing and reading a mesh gives it back exactly. The
 reader accepts the ``v``, ``v/vt``, ``v//vn`` and ``v/vt/vn`` corner forms, negative (relative)
-indices, faces of any size and ``\\``-continued lines; texture coordinates, normals, groups,
-objects, materials, lines and points are checked or skipped but not returned.
+indices, faces of any size, ``\\``-continued lines and any line ending (``\\n``, ``\\r\\n``, ``\\r``);
+texture coordinates, normals, groups, objects, materials, lines and points are checked or skipped
+but not returned.
 """
 
 from __future__ import annotations
@@ -119,7 +120,10 @@ def import_obj(path):
     """
     data = _meshio.read_bytes(path, "OBJ file")
     what = f"OBJ file {_meshio._fspath(path)!r}"
-    text = data.replace(b"\\\r\n", b" ").replace(b"\\\n", b" ")  # continued lines
+    # lines may end in \n, \r\n or \r alone (classic Mac OS): one convention from here on
+    if b"\r" in data:
+        data = data.replace(b"\r\n", b"\n").replace(b"\r", b"\n")
+    text = data.replace(b"\\\n", b" ")  # continued lines
 
     kinds = np.array(_KIND_RE.findall(text), dtype="S2")
     is_v, is_vt, is_vn, is_f = (kinds == k for k in (b"v", b"vt", b"vn", b"f"))
@@ -127,9 +131,14 @@ def import_obj(path):
 
     coords = _VERTEX_RE.findall(text)
     if len(coords) != n_v:
-        bad = next(i for i, line in enumerate(re.finditer(rb"^[ \t]*v(?=[ \t\r\n#]|$)(.*)$", text, re.MULTILINE))
-                   if len(line.group(1).split(b"#")[0].split()) < 3)
-        raise FileFormatError(f"{what}: vertex {bad} (line {_line_number(text, b'v', bad)}) has fewer than 3 coordinates")
+        # error path only: the first v line the vertex pattern does not match (tokens are separated
+        # by spaces or tabs only, so "1\x0c2" is one token, as it is above)
+        lines = re.finditer(rb"^[ \t]*v(?=[ \t\r\n#]|$)", text, re.MULTILINE)
+        bad = next(i for i, line in enumerate(lines) if not _VERTEX_RE.match(text, line.start()))
+        raise FileFormatError(
+            f"{what}: vertex {bad} (line {_line_number(text, b'v', bad)}) has fewer than 3 coordinates "
+            "(separated by spaces or tabs)"
+        )
     V = np.array(coords, dtype=bytes).reshape(-1, 3)
     try:
         V = V.astype(np.float64)

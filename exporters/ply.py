@@ -9,6 +9,8 @@ corners); polygons are kept. The reader takes any PLY whose ``vertex`` element h
 
 from __future__ import annotations
 
+import re
+
 import numpy as np
 
 from splinekit.errors import ExportError, FileFormatError, ParameterError
@@ -24,6 +26,7 @@ _TYPES = {
     "float": "f4", "float32": "f4", "double": "f8", "float64": "f8",
 }
 _INT32_MAX = 2**31 - 1
+_END_HEADER = re.compile(rb"^[ \t]*end_header[ \t\r]*$", re.MULTILINE)
 
 
 def _header(fmt: str, n_vertices: int, n_faces: int, count_type: str) -> bytes:
@@ -111,14 +114,17 @@ def _parse_header(data: bytes, what: str):
     """``(format, elements, body offset)`` of a PLY file."""
     if not data.startswith((b"ply\n", b"ply\r\n")):
         raise FileFormatError(f"{what}: not a PLY file (it must start with a 'ply' line)")
-    end = data.find(b"end_header")
-    if end < 0:
+    # the header ends at the first line that is 'end_header' itself (not one that mentions it,
+    # such as a comment); a regular expression anchored at line starts finds it in one pass
+    m = _END_HEADER.search(data)
+    if m is None:
         raise FileFormatError(f"{what}: PLY header has no 'end_header' line (truncated file?)")
-    body = data.find(b"\n", end)
+    end = m.start()
+    body = data.find(b"\n", m.end())
     if body < 0:
         raise FileFormatError(f"{what}: PLY header ends without a newline after 'end_header'")
     fmt, elements = None, []
-    for number, raw in enumerate(data[:end].decode("latin-1").splitlines(), start=1):
+    for number, raw in enumerate(data[:end].decode("latin-1").split("\n"), start=1):
         words = raw.split()
         if not words or words[0] in ("ply", "comment", "obj_info"):
             continue
@@ -147,6 +153,14 @@ def _parse_header(data: bytes, what: str):
             raise FileFormatError(f"{what}: malformed PLY header line {number}: {raw!r}") from None
     if fmt is None:
         raise FileFormatError(f"{what}: PLY header has no 'format' line")
+    names = [el.name for el in elements]
+    for el in elements:
+        if el.name in ("vertex", "face") and names.count(el.name) > 1:
+            raise FileFormatError(f"{what}: PLY header declares {names.count(el.name)} '{el.name}' elements; one is expected")
+        props = [p[0] for p in el.props]
+        twice = next((p for p in props if props.count(p) > 1), None)
+        if twice is not None:
+            raise FileFormatError(f"{what}: PLY element '{el.name}' declares the property {twice!r} twice")
     return fmt, elements, body + 1
 
 
@@ -204,7 +218,7 @@ def _read_element(stream: _Stream, pos: int, el: _Element, wanted: set):
             if pos + off + stream.width(cdt) > stream.size:
                 raise FileFormatError(f"{what}: PLY {el.name} {done} is truncated")
             k = stream.scalar(pos + off, cdt)
-            if not (k >= 0 and k == int(k)):
+            if not (np.isfinite(k) and k >= 0 and k == int(k)):  # an ASCII length may be inf or nan
                 raise FileFormatError(f"{what}: PLY {el.name} {done} has an invalid list length {k!r}")
             k = int(k)
             layout.append((name, dt, off + stream.width(cdt), k))

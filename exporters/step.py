@@ -27,6 +27,7 @@ from splinekit.interop.occ import from_occ, require_ocp, to_shape
 
 from ._brep_io import BrepItem, ReadResult, default_names, items_from_shapes
 from ._meshio import _fspath, check_target
+from ._stepscan import scan_step
 
 __all__ = ["export_step", "import_step", "StepItem", "ReadResult", "STEP_UNITS"]
 
@@ -377,7 +378,9 @@ def import_step(path, *, unit: str = "mm", strict: bool = True, surfaces: bool =
     B-spline form of its surface over the face's UV box (trims dropped).
 
     Raises FileFormatError if ``path`` is missing, unreadable or not STEP, or
-    holds no geometry; ParameterError if ``path`` is not a path (``None``, an
+    holds no geometry, or nests parentheses deeper than OCC's parser survives
+    (see :mod:`exporters._stepscan`); ResourceLimitError if OCC's model of the
+    file would exceed the memory budget; ParameterError if ``path`` is not a path (``None``, an
     empty string) or ``unit`` is unknown.
     """
     path = _fspath(path)
@@ -387,6 +390,7 @@ def import_step(path, *, unit: str = "mm", strict: bool = True, surfaces: bool =
     for flag, value in (("strict", strict), ("surfaces", surfaces)):
         if not isinstance(value, bool):
             raise ParameterError(f"{flag} must be True or False, got {value!r}")
+    scan_step(path)  # OCC's parser crashes the process on some inputs: refuse them first
     named = _read_named_shapes(path, metres)
     if surfaces:
         items = ReadResult()

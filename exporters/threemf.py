@@ -8,19 +8,27 @@ The package has the three parts a 3MF consumer needs: ``[Content_Types].xml``, `
 round-trip text of their float64 values.
 
 The reader takes the mesh objects of such a package (every ``<object>`` with a ``<mesh>``, placed
-by the build items' ``transform`` attributes).
+by the build items' ``transform`` attributes, and objects made of ``<components>``), with a real
+XML parser (expat, no DTD allowed), reading zip members with a size limit and checking the size
+of the expanded build against the memory budget before expanding it.
 """
 
 from __future__ import annotations
 
 import io
 import re
+import struct
 import zipfile
+import zlib
+from itertools import chain
+from operator import itemgetter
+from xml.parsers import expat
 from xml.sax.saxutils import quoteattr
 
 import numpy as np
 
-from splinekit.errors import FileFormatError, ParameterError
+from splinekit import limits
+from splinekit.errors import FileFormatError, ParameterError, SplineKitError
 
 from . import _meshio
 
@@ -107,98 +115,430 @@ def export_3mf(path, mesh, *, name="splinekit", unit="millimeter") -> str:
 
 
 # -- reading ----------------------------------------------------------------------------------
-_OBJECT_RE = re.compile(rb"<(?:\w+:)?object\b([^>]*)>(.*?)</(?:\w+:)?object\s*>", re.DOTALL)
-_ITEM_RE = re.compile(rb"<(?:\w+:)?item\b([^>]*?)/?>", re.DOTALL)
+# The model part is parsed with expat, fed in chunks straight from the zip member, so the XML text
+# is never held whole; vertex and triangle elements are collected as attribute dicts and turned
+# into arrays a chunk at a time. A document type declaration is refused outright (as defusedxml's
+# forbid_dtd does): without one no entity can be declared, so no entity expansion and no external
+# reference can happen. Expat is linear in the input.
+
+_CHUNK_BYTES = 1 << 20
+MODEL_BYTES_FACTOR = 4
+"""Memory charged per byte of (uncompressed) model XML before reading it: the vertex and triangle
+arrays (24 bytes for at least 27 bytes of text each), the attribute dicts of one chunk and the
+mesh built from them."""
+BYTES_PER_VERTEX = 64
+"""Memory charged per vertex of the expanded build: float64 coordinates, the transformed copy and
+the mesh built from it."""
+BYTES_PER_TRIANGLE = 160
+"""Memory charged per triangle of the expanded build (indices, offsets and the mesh topology)."""
+BYTES_PER_PLACEMENT = 1024
+"""Memory (and work) charged per placed copy of a mesh object, so that instancing a tiny object
+millions of times is refused too."""
+MAX_COMPONENT_DEPTH = 64
+"""Deepest nesting of component objects accepted (real files use one or two levels)."""
+MAX_RELS_BYTES = 1 << 20
+"""Largest ``_rels/.rels`` part accepted (a real one is a few hundred bytes)."""
+
+_CORE = _CORE_NS + " "
+_VERTEX = (_CORE + "vertex", "vertex")
+_TRIANGLE = (_CORE + "triangle", "triangle")
+_ZIP_ERRORS = (zipfile.BadZipFile, zipfile.LargeZipFile, zlib.error, EOFError, NotImplementedError,
+               RuntimeError, OSError, ValueError, OverflowError, struct.error, UnicodeError, KeyError,
+               IndexError, TypeError, LookupError)
 
 
-def _attribute(tag_text: bytes, name: bytes):
-    m = re.search(rb"(?:^|\s)" + name + rb"\s*=\s*(\"[^\"]*\"|'[^']*')", tag_text)
-    return None if m is None else m.group(1)[1:-1]
+def _local(name: str):
+    """The local name of an element of the core namespace or of no namespace, else None."""
+    if name.startswith(_CORE):
+        return name[len(_CORE):]
+    return None if " " in name else name
 
 
-def _numbers(block: bytes, tag: bytes, names, dtype, what: str, label: str) -> np.ndarray:
-    """``(n, len(names))`` attribute values of every ``<tag .../>`` in ``block``."""
-    n = len(re.findall(rb"<(?:\w+:)?" + tag + rb"\b", block))
-    columns = []
-    for attr in names:
-        found = re.findall(rb"<(?:\w+:)?" + tag + rb"\b[^>]*?\s" + attr + rb"\s*=\s*[\"']([^\"']*)[\"']", block)
-        if len(found) != n:
-            raise FileFormatError(f"{what}: {label}: a <{tag.decode()}> element has no {attr.decode()} attribute")
-        columns.append(np.array(found, dtype=bytes) if found else np.zeros(0, "S1"))
+class _Model:
+    """The parts of a 3MF model document that :func:`import_3mf` uses, filled by expat's
+    handlers: per object id its vertex and triangle ranges in the model's running vertex and
+    triangle lists, or its components; the build items."""
+
+    def __init__(self, what: str):
+        self.what = what
+        self.vertex_dicts, self.triangle_dicts = [], []  # of the current chunk
+        self.vertex_parts, self.triangle_parts = [], []  # (n, 3) arrays of the chunks so far
+        self.n_vertices = self.n_triangles = 0  # flushed so far
+        self.objects = {}  # id -> {"mesh": (v0, v1, t0, t1) or None, "components": [(id, transform)]}
+        self.items = []  # (object id, transform text)
+        self.stack = []  # open structural elements: (local name, data)
+        self.parser = None
+
+    # handlers: start() is called for every element, so its common case comes first
+    def start(self, name, attrs):
+        if name in _VERTEX:
+            self.vertex_dicts.append(attrs)
+        elif name in _TRIANGLE:
+            self.triangle_dicts.append(attrs)
+        else:
+            local = _local(name)
+            if local in ("object", "mesh", "vertices", "triangles", "components", "component", "build", "item"):
+                self._open(local, attrs)
+
+    def end(self, name):
+        if self.stack and name not in _VERTEX and name not in _TRIANGLE and _local(name) == self.stack[-1][0]:
+            self._close(*self.stack.pop())
+
+    def _where(self) -> str:
+        p = self.parser
+        return f"line {p.CurrentLineNumber}, column {p.CurrentColumnNumber + 1} (byte {p.CurrentByteIndex})"
+
+    def _fail(self, problem: str):
+        raise FileFormatError(f"{self.what}: {problem} at {self._where()} of the model part")
+
+    def _open(self, local, attrs):
+        parent = self.stack[-1][0] if self.stack else None
+        data = None
+        if local == "object":
+            oid = attrs.get("id")
+            if oid is None:
+                self._fail("an <object> has no id")
+            if oid in self.objects:
+                self._fail(f"object id {oid!r} is used twice")
+            data = oid
+            self.objects[oid] = {"mesh": None, "components": None}
+        elif local == "mesh":
+            if parent != "object":
+                self._fail("a <mesh> outside an <object>")
+            data = self.stack[-1][1]
+            if self.objects[data]["mesh"] is not None or self.objects[data]["components"] is not None:
+                self._fail(f"object {data!r} has more than one <mesh> or <components>")
+            self.objects[data]["mesh"] = [None, None]
+        elif local in ("vertices", "triangles"):
+            if parent != "mesh":
+                self._fail(f"a <{local}> outside a <mesh>")
+            if self.objects[self.stack[-1][1]]["mesh"][0 if local == "vertices" else 1] is not None:
+                self._fail(f"a <mesh> has more than one <{local}>")
+            data = self._flushed_count(local)
+        elif local == "components":
+            if parent != "object":
+                self._fail("a <components> outside an <object>")
+            data = self.stack[-1][1]
+            if self.objects[data]["mesh"] is not None or self.objects[data]["components"] is not None:
+                self._fail(f"object {data!r} has more than one <mesh> or <components>")
+            self.objects[data]["components"] = []
+        elif local == "component":
+            if parent != "components":
+                self._fail("a <component> outside <components>")
+            if attrs.get("objectid") is None:
+                self._fail("a <component> has no objectid")
+            self.objects[self.stack[-1][1]]["components"].append((attrs["objectid"], attrs.get("transform")))
+        elif local == "item":
+            if parent != "build":
+                self._fail("an <item> outside <build>")
+            if attrs.get("objectid") is None:
+                self._fail("a build <item> has no objectid")
+            self.items.append((attrs["objectid"], attrs.get("transform")))
+        self.stack.append((local, data))
+
+    def _flushed_count(self, local):
+        return self.n_vertices + len(self.vertex_dicts) if local == "vertices" else self.n_triangles + len(self.triangle_dicts)
+
+    def _close(self, local, data):
+        if local in ("vertices", "triangles"):
+            oid = self.stack[-1][1]  # the enclosing <mesh> holds the object id
+            self.objects[oid]["mesh"][0 if local == "vertices" else 1] = (data, self._flushed_count(local))
+
+    def flush(self):
+        """Turn the attribute dicts collected so far into arrays."""
+        if self.vertex_dicts:
+            self.vertex_parts.append(self._array(self.vertex_dicts, ("x", "y", "z"), np.float64, "vertex", self.n_vertices))
+            self.n_vertices += len(self.vertex_dicts)
+            self.vertex_dicts = []
+        if self.triangle_dicts:
+            self.triangle_parts.append(self._array(self.triangle_dicts, ("v1", "v2", "v3"), np.int64, "triangle", self.n_triangles))
+            self.n_triangles += len(self.triangle_dicts)
+            self.triangle_dicts = []
+
+    def _array(self, dicts, keys, dtype, tag, first) -> np.ndarray:
+        """``(len(dicts), 3)`` values of the attributes ``keys`` (Python's float()/int() over the
+        flat list of strings: a C loop, several times faster than numpy's string casts)."""
+        convert = float if dtype is np.float64 else int
+        try:
+            text = list(chain.from_iterable(map(itemgetter(*keys), dicts)))
+        except KeyError:
+            k = next(i for i, d in enumerate(dicts) if not all(key in d for key in keys))  # error path only
+            missing = next(key for key in keys if key not in dicts[k])
+            raise FileFormatError(f"{self.what}: <{tag}> {first + k} of the model has no {missing} attribute") from None
+        try:
+            return np.array(list(map(convert, text)), dtype=dtype).reshape(-1, 3)
+        except (ValueError, OverflowError):
+            kind = "number" if dtype is np.float64 else "integer"
+            k = next(i for i, t in enumerate(text) if not _parses(t, convert, dtype)) // 3  # error path only
+            raise FileFormatError(
+                f"{self.what}: <{tag}> {first + k} of the model has an attribute that is not a valid {kind}: "
+                f"{text[3 * k:3 * k + 3]}"
+            ) from None
+
+
+def _parses(token: str, convert, dtype) -> bool:
     try:
-        return np.stack(columns, axis=1).astype(dtype) if n else np.zeros((0, len(names)), dtype)
-    except ValueError:
-        kind = "number" if np.dtype(dtype).kind == "f" else "integer"
-        raise FileFormatError(f"{what}: {label}: a <{tag.decode()}> attribute is not a valid {kind}") from None
+        np.array([convert(token)], dtype=dtype)
+    except (ValueError, OverflowError):
+        return False
+    return True
 
 
-def _transform(text, what: str) -> np.ndarray:
-    """The 4 x 3 affine matrix of a 3MF ``transform`` attribute (row vectors: p' = [p 1] @ M)."""
+class _DoctypeRefused(Exception):
+    pass
+
+
+def _refuse_dtd(*_):
+    raise _DoctypeRefused
+
+
+def _expat(start=None, end=None):
+    parser = expat.ParserCreate(namespace_separator=" ")
+    parser.StartDoctypeDeclHandler = _refuse_dtd
+    parser.SetParamEntityParsing(expat.XML_PARAM_ENTITY_PARSING_NEVER)
+    if start is not None:
+        parser.StartElementHandler = start
+    if end is not None:
+        parser.EndElementHandler = end
+    return parser
+
+
+def _parse(parser, chunks, what: str, part: str, after_chunk=None) -> None:
+    """Feed ``chunks`` to ``parser``; XML errors and a DTD become FileFormatError naming ``part``."""
+    try:
+        for chunk in chunks:
+            parser.Parse(chunk, False)
+            if after_chunk is not None:
+                after_chunk()
+        parser.Parse(b"", True)
+    except expat.ExpatError as exc:
+        raise FileFormatError(
+            f"{what}: the {part} part is not well-formed XML: {expat.ErrorString(exc.code)} "
+            f"at line {exc.lineno}, column {exc.offset + 1} (byte {parser.ErrorByteIndex})"
+        ) from None
+    except _DoctypeRefused:
+        raise FileFormatError(
+            f"{what}: the {part} part has a document type declaration (<!DOCTYPE ...>) at line "
+            f"{parser.CurrentLineNumber}, which 3MF does not allow (it could declare entities)"
+        ) from None
+
+
+def _member(package, name: str, what: str):
+    info = package.getinfo(name)
+    if info.flag_bits & 0x1:
+        raise FileFormatError(f"{what}: the part {name!r} is encrypted")
+    return info
+
+
+def _chunks(package, info, what: str):
+    """The uncompressed bytes of member ``info``, a chunk at a time; never more than the size its
+    header declares (a member that inflates past it is refused, so a zip bomb cannot get through
+    a check made on the declared size)."""
+    total = 0
+    with package.open(info) as fh:
+        while True:
+            chunk = fh.read(_CHUNK_BYTES)
+            if not chunk:
+                break
+            total += len(chunk)
+            if total > info.file_size:
+                raise FileFormatError(f"{what}: the part {info.filename!r} inflates past the {info.file_size} bytes its header declares")
+            yield chunk
+    if total != info.file_size:
+        raise FileFormatError(f"{what}: the part {info.filename!r} has {total} bytes, its header declares {info.file_size}")
+
+
+def _model_target(package, names, what: str) -> str:
+    """The model part named by ``_rels/.rels`` (default ``3D/3dmodel.model``)."""
+    if "_rels/.rels" not in names:
+        return "3D/3dmodel.model"
+    info = _member(package, "_rels/.rels", what)
+    if info.file_size > MAX_RELS_BYTES:
+        raise FileFormatError(f"{what}: the _rels/.rels part declares {info.file_size} bytes; at most {MAX_RELS_BYTES} are accepted")
+    targets = []
+
+    def start(name, attrs):
+        if name.rsplit(" ", 1)[-1] == "Relationship" and attrs.get("Type") == _MODEL_TYPE:
+            targets.append(attrs.get("Target"))
+
+    _parse(_expat(start), _chunks(package, info, what), what, "_rels/.rels")
+    if not targets:
+        return "3D/3dmodel.model"
+    if not isinstance(targets[0], str) or not targets[0].strip("/"):
+        raise FileFormatError(f"{what}: the model relationship in _rels/.rels has no Target")
+    return targets[0].lstrip("/")
+
+
+def _read_model(package, target: str, what: str) -> _Model:
+    info = _member(package, target, what)
+    limits.check(info.file_size * MODEL_BYTES_FACTOR, f"reading the {info.file_size}-byte model part of {what}")
+    model = _Model(what)
+    model.parser = _expat(model.start, model.end)
+    _parse(model.parser, _chunks(package, info, what), what, "model", model.flush)
+    model.flush()
+    return model
+
+
+def _transform(text, what: str, where: str) -> np.ndarray:
+    """The 4 x 4 row-vector affine matrix of a 3MF ``transform`` attribute (p' = [p 1] @ M)."""
+    M = np.eye(4)
     if text is None:
-        return np.vstack([np.eye(3), np.zeros(3)])
+        return M
     try:
-        values = np.array(text.split(), dtype=bytes).astype(np.float64)
+        values = np.array(text.split()).astype(np.float64)
     except ValueError:
         values = np.zeros(0)
     if values.size != 12 or not np.isfinite(values).all():
-        raise FileFormatError(f"{what}: a build item has a malformed transform {text.decode('latin-1')!r} (12 numbers expected)")
-    return values.reshape(4, 3)
+        raise FileFormatError(f"{what}: {where} has a malformed transform {text[:200]!r} (12 finite numbers expected)")
+    M[:, :3] = values.reshape(4, 3)
+    return M
+
+
+def _sizes(model: _Model, what: str):
+    """Per object id ``(vertices, triangles, placements)`` of its full expansion (Python ints, so
+    exponential instancing is counted exactly), checking references, cycles and depth."""
+    sizes, visiting = {}, set()
+
+    def size(oid, depth):
+        if oid in sizes:
+            return sizes[oid]
+        if oid not in model.objects:
+            raise FileFormatError(f"{what}: a build item or component refers to object {oid!r}, which is not defined")
+        if oid in visiting:
+            raise FileFormatError(f"{what}: object {oid!r} contains itself through its components")
+        if depth > MAX_COMPONENT_DEPTH:
+            raise FileFormatError(f"{what}: components nest more than {MAX_COMPONENT_DEPTH} levels deep")
+        obj = model.objects[oid]
+        if obj["mesh"] is not None:
+            (v0, v1), (t0, t1) = obj["mesh"][0] or (0, 0), obj["mesh"][1] or (0, 0)
+            total = (v1 - v0, t1 - t0, 1 if v1 > v0 else 0)
+        else:
+            visiting.add(oid)
+            total = (0, 0, 0)
+            for child, _ in obj["components"] or ():
+                n = size(child, depth + 1)
+                total = tuple(a + b for a, b in zip(total, n))
+            visiting.discard(oid)
+        sizes[oid] = total
+        return total
+
+    return size
 
 
 def import_3mf(path):
     """Read the mesh objects of a 3MF package into one :class:`~splinekit.PolyMesh` of triangles.
 
-    Every build item's object is placed with the item's ``transform``; without build items, every
-    mesh object is taken as it is. Objects made of components, missing parts and malformed XML
-    raise :class:`~splinekit.errors.FileFormatError`.
+    Every build item's object is placed with the item's ``transform``; an object made of
+    components places each component's object with the component's transform, recursively (up
+    to :data:`MAX_COMPONENT_DEPTH` levels). Without build items, every mesh object is taken as it
+    is. The size of the expanded build is estimated before anything is copied and checked
+    against the memory budget (:func:`splinekit.limits.check`), and so is the model part's
+    uncompressed size before it is read.
+
+    Raises :class:`~splinekit.errors.FileFormatError` (naming the file, and where known the line
+    and byte of the model part) on a malformed package: not a zip, a missing part, a part that
+    inflates past its declared size, XML that is not well-formed or declares a DTD, a bad number,
+    an index out of range, a reference to a missing object, a component cycle, a transform that
+    gives non-finite coordinates; :class:`~splinekit.errors.ResourceLimitError` when the model or
+    its expansion would exceed the memory budget.
     """
     what = f"3MF file {_meshio._fspath(path)!r}"
     raw = _meshio.read_bytes(path, "3MF file")
     try:
         with zipfile.ZipFile(io.BytesIO(raw)) as package:
-            names = package.namelist()
-            target = "3D/3dmodel.model"
-            if "_rels/.rels" in names:
-                rels = package.read("_rels/.rels")
-                for rel in re.findall(rb"<(?:\w+:)?Relationship\b[^>]*>", rels):
-                    if _attribute(rel, b"Type") == _MODEL_TYPE.encode():
-                        target = _attribute(rel, b"Target").decode("utf-8").lstrip("/")
+            names = set(package.namelist())
+            target = _model_target(package, names, what)
             if target not in names:
                 raise FileFormatError(f"{what}: the package has no model part {target!r}")
-            model = package.read(target)
-    except (zipfile.BadZipFile, zipfile.LargeZipFile, EOFError, KeyError) as exc:
-        raise FileFormatError(f"{what}: not a readable 3MF (zip) package: {exc}") from None
-    objects = {}
-    for attrs, body in _OBJECT_RE.findall(model):
-        oid = _attribute(attrs, b"id")
-        if oid is None:
-            raise FileFormatError(f"{what}: an <object> has no id")
-        label = f"object {oid.decode('latin-1')}"
-        if re.search(rb"<(?:\w+:)?components\b", body):
-            raise FileFormatError(f"{what}: {label} is made of components, which import_3mf does not support")
-        if not re.search(rb"<(?:\w+:)?mesh\b", body):
+            model = _read_model(package, target, what)
+    except SplineKitError:
+        raise
+    except _ZIP_ERRORS as exc:
+        raise FileFormatError(f"{what}: not a readable 3MF (zip) package: {type(exc).__name__}: {exc}") from None
+    V_all = np.concatenate(model.vertex_parts) if model.vertex_parts else np.zeros((0, 3))
+    T_all = np.concatenate(model.triangle_parts) if model.triangle_parts else np.zeros((0, 3), dtype=np.int64)
+    for oid, obj in model.objects.items():
+        if obj["mesh"] is None:
             continue
-        V = _numbers(body, b"vertex", (b"x", b"y", b"z"), np.float64, what, label)
-        T = _numbers(body, b"triangle", (b"v1", b"v2", b"v3"), np.int64, what, label)
-        _meshio.finite_or_raise(V, f"{what}: {label}")
-        bad = (T < 0) | (T >= len(V))
+        (v0, v1), (t0, t1) = obj["mesh"][0] or (0, 0), obj["mesh"][1] or (0, 0)
+        _meshio.finite_or_raise(V_all[v0:v1], f"{what}: object {oid}")
+        T = T_all[t0:t1]
+        bad = (T < 0) | (T >= v1 - v0)
         if bad.any():
             t = int(np.flatnonzero(bad.any(axis=1))[0])
-            raise FileFormatError(f"{what}: {label}: triangle {t} refers to vertex {T[t].tolist()}, outside 0..{len(V) - 1}")
-        objects[oid] = (V, T)
-    if not objects:
+            raise FileFormatError(f"{what}: object {oid}: triangle {t} refers to vertex {T[t].tolist()}, outside 0..{v1 - v0 - 1}")
+    if not any(obj["mesh"] is not None for obj in model.objects.values()):
         raise FileFormatError(f"{what}: the model has no mesh object")
-    items = [(_attribute(a, b"objectid"), _transform(_attribute(a, b"transform"), what)) for a in _ITEM_RE.findall(model)]
-    if not items:
-        items = [(oid, _transform(None, what)) for oid in objects]
+    items = model.items or [(oid, None) for oid, obj in model.objects.items() if obj["mesh"] is not None]
+    roots = [(oid, _transform(text, what, f"build item {k} (object {oid!r})")) for k, (oid, text) in enumerate(items)]
+
+    # estimate the expansion, then check it against the budget, before copying anything
+    size = _sizes(model, what)
+    n_v = n_t = n_p = 0
+    for oid, _ in roots:
+        v, t, p = size(oid, 0)
+        n_v, n_t, n_p = n_v + v, n_t + t, n_p + p
+    limits.check(
+        n_v * BYTES_PER_VERTEX + n_t * BYTES_PER_TRIANGLE + n_p * BYTES_PER_PLACEMENT,
+        f"expanding the build of {what} ({n_v} vertices, {n_t} triangles in {n_p} placed objects)",
+    )
+
+    # placements: per object id the (k, 4, 4) world matrices of its copies, parents before children
+    placements: dict = {}
+    for oid, M in roots:
+        placements.setdefault(oid, []).append(M[None])
+    order = _parents_first(model, [oid for oid, _ in roots], size)
     parts_v, parts_t, base = [], [], 0
-    for oid, M in items:
-        if oid not in objects:
-            raise FileFormatError(f"{what}: a build item refers to object {oid!r}, which has no mesh")
-        V, T = objects[oid]
-        parts_v.append(V @ M[:3] + M[3])
-        parts_t.append(T + base)
-        base += len(V)
-    V = np.concatenate(parts_v)
-    T = np.concatenate(parts_t)
+    with np.errstate(over="ignore", invalid="ignore"):
+        for oid in order:
+            P = np.concatenate(placements.pop(oid))
+            obj = model.objects[oid]
+            if obj["mesh"] is None:
+                for child, text in obj["components"]:
+                    if size(child, 0)[2]:  # skip subtrees without vertices
+                        C = _transform(text, what, f"a component of object {oid!r}")
+                        placements.setdefault(child, []).append(C @ P)
+                continue
+            (v0, v1), (t0, t1) = obj["mesh"][0] or (0, 0), obj["mesh"][1] or (0, 0)
+            V = V_all[v0:v1]
+            X = np.einsum("vi,kij->kvj", V, P[:, :3, :3]) + P[:, None, 3, :3]  # (k, nv, 3)
+            parts_v.append(X.reshape(-1, 3))
+            parts_t.append((T_all[t0:t1][None] + (base + np.arange(len(P)) * (v1 - v0))[:, None, None]).reshape(-1, 3))
+            base += len(P) * (v1 - v0)
+    V = np.concatenate(parts_v) if parts_v else np.zeros((0, 3))
+    T = np.concatenate(parts_t) if parts_t else np.zeros((0, 3), dtype=np.int64)
+    bad = ~np.isfinite(V).all(axis=1)
+    if bad.any():
+        raise FileFormatError(
+            f"{what}: the build's transforms take vertex {int(np.flatnonzero(bad)[0])} of the expanded mesh "
+            f"beyond the float64 range ({V[bad][0].tolist()})"
+        )
     return _meshio.build_mesh(V, T.ravel(), np.arange(len(T) + 1, dtype=np.int64) * 3, what)
+
+
+def _parents_first(model: _Model, roots, size) -> list:
+    """The object ids reachable from ``roots`` (through components whose expansion has vertices),
+    each after every object that contains it (a reverse post-order; cycles are already refused)."""
+    post, done = [], set()
+    for root in dict.fromkeys(roots):
+        if root in done or not size(root, 0)[2]:
+            continue
+        stack = [(root, iter(_children(model, root, size)))]
+        done.add(root)
+        while stack:
+            oid, children = stack[-1]
+            child = next(children, None)
+            if child is None:
+                post.append(oid)
+                stack.pop()
+            elif child not in done:
+                done.add(child)
+                stack.append((child, iter(_children(model, child, size))))
+    return post[::-1]
+
+
+def _children(model: _Model, oid, size) -> list:
+    obj = model.objects[oid]
+    if obj["mesh"] is not None:
+        return []
+    return [child for child, _ in obj["components"] or () if size(child, 0)[2]]

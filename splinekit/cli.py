@@ -415,6 +415,9 @@ def read_step_shape(path):
     IFSelect, STEPControl = _occ("IFSelect", "STEPControl")
     if not os.path.isfile(path):
         raise FileFormatError(f"STEP file {path!r} does not exist or is not a file")
+    from exporters._stepscan import scan_step
+
+    scan_step(path)  # OCC's parser crashes the process on some inputs: refuse them first
     reader = STEPControl.STEPControl_Reader()
     status = reader.ReadFile(path)
     if status != IFSelect.IFSelect_ReturnStatus.IFSelect_RetDone:
