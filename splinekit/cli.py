@@ -11,7 +11,10 @@ Subcommands::
 
 ``--quiet`` silences everything but errors, ``--verbose`` adds detail and
 tracebacks. Errors are one line on stderr (``splinekit: error: ...``) with exit
-status 1 (2 for a malformed command line, 130 for an interrupt).
+status 1 (2 for a malformed command line). SIGINT and SIGTERM end a command with
+one line and status 130 / 143, leaving no temporary file (see
+:mod:`splinekit._signals`); a closed stdout (``splinekit list | head -1``) ends
+it silently with status 141, as SIGPIPE ends other Unix tools.
 
 The models come from the ``models`` package; the environment variable
 ``SPLINEKIT_MODELS`` names another module with the same registry interface
@@ -24,11 +27,14 @@ from __future__ import annotations
 import argparse
 import importlib
 import os
+import signal
 import sys
 import time
+import warnings
 
 import numpy as np
 
+from . import __version__, _signals
 from ._progress import is_enabled, progress, set_enabled
 from .errors import (
     FileFormatError,
@@ -165,6 +171,7 @@ def _registry():
     try:
         module = importlib.import_module(name)
     except ImportError as exc:
+        _signals.reraise_interrupt(exc)
         raise MissingDependencyError(f"cannot import the model registry {name!r}: {exc}") from None
     missing = [attr for attr in ("MODELS", "DEFAULT_MODEL", "get_model", "build_model") if not hasattr(module, attr)]
     if missing:
@@ -266,6 +273,7 @@ def _tessellator():
     try:
         from .tessellate import tessellate
     except ImportError as exc:
+        _signals.reraise_interrupt(exc)
         raise MissingDependencyError(f"mesh output needs splinekit.tessellate, which does not import: {exc}") from None
     return tessellate
 
@@ -787,6 +795,7 @@ def _parser() -> argparse.ArgumentParser:
     common.add_argument("-v", "--verbose", action="store_true", default=argparse.SUPPRESS,
                         help="print more detail, and the traceback of an unexpected error")
     parser = _Parser(prog="splinekit", description="Spline and subdivision modeling toolkit.", parents=[common])
+    parser.add_argument("--version", action="version", version=f"splinekit {__version__}")
     sub = parser.add_subparsers(dest="command", parser_class=_Parser, metavar="COMMAND")
 
     sub.add_parser("list", parents=[common], help="the models, their parameters, defaults, units and ranges")
@@ -837,8 +846,49 @@ def _first_line(exc: BaseException) -> str:
     return text.splitlines()[0] if text else type(exc).__name__
 
 
+def _error_line(text: str) -> None:
+    """``text`` as one line on stderr; a closed stderr is no further error."""
+    try:
+        sys.stderr.write(text + "\n")
+        sys.stderr.flush()
+    except (OSError, ValueError):
+        pass
+
+
 def main(argv=None) -> int:
-    """Run the command line with ``argv`` (default ``sys.argv[1:]``); returns the exit status."""
+    """Run the command line with ``argv`` (default ``sys.argv[1:]``); returns the exit status.
+
+    SIGINT / SIGTERM end the command with one line on stderr and status 130 / 143; in the
+    ``splinekit`` process itself the process then ends at once (:func:`splinekit._signals.finish`).
+    A closed stdout ends it silently with status 141.
+    """
+    with _signals.running() as own:
+        try:
+            status = _main(argv)
+            signum = _signals.received()  # a signal whose exception a library swallowed still counts
+        except KeyboardInterrupt as exc:
+            signum = _signals.received() or getattr(exc, "signum", signal.SIGINT)
+        except BrokenPipeError:  # the reader of stdout is gone: stop, and say nothing
+            if own:
+                _signals.finish(141)
+            return 141
+        if signum is not None:
+            status = _signals.STATUS.get(signum, 128 + signum)
+            # on a terminal the line starts afresh after the echoed ^C
+            _error_line(("\n" if signum == signal.SIGINT and _is_tty(sys.stderr) else "") + _signals.message(signum))
+            if own:
+                _signals.finish(status)
+    return status
+
+
+def _is_tty(stream) -> bool:
+    try:
+        return bool(stream.isatty())
+    except (AttributeError, ValueError):
+        return False
+
+
+def _main(argv) -> int:
     parser = _parser()
     args = parser.parse_args(argv)
     quiet, verbose = getattr(args, "quiet", False), getattr(args, "verbose", False)
@@ -853,33 +903,53 @@ def main(argv=None) -> int:
         set_enabled(bars)  # main() may be called again in the same process
 
 
+# A RuntimeWarning from numpy in our code means an overflow or an invalid operation on extreme
+# input: the command stops with one line instead of printing the warning and an inf result.
+_OUR_MODULES = r"(splinekit|exporters|models|numpy|__main__)(\.|$)"
+
+
 def _run(args, console: _Console) -> int:
     """Run the parsed command; errors become one line on stderr and an exit status."""
     verbose = console.verbose
     try:
-        if args.command == "demo":
-            return cmd_demo(args)
-        return COMMANDS[args.command](args, console)
-    except KeyboardInterrupt:
-        sys.stderr.write("\nsplinekit: interrupted\n")
-        return 130
+        with warnings.catch_warnings():
+            warnings.filterwarnings("error", category=RuntimeWarning, module=_OUR_MODULES)
+            if args.command == "demo":
+                return cmd_demo(args)
+            return COMMANDS[args.command](args, console)
+    except BrokenPipeError:
+        raise  # main() ends quietly
     except (SplineKitError, OSError) as exc:
-        if verbose:
-            import traceback
-
-            traceback.print_exc()
-        sys.stderr.write(f"splinekit: error: {_first_line(exc)}\n")
+        _traceback(verbose)
+        _error_line(f"splinekit: error: {_first_line(exc)}")
+        return 1
+    except RuntimeWarning as exc:
+        _traceback(verbose)
+        _error_line(f"splinekit: error: numerical failure ({_first_line(exc)} at {_where(exc)}): "
+                    "the input values are too extreme for double precision")
         return 1
     except Exception as exc:  # a bug: still one line, the traceback on request
-        if verbose:
-            import traceback
-
-            traceback.print_exc()
-            sys.stderr.write(f"splinekit: error: unexpected {type(exc).__name__}: {_first_line(exc)}\n")
-        else:
-            sys.stderr.write(f"splinekit: error: unexpected {type(exc).__name__}: {_first_line(exc)}; "
-                             "run with --verbose for the traceback\n")
+        _traceback(verbose)
+        hint = "" if verbose else "; run with --verbose for the traceback"
+        _error_line(f"splinekit: error: unexpected {type(exc).__name__}: {_first_line(exc)}{hint}")
         return 1
+
+
+def _traceback(verbose: bool) -> None:
+    if verbose:
+        import traceback
+
+        traceback.print_exc()
+
+
+def _where(exc: BaseException) -> str:
+    """``module.py:line`` where ``exc`` was raised."""
+    tb = exc.__traceback__
+    while tb is not None and tb.tb_next is not None:
+        tb = tb.tb_next
+    if tb is None:
+        return "?"
+    return f"{os.path.basename(tb.tb_frame.f_code.co_filename)}:{tb.tb_lineno}"
 
 
 if __name__ == "__main__":  # pragma: no cover
