@@ -38,6 +38,7 @@ from . import __version__, _signals
 from ._progress import is_enabled, progress, set_enabled
 from .errors import (
     FileFormatError,
+    MeshTopologyError,
     MissingDependencyError,
     ParameterError,
     SplineKitError,
@@ -155,11 +156,26 @@ def _table(rows, header) -> str:
     return "\n".join(lines)
 
 
+_BEYOND = "-- (beyond the float range)"
+
+
 def _bbox_text(lo, hi) -> str:
     lo, hi = np.asarray(lo, float), np.asarray(hi, float)
-    size = hi - lo
+    with np.errstate(over="ignore"):  # coordinates near the float limits: a size beyond it is said so
+        size = hi - lo
     return (f"[{', '.join(f'{x:.6g}' for x in lo)}] .. [{', '.join(f'{x:.6g}' for x in hi)}] "
-            f"(size {' x '.join(f'{x:.6g}' for x in size)})")
+            f"(size {' x '.join(f'{x:.6g}' if np.isfinite(x) else 'beyond the float range' for x in size)})")
+
+
+def _measure(get, fmt: str) -> str:
+    """``get()`` (an area or a volume) formatted with ``fmt``, or why there is no number: on a mesh
+    near the float limits the measure overflows (MeshTopologyError), which is worth a note in a
+    summary, not a failed command after its files are written."""
+    try:
+        value = float(get())
+    except MeshTopologyError as exc:
+        return f"-- ({_first_line(exc)})"
+    return format(value, fmt) if np.isfinite(value) else _BEYOND
 
 
 # ---------------------------------------------------------------------------
@@ -360,11 +376,12 @@ def _build_and_export(registry, name, sets, formats, tolerance, out_dir, strict,
         from .interop.occ import to_shape
 
         shapes = [to_shape(list(body)) for body in model.bodies]
-        console.out(f"  volume {sum(occ_volume(s) for s in shapes):.8g}, area {sum(occ_area(s) for s in shapes):.8g} (exact, OCC)")
+        volume = _measure(lambda: sum(occ_volume(s) for s in shapes), ".8g")
+        console.out(f"  volume {volume}, area {_measure(lambda: sum(occ_area(s) for s in shapes), '.8g')} (exact, OCC)")
     elif mesh is not None and mesh.is_closed:
-        console.out(f"  volume {float(mesh.volume):.8g}, area {float(mesh.area):.8g} (mesh)")
+        console.out(f"  volume {_measure(lambda: mesh.volume, '.8g')}, area {_measure(lambda: mesh.area, '.8g')} (mesh)")
     elif mesh is not None:
-        console.out(f"  area {float(mesh.area):.8g} (mesh; open surface, no volume)")
+        console.out(f"  area {_measure(lambda: mesh.area, '.8g')} (mesh; open surface, no volume)")
     console.out(f"  built in {t_build:.2f} s, total {time.perf_counter() - t0:.2f} s")
 
 
@@ -524,8 +541,8 @@ def _info_mesh(path, console: _Console) -> int:
                 + (f", genus {genus:g}" if genus is not None else ""))
     if len(V):
         console.out(f"  bounding box {_bbox_text(V.min(0), V.max(0))}")
-    console.out(f"  area   {float(mesh.area):.10g}")
-    console.out(f"  volume {float(mesh.volume):.10g}" if closed else "  volume -- (open mesh)")
+    console.out(f"  area   {_measure(lambda: mesh.area, '.10g')}")
+    console.out(f"  volume {_measure(lambda: mesh.volume, '.10g')}" if closed else "  volume -- (open mesh)")
     return 0
 
 
@@ -858,9 +875,12 @@ def _error_line(text: str) -> None:
 def main(argv=None) -> int:
     """Run the command line with ``argv`` (default ``sys.argv[1:]``); returns the exit status.
 
-    SIGINT / SIGTERM end the command with one line on stderr and status 130 / 143; in the
-    ``splinekit`` process itself the process then ends at once (:func:`splinekit._signals.finish`).
-    A closed stdout ends it silently with status 141.
+    SIGINT / SIGTERM end the command with one line on stderr and status 130 / 143. A closed
+    stdout ends it silently with status 141. In the ``splinekit`` process itself (the console
+    script, ``python -m splinekit``) main does not return: the process ends with the status
+    through :func:`splinekit._signals.finish`, after flushing its output, so that no moment is
+    left in which a signal meets the interpreter's teardown (default handling, or an extension
+    interrupted while it initialised).
     """
     with _signals.running() as own:
         try:
@@ -869,15 +889,19 @@ def main(argv=None) -> int:
         except KeyboardInterrupt as exc:
             signum = _signals.received() or getattr(exc, "signum", signal.SIGINT)
         except BrokenPipeError:  # the reader of stdout is gone: stop, and say nothing
-            if own:
-                _signals.finish(141)
-            return 141
+            signum, status = None, 141
+        except SystemExit as exc:  # --help, --version, a malformed command line
+            if not own:
+                raise
+            signum, status = None, exc.code if isinstance(exc.code, int) else int(exc.code is not None)
+            if isinstance(exc.code, str):
+                _error_line(exc.code)
         if signum is not None:
             status = _signals.STATUS.get(signum, 128 + signum)
             # on a terminal the line starts afresh after the echoed ^C
             _error_line(("\n" if signum == signal.SIGINT and _is_tty(sys.stderr) else "") + _signals.message(signum))
-            if own:
-                _signals.finish(status)
+    if own:
+        _signals.finish(status)
     return status
 
 
