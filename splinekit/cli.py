@@ -35,6 +35,7 @@ import warnings
 import numpy as np
 
 from . import __version__, _signals
+from ._atomic import checked_path
 from ._progress import is_enabled, progress, set_enabled
 from .errors import (
     FileFormatError,
@@ -401,7 +402,7 @@ def cmd_build(args, console: _Console) -> int:
     formats = _formats(args.format)
     tolerance = _tolerance(args.tolerance)
     names = _model_names(registry, args)
-    out_dir = args.output or "."
+    out_dir = checked_path(args.output or ".")  # a NUL byte is a ParameterError, not a ValueError from os
     if os.path.exists(out_dir) and not os.path.isdir(out_dir):
         raise ParameterError(f"output folder {out_dir!r} exists and is not a folder")
     strict = args.format is not None and len(names) == 1
