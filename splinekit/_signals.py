@@ -140,9 +140,13 @@ def _unraisable(unraisable) -> None:
 
 
 def _again(signum: int) -> None:
-    """Run the handler for ``signum`` in the main thread, as if the signal came again."""
+    """Send ``signum`` to the main thread again (a real signal, so that a blocking call such as
+    a sleep is interrupted too)."""
     if _state.phase == _RUNNING and not _state.in_flight:
-        _thread.interrupt_main(signum)
+        if hasattr(signal, "pthread_kill"):
+            signal.pthread_kill(threading.main_thread().ident, signum)
+        else:  # pragma: no cover - Windows: the handler runs, a blocking call is not interrupted
+            _thread.interrupt_main(signum)
 
 
 def _in_main_thread() -> bool:

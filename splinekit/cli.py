@@ -803,7 +803,7 @@ class _Parser(argparse.ArgumentParser):
     """argparse with one-line errors: ``splinekit: error: ...`` and exit status 2."""
 
     def error(self, message):
-        self.exit(2, f"{self.prog.split()[0]}: error: {message} (see --help)\n")
+        self.exit(2, _one_line(f"{self.prog.split()[0]}: error: {message} (see --help)") + "\n")
 
 
 def _parser() -> argparse.ArgumentParser:
@@ -864,10 +864,17 @@ def _first_line(exc: BaseException) -> str:
     return text.splitlines()[0] if text else type(exc).__name__
 
 
+def _one_line(text: str) -> str:
+    """``text`` with every character that ends a line or steers a terminal (newline, carriage
+    return, escape, the separators \\x1c-\\x1e, U+2028...) written as its escape: arguments echoed
+    in an error message cannot break it into several lines."""
+    return "".join(c if c.isprintable() or c == " " else repr(c)[1:-1] for c in text)
+
+
 def _error_line(text: str) -> None:
     """``text`` as one line on stderr; a closed stderr is no further error."""
     try:
-        sys.stderr.write(text + "\n")
+        sys.stderr.write(_one_line(text) + "\n")
         sys.stderr.flush()
     except (OSError, ValueError):
         pass

@@ -180,3 +180,166 @@ def test_sigint_and_sigterm_at_random_moments(reference, tmp_path):
 @pytest.mark.skipif(not sys.platform.startswith("linux"), reason="signals and /proc as on Linux")
 def test_sigint_and_sigterm_at_random_moments_long(reference, tmp_path):
     _sweep(reference, tmp_path, tries_per_signal=150, seed=1313)
+
+
+# -- the mechanism, in process ----------------------------------------------------------------
+
+REGISTRY = '''
+"""Models that signal themselves while they build (for the in-process signal tests)."""
+import ctypes, os, signal, time
+from dataclasses import dataclass, field
+
+from splinekit.errors import ParameterError
+from splinekit.mesh import primitives
+
+
+@dataclass
+class Model:
+    name: str
+    params: dict
+    bodies: list = field(default_factory=list)
+    body_names: list = field(default_factory=list)
+    mesh: object = None
+    closed: bool = True
+    checks: dict = field(default_factory=dict)
+
+
+class _Module:
+    PARAMETERS = ()
+
+    def __init__(self, build):
+        self.__doc__, self.build = "A model.", build
+
+
+def _signal():
+    os.kill(os.getpid(), int(os.environ["SPLINEKIT_TEST_SIGNAL"]))
+
+
+def plain(**given):
+    _signal()
+    time.sleep(20)  # interrupted long before
+    return Model("plain", {}, mesh=primitives.box())
+
+
+def swallowed(**given):
+    try:
+        _signal()
+        time.sleep(20)
+    except BaseException:  # a library that swallows everything: the command still ends 130/143
+        pass
+    return Model("swallowed", {}, mesh=primitives.box())
+
+
+def in_callback(**given):
+    # the signal is handled inside a ctypes callback, whose exceptions ctypes discards
+    # (numba's compiler calls back into Python this way)
+    callback = ctypes.CFUNCTYPE(None)(lambda: (_signal(), sum(range(1000))))
+    callback()
+    time.sleep(20)  # the discarded interrupt comes again and ends this
+    return Model("in_callback", {}, mesh=primitives.box())
+
+
+MODELS = {"plain": _Module(plain), "swallowed": _Module(swallowed), "in_callback": _Module(in_callback)}
+DEFAULT_MODEL = "plain"
+
+
+def get_model(name):
+    if name not in MODELS:
+        raise ParameterError(f"unknown model {name!r}")
+    return MODELS[name]
+
+
+def build_model(name, **params):
+    return get_model(name).build(**params)
+'''
+
+
+@pytest.fixture
+def signalling_registry(tmp_path, monkeypatch, capsys):
+    (tmp_path / "splinekit_signal_models.py").write_text(REGISTRY)
+    monkeypatch.syspath_prepend(str(tmp_path))
+    monkeypatch.setenv("SPLINEKIT_MODELS", "splinekit_signal_models")
+    monkeypatch.chdir(tmp_path)
+    return tmp_path
+
+
+@pytest.mark.parametrize("model", ["plain", "swallowed", "in_callback"])
+@pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM])
+def test_main_in_process_ends_on_a_signal_with_one_line_and_restores_the_handlers(signalling_registry, monkeypatch,
+                                                                                   capsys, model, signum):
+    from splinekit.cli import main
+
+    monkeypatch.setenv("SPLINEKIT_TEST_SIGNAL", str(int(signum)))
+    before = {s: signal.getsignal(s) for s in (signal.SIGINT, signal.SIGTERM)}
+    hook = sys.unraisablehook
+    t0 = time.monotonic()
+    status = main(["build", model, "--format", "stl", "-o", "out"])
+    err = capsys.readouterr().err
+    assert status == 128 + signum
+    assert err.splitlines() == [MESSAGES[signum]]
+    assert time.monotonic() - t0 < 15  # not the 20 s sleep: interrupted
+    assert {s: signal.getsignal(s) for s in before} == before and sys.unraisablehook is hook
+
+
+def test_a_signal_inside_a_deferred_block_is_raised_when_it_ends(tmp_path):
+    from splinekit import _atomic, _signals
+
+    steps = []
+    with _signals.running():
+        with pytest.raises(_signals.Interrupted) as info:
+            with _signals.deferred():
+                os.kill(os.getpid(), signal.SIGTERM)
+                for _ in range(10000):  # many chances for the handler to run
+                    pass
+                steps.append("end of block")
+        assert steps == ["end of block"] and info.value.signum == signal.SIGTERM and info.value.status == 143
+
+    # the atomic writer: the interrupt lands while write() runs; the temporary file goes, the
+    # target stays as it was
+    target = tmp_path / "kept.bin"
+    target.write_bytes(b"old")
+
+    def write(tmp):
+        with open(tmp, "wb") as fh:
+            fh.write(b"partial")
+        os.kill(os.getpid(), signal.SIGINT)
+        time.sleep(20)
+
+    with _signals.running():
+        with pytest.raises(_signals.Interrupted):
+            _atomic.atomic_write(target, write)
+    assert target.read_bytes() == b"old" and os.listdir(tmp_path) == ["kept.bin"]
+
+
+def test_an_interrupted_ocp_import_is_an_interrupt_not_a_missing_package(monkeypatch):
+    """pybind11 reports an extension interrupted while it initialises as ``ImportError:
+    initialization failed`` caused by the KeyboardInterrupt; that is no missing package."""
+    import importlib.abc
+
+    from splinekit.errors import MissingDependencyError
+    from splinekit.interop import occ
+
+    class Interrupted(importlib.abc.MetaPathFinder, importlib.abc.Loader):
+        def __init__(self, cause):
+            self.cause = cause
+
+        def find_spec(self, name, path=None, target=None):
+            import importlib.util
+
+            return importlib.util.spec_from_loader(name, self) if name == "OCP" else None
+
+        def create_module(self, spec):
+            return None
+
+        def exec_module(self, module):
+            raise ImportError("initialization failed") from self.cause
+
+    for name in [m for m in sys.modules if m == "OCP" or m.startswith("OCP.")]:
+        monkeypatch.delitem(sys.modules, name)
+    monkeypatch.setattr(occ, "_MODULES", {})
+    monkeypatch.setattr(sys, "meta_path", [Interrupted(KeyboardInterrupt())] + sys.meta_path)
+    with pytest.raises(KeyboardInterrupt):
+        occ.require_ocp()
+    sys.meta_path[0].cause = RuntimeError("a broken build of OCP")  # a real failure stays one
+    with pytest.raises(MissingDependencyError, match="OCP"):
+        occ.require_ocp()
