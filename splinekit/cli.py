@@ -214,7 +214,12 @@ def _parse_sets(registry, name: str, items) -> dict:
         if key not in params:
             known = ", ".join(params) or "none"
             raise ParameterError(f"model '{name}' has no parameter '{key}'; parameters: {known}")
-        values[key] = params[key].parse(text)
+        try:
+            values[key] = params[key].parse(text)
+        except SplineKitError:
+            raise
+        except (ArithmeticError, ValueError, TypeError) as exc:  # a registry's parser that lets one out
+            raise ParameterError(f"--set {key}={text!r}: not a value of parameter '{key}' ({_first_line(exc)})") from None
     return values
 
 

@@ -410,6 +410,16 @@ def real_sets(draw):
     return model, name, text
 
 
+def test_huge_integers_for_every_real_parameter(real_registry):
+    """``int('9' * 400)`` parses, and ``float()`` of it overflows: one line, not an OverflowError."""
+    for model, names in _real_models().items():
+        for name in names:
+            with scratch() as folder:
+                for text in ("9" * 400, "-" + "9" * 400, "1e400"):
+                    status, _, err = check(["build", model, "--set", f"{name}={text}"], folder, "real parameters")
+                    assert status == 1 and name in err
+
+
 @FUZZ
 @given(case=real_sets(), command=st.sampled_from(["build", "render", "check"]))
 def test_fuzz_real_model_parameters(real_registry, case, command):
