@@ -876,10 +876,11 @@ def _one_line(text: str) -> str:
     return "".join(c if c.isprintable() or c == " " else repr(c)[1:-1] for c in text)
 
 
-def _error_line(text: str) -> None:
-    """``text`` as one line on stderr; a closed stderr is no further error."""
+def _error_line(text: str, after_echo: bool = False) -> None:
+    """``text`` as one line on stderr; a closed stderr is no further error. ``after_echo``: on a
+    terminal, start a fresh line first (the terminal has echoed ``^C``)."""
     try:
-        sys.stderr.write(_one_line(text) + "\n")
+        sys.stderr.write(("\n" if after_echo and _is_tty(sys.stderr) else "") + _one_line(text) + "\n")
         sys.stderr.flush()
     except (OSError, ValueError):
         pass
@@ -911,8 +912,7 @@ def main(argv=None) -> int:
                 _error_line(exc.code)
         if signum is not None:
             status = _signals.STATUS.get(signum, 128 + signum)
-            # on a terminal the line starts afresh after the echoed ^C
-            _error_line(("\n" if signum == signal.SIGINT and _is_tty(sys.stderr) else "") + _signals.message(signum))
+            _error_line(_signals.message(signum), after_echo=signum == signal.SIGINT)
     if own:
         _signals.finish(status)
     return status
