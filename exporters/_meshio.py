@@ -20,9 +20,9 @@ import stat
 import numpy as np
 
 from splinekit import limits
-from splinekit._atomic import atomic_write
+from splinekit._atomic import atomic_write, checked_path, write_target
+from splinekit._signals import reraise_interrupt
 from splinekit.errors import (
-    ExportError,
     FileFormatError,
     MeshTopologyError,
     ParameterError,
@@ -86,15 +86,8 @@ def format_of(path, format=None) -> str:
 
 
 def _fspath(path) -> str:
-    try:
-        path = os.fspath(path)
-    except TypeError:
-        raise ParameterError(f"path must be a str or os.PathLike, got {type(path).__name__}") from None
-    if isinstance(path, bytes):
-        path = os.fsdecode(path)
-    if not path:
-        raise ParameterError("path is empty")
-    return path
+    """``path`` as a str; ParameterError if it is not a path, is empty or holds a NUL byte."""
+    return checked_path(path)
 
 
 def check_mesh(mesh, what: str):
@@ -164,7 +157,8 @@ def stl_fill_kernel(n_triangles: int):
     if "stl" not in _compiled:
         try:
             _compiled["stl"] = _build_stl_kernel()
-        except ImportError:  # numba absent or broken: numpy serves
+        except ImportError as exc:  # numba absent or broken: numpy serves
+            reraise_interrupt(exc)  # but an interrupted import is an interrupt, not a broken numba
             _compiled["stl"] = None
     return _compiled["stl"]
 
@@ -216,14 +210,12 @@ def write_part(fh, data) -> None:
 
 
 def check_target(path, what: str) -> str:
-    """``path`` as a str if a file can be written there: ParameterError for a ``path`` that is not
-    a path, ExportError (naming ``what``) if its folder is missing or ``path`` is a folder."""
+    """``path`` as a str if a file can be written there, checked before the work of a writer:
+    ParameterError for a ``path`` that is not a path, ExportError (naming ``what``) if its folder is
+    missing or ``path`` is a folder, a device, a FIFO, a socket or a read-only file (see
+    :func:`splinekit._atomic.write_target`; :func:`save` checks again when it writes)."""
     path = _fspath(path)
-    folder = os.path.dirname(os.path.abspath(path))
-    if not os.path.isdir(folder):
-        raise ExportError(f"cannot write {what} {path!r}: the folder {folder!r} does not exist or is not a folder")
-    if os.path.isdir(path):
-        raise ExportError(f"cannot write {what} {path!r}: it is a folder")
+    write_target(path, what)
     return path
 
 
@@ -231,9 +223,10 @@ def save(path, write, what: str) -> str:
     """Write a file atomically: ``write(fh)`` fills a temporary binary file beside ``path``, which is
     then renamed onto ``path``. Returns ``path`` as a string.
 
-    A missing or unwritable folder, a ``path`` that is a folder, or an OSError while writing raises
-    :class:`~splinekit.errors.ExportError` (naming ``what`` and the path); in every failure the
-    temporary file is removed and an existing target is left byte-for-byte as it was.
+    Through :func:`splinekit._atomic.atomic_write`: a missing or unwritable folder, a ``path`` that is
+    not a regular file, or an OSError while writing raises :class:`~splinekit.errors.ExportError`
+    (naming ``what`` and the path); in every failure the temporary file is removed and an existing
+    target is left byte-for-byte as it was. A symbolic link is kept and the file it names replaced.
     """
     path = check_target(path, what)
 
@@ -241,13 +234,7 @@ def save(path, write, what: str) -> str:
         with open(tmp, "wb") as fh:
             write(fh)
 
-    try:
-        return atomic_write(path, fill)
-    except OSError as exc:
-        if isinstance(exc, ExportError):
-            raise
-        reason = exc.strerror or str(exc) or type(exc).__name__
-        raise ExportError(f"cannot write {what} {path!r}: {reason}") from exc
+    return atomic_write(path, fill, what)
 
 
 def format_rows(template: str, values: np.ndarray, fh) -> None:

@@ -21,12 +21,13 @@ import os
 import unicodedata
 from contextlib import contextmanager
 
-from splinekit._atomic import atomic_write
+from splinekit._atomic import atomic_write, write_target
+from splinekit._signals import reraise_interrupt
 from splinekit.errors import ExportError, FileFormatError, ParameterError
 from splinekit.interop.occ import from_occ, require_ocp, to_shape
 
 from ._brep_io import BrepItem, ReadResult, default_names, items_from_shapes
-from ._meshio import _fspath, check_target
+from ._meshio import _fspath
 from ._stepscan import scan_step
 
 __all__ = ["export_step", "import_step", "StepItem", "ReadResult", "STEP_UNITS"]
@@ -246,8 +247,9 @@ def _products(shapes, names):
 def _check_target(path) -> str:
     """``path`` as a str, checked before the (slow) OCC translation: the mesh writers' checks,
     and a writable folder."""
-    path = check_target(path, "STEP file")
-    folder = os.path.dirname(os.path.abspath(path))
+    path = _fspath(path)
+    real, _ = write_target(path, "STEP file")
+    folder = os.path.dirname(real)  # of the file a symbolic link names: the temporary file goes there
     if not os.access(folder, os.W_OK):
         raise ExportError(f"cannot write STEP file {path!r}: the folder {folder!r} is not writable")
     return path
@@ -309,16 +311,12 @@ def export_step(path, objects, *, names=None, unit: str = "mm", tolerance: float
             except OSError:
                 raise
             except Exception as exc:  # an OCC failure while writing: the target stays untouched
+                reraise_interrupt(exc)  # an interrupt OCC wrapped is still an interrupt
                 raise ExportError(f"OpenCascade failed to write {path!r}: {type(exc).__name__}: {exc}") from None
         if status != IFSelect.IFSelect_ReturnStatus.IFSelect_RetDone:
             raise ExportError(f"OpenCascade failed to write {path!r}: {getattr(status, 'name', status)}")
 
-    try:
-        return atomic_write(path, write)
-    except ExportError:
-        raise
-    except OSError as exc:
-        raise ExportError(f"cannot write {path!r}: {exc}") from None
+    return atomic_write(path, write, "STEP file")
 
 
 def _label_name(label, TDataStd) -> str | None:

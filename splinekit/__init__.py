@@ -7,6 +7,10 @@ booleans import manifold3d the same way.
 
 import sys as _sys
 
+from . import _signals
+
+_signals.install_for_command()  # the `splinekit` command handles SIGINT/SIGTERM from its first moment
+
 from . import errors, limits
 from .basis import bernstein, design_matrix
 from .curves import BezierCurve, BSplineCurve, NurbsCurve, SplineCurve

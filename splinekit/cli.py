@@ -11,7 +11,10 @@ Subcommands::
 
 ``--quiet`` silences everything but errors, ``--verbose`` adds detail and
 tracebacks. Errors are one line on stderr (``splinekit: error: ...``) with exit
-status 1 (2 for a malformed command line, 130 for an interrupt).
+status 1 (2 for a malformed command line). SIGINT and SIGTERM end a command with
+one line and status 130 / 143, leaving no temporary file (see
+:mod:`splinekit._signals`); a closed stdout (``splinekit list | head -1``) ends
+it silently with status 141, as SIGPIPE ends other Unix tools.
 
 The models come from the ``models`` package; the environment variable
 ``SPLINEKIT_MODELS`` names another module with the same registry interface
@@ -24,14 +27,19 @@ from __future__ import annotations
 import argparse
 import importlib
 import os
+import signal
 import sys
 import time
+import warnings
 
 import numpy as np
 
+from . import __version__, _signals
+from ._atomic import checked_path
 from ._progress import is_enabled, progress, set_enabled
 from .errors import (
     FileFormatError,
+    MeshTopologyError,
     MissingDependencyError,
     ParameterError,
     SplineKitError,
@@ -149,11 +157,26 @@ def _table(rows, header) -> str:
     return "\n".join(lines)
 
 
+_BEYOND = "-- (beyond the float range)"
+
+
 def _bbox_text(lo, hi) -> str:
     lo, hi = np.asarray(lo, float), np.asarray(hi, float)
-    size = hi - lo
+    with np.errstate(over="ignore"):  # coordinates near the float limits: a size beyond it is said so
+        size = hi - lo
     return (f"[{', '.join(f'{x:.6g}' for x in lo)}] .. [{', '.join(f'{x:.6g}' for x in hi)}] "
-            f"(size {' x '.join(f'{x:.6g}' for x in size)})")
+            f"(size {' x '.join(f'{x:.6g}' if np.isfinite(x) else 'beyond the float range' for x in size)})")
+
+
+def _measure(get, fmt: str) -> str:
+    """``get()`` (an area or a volume) formatted with ``fmt``, or why there is no number: on a mesh
+    near the float limits the measure overflows (MeshTopologyError), which is worth a note in a
+    summary, not a failed command after its files are written."""
+    try:
+        value = float(get())
+    except MeshTopologyError as exc:
+        return f"-- ({_first_line(exc)})"
+    return format(value, fmt) if np.isfinite(value) else _BEYOND
 
 
 # ---------------------------------------------------------------------------
@@ -165,6 +188,7 @@ def _registry():
     try:
         module = importlib.import_module(name)
     except ImportError as exc:
+        _signals.reraise_interrupt(exc)
         raise MissingDependencyError(f"cannot import the model registry {name!r}: {exc}") from None
     missing = [attr for attr in ("MODELS", "DEFAULT_MODEL", "get_model", "build_model") if not hasattr(module, attr)]
     if missing:
@@ -190,7 +214,12 @@ def _parse_sets(registry, name: str, items) -> dict:
         if key not in params:
             known = ", ".join(params) or "none"
             raise ParameterError(f"model '{name}' has no parameter '{key}'; parameters: {known}")
-        values[key] = params[key].parse(text)
+        try:
+            values[key] = params[key].parse(text)
+        except SplineKitError:
+            raise
+        except (ArithmeticError, ValueError, TypeError) as exc:  # a registry's parser that lets one out
+            raise ParameterError(f"--set {key}={text!r}: not a value of parameter '{key}' ({_first_line(exc)})") from None
     return values
 
 
@@ -266,6 +295,7 @@ def _tessellator():
     try:
         from .tessellate import tessellate
     except ImportError as exc:
+        _signals.reraise_interrupt(exc)
         raise MissingDependencyError(f"mesh output needs splinekit.tessellate, which does not import: {exc}") from None
     return tessellate
 
@@ -366,11 +396,12 @@ def _build_and_export(registry, name, sets, formats, tolerance, out_dir, strict,
         from .interop.occ import to_shape
 
         shapes = [to_shape(list(body)) for body in model.bodies]
-        console.out(f"  volume {sum(occ_volume(s) for s in shapes):.8g}, area {sum(occ_area(s) for s in shapes):.8g} (exact, OCC)")
+        volume = _measure(lambda: sum(occ_volume(s) for s in shapes), ".8g")
+        console.out(f"  volume {volume}, area {_measure(lambda: sum(occ_area(s) for s in shapes), '.8g')} (exact, OCC)")
     elif mesh is not None and mesh.is_closed:
-        console.out(f"  volume {float(mesh.volume):.8g}, area {float(mesh.area):.8g} (mesh)")
+        console.out(f"  volume {_measure(lambda: mesh.volume, '.8g')}, area {_measure(lambda: mesh.area, '.8g')} (mesh)")
     elif mesh is not None:
-        console.out(f"  area {float(mesh.area):.8g} (mesh; open surface, no volume)")
+        console.out(f"  area {_measure(lambda: mesh.area, '.8g')} (mesh; open surface, no volume)")
     console.out(f"  built in {t_build:.2f} s, total {time.perf_counter() - t0:.2f} s")
 
 
@@ -390,7 +421,7 @@ def cmd_build(args, console: _Console) -> int:
     formats = _formats(args.format)
     tolerance = _tolerance(args.tolerance)
     names = _model_names(registry, args)
-    out_dir = args.output or "."
+    out_dir = checked_path(args.output or ".")  # a NUL byte is a ParameterError, not a ValueError from os
     if os.path.exists(out_dir) and not os.path.isdir(out_dir):
         raise ParameterError(f"output folder {out_dir!r} exists and is not a folder")
     strict = args.format is not None and len(names) == 1
@@ -533,8 +564,8 @@ def _info_mesh(path, console: _Console) -> int:
                 + (f", genus {genus:g}" if genus is not None else ""))
     if len(V):
         console.out(f"  bounding box {_bbox_text(V.min(0), V.max(0))}")
-    console.out(f"  area   {float(mesh.area):.10g}")
-    console.out(f"  volume {float(mesh.volume):.10g}" if closed else "  volume -- (open mesh)")
+    console.out(f"  area   {_measure(lambda: mesh.area, '.10g')}")
+    console.out(f"  volume {_measure(lambda: mesh.volume, '.10g')}" if closed else "  volume -- (open mesh)")
     return 0
 
 
@@ -863,7 +894,7 @@ class _Parser(argparse.ArgumentParser):
     """argparse with one-line errors: ``splinekit: error: ...`` and exit status 2."""
 
     def error(self, message):
-        self.exit(2, f"{self.prog.split()[0]}: error: {message} (see --help)\n")
+        self.exit(2, _one_line(f"{self.prog.split()[0]}: error: {message} (see --help)") + "\n")
 
 
 def _parser() -> argparse.ArgumentParser:
@@ -873,6 +904,7 @@ def _parser() -> argparse.ArgumentParser:
     common.add_argument("-v", "--verbose", action="store_true", default=argparse.SUPPRESS,
                         help="print more detail, and the traceback of an unexpected error")
     parser = _Parser(prog="splinekit", description="Spline and subdivision modeling toolkit.", parents=[common])
+    parser.add_argument("--version", action="version", version=f"splinekit {__version__}")
     sub = parser.add_subparsers(dest="command", parser_class=_Parser, metavar="COMMAND")
 
     sub.add_parser("list", parents=[common], help="the models, their parameters, defaults, units and ranges")
@@ -923,8 +955,63 @@ def _first_line(exc: BaseException) -> str:
     return text.splitlines()[0] if text else type(exc).__name__
 
 
+def _one_line(text: str) -> str:
+    """``text`` with every character that ends a line or steers a terminal (newline, carriage
+    return, escape, the separators \\x1c-\\x1e, U+2028...) written as its escape: arguments echoed
+    in an error message cannot break it into several lines."""
+    return "".join(c if c.isprintable() or c == " " else repr(c)[1:-1] for c in text)
+
+
+def _error_line(text: str, after_echo: bool = False) -> None:
+    """``text`` as one line on stderr; a closed stderr is no further error. ``after_echo``: on a
+    terminal, start a fresh line first (the terminal has echoed ``^C``)."""
+    try:
+        sys.stderr.write(("\n" if after_echo and _is_tty(sys.stderr) else "") + _one_line(text) + "\n")
+        sys.stderr.flush()
+    except (OSError, ValueError):
+        pass
+
+
 def main(argv=None) -> int:
-    """Run the command line with ``argv`` (default ``sys.argv[1:]``); returns the exit status."""
+    """Run the command line with ``argv`` (default ``sys.argv[1:]``); returns the exit status.
+
+    SIGINT / SIGTERM end the command with one line on stderr and status 130 / 143. A closed
+    stdout ends it silently with status 141. In the ``splinekit`` process itself (the console
+    script, ``python -m splinekit``) main does not return: the process ends with the status
+    through :func:`splinekit._signals.finish`, after flushing its output, so that no moment is
+    left in which a signal meets the interpreter's teardown (default handling, or an extension
+    interrupted while it initialised).
+    """
+    with _signals.running() as own:
+        try:
+            status = _main(argv)
+            signum = _signals.received()  # a signal whose exception a library swallowed still counts
+        except KeyboardInterrupt as exc:
+            signum = _signals.received() or getattr(exc, "signum", signal.SIGINT)
+        except BrokenPipeError:  # the reader of stdout is gone: stop, and say nothing
+            signum, status = None, 141
+        except SystemExit as exc:  # --help, --version, a malformed command line
+            if not own:
+                raise
+            signum, status = None, exc.code if isinstance(exc.code, int) else int(exc.code is not None)
+            if isinstance(exc.code, str):
+                _error_line(exc.code)
+        if signum is not None:
+            status = _signals.STATUS.get(signum, 128 + signum)
+            _error_line(_signals.message(signum), after_echo=signum == signal.SIGINT)
+    if own:
+        _signals.finish(status)
+    return status
+
+
+def _is_tty(stream) -> bool:
+    try:
+        return bool(stream.isatty())
+    except (AttributeError, ValueError):
+        return False
+
+
+def _main(argv) -> int:
     parser = _parser()
     args = parser.parse_args(argv)
     quiet, verbose = getattr(args, "quiet", False), getattr(args, "verbose", False)
@@ -939,33 +1026,53 @@ def main(argv=None) -> int:
         set_enabled(bars)  # main() may be called again in the same process
 
 
+# A RuntimeWarning from numpy in our code means an overflow or an invalid operation on extreme
+# input: the command stops with one line instead of printing the warning and an inf result.
+_OUR_MODULES = r"(splinekit|exporters|models|numpy|__main__)(\.|$)"
+
+
 def _run(args, console: _Console) -> int:
     """Run the parsed command; errors become one line on stderr and an exit status."""
     verbose = console.verbose
     try:
-        if args.command == "demo":
-            return cmd_demo(args)
-        return COMMANDS[args.command](args, console)
-    except KeyboardInterrupt:
-        sys.stderr.write("\nsplinekit: interrupted\n")
-        return 130
+        with warnings.catch_warnings():
+            warnings.filterwarnings("error", category=RuntimeWarning, module=_OUR_MODULES)
+            if args.command == "demo":
+                return cmd_demo(args)
+            return COMMANDS[args.command](args, console)
+    except BrokenPipeError:
+        raise  # main() ends quietly
     except (SplineKitError, OSError) as exc:
-        if verbose:
-            import traceback
-
-            traceback.print_exc()
-        sys.stderr.write(f"splinekit: error: {_first_line(exc)}\n")
+        _traceback(verbose)
+        _error_line(f"splinekit: error: {_first_line(exc)}")
+        return 1
+    except RuntimeWarning as exc:
+        _traceback(verbose)
+        _error_line(f"splinekit: error: numerical failure ({_first_line(exc)} at {_where(exc)}): "
+                    "the input values are too extreme for double precision")
         return 1
     except Exception as exc:  # a bug: still one line, the traceback on request
-        if verbose:
-            import traceback
-
-            traceback.print_exc()
-            sys.stderr.write(f"splinekit: error: unexpected {type(exc).__name__}: {_first_line(exc)}\n")
-        else:
-            sys.stderr.write(f"splinekit: error: unexpected {type(exc).__name__}: {_first_line(exc)}; "
-                             "run with --verbose for the traceback\n")
+        _traceback(verbose)
+        hint = "" if verbose else "; run with --verbose for the traceback"
+        _error_line(f"splinekit: error: unexpected {type(exc).__name__}: {_first_line(exc)}{hint}")
         return 1
+
+
+def _traceback(verbose: bool) -> None:
+    if verbose:
+        import traceback
+
+        traceback.print_exc()
+
+
+def _where(exc: BaseException) -> str:
+    """``module.py:line`` where ``exc`` was raised."""
+    tb = exc.__traceback__
+    while tb is not None and tb.tb_next is not None:
+        tb = tb.tb_next
+    if tb is None:
+        return "?"
+    return f"{os.path.basename(tb.tb_frame.f_code.co_filename)}:{tb.tb_lineno}"
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -20,6 +20,7 @@ import subprocess
 import sys
 import textwrap
 import time
+import warnings
 
 import numpy as np
 import pytest
@@ -563,3 +564,70 @@ def test_real_registry_list_default_build_info_and_check(tmp_path, capsys, monke
         assert info.returncode == 0 and f"{faces} faces" in info.stdout
     check = run(["check"], env)
     assert check.returncode == 0, check.stdout + check.stderr
+
+
+# -- version, python -m splinekit, closed pipes, extreme values --------------------------------
+
+def test_version_and_python_dash_m_splinekit():
+    import splinekit
+
+    for command in (_command(), [sys.executable, "-m", "splinekit"]):
+        result = subprocess.run(command + ["--version"], capture_output=True, text=True, timeout=120)
+        assert result.returncode == 0 and result.stdout.strip() == f"splinekit {splinekit.__version__}"
+    result = subprocess.run([sys.executable, "-m", "splinekit", "build", "--help"], capture_output=True, text=True,
+                            timeout=120)
+    assert result.returncode == 0 and "--tolerance" in result.stdout
+
+
+def test_a_closed_stdout_ends_the_command_silently(fake_env):
+    """``splinekit list | head -1``: the reader goes away; no 'Broken pipe' error, no traceback,
+    status 141 as for a tool that SIGPIPE ended."""
+    read, write = os.pipe()
+    proc = subprocess.Popen(_command() + ["list"], stdout=write, stderr=subprocess.PIPE, env=fake_env, text=True)
+    os.close(write)
+    os.close(read)  # before the command prints anything
+    _, err = proc.communicate(timeout=120)
+    assert proc.returncode == 141 and err == ""
+
+
+def test_a_closed_stdout_in_process(in_process, capsys, monkeypatch):
+    class Closed(io.StringIO):
+        def write(self, text):
+            raise BrokenPipeError(32, "Broken pipe")
+
+    monkeypatch.setattr(sys, "stdout", Closed())
+    assert in_process(["list"]) == 141
+    assert capsys.readouterr().err == ""
+
+
+def test_coordinates_near_the_float_limits_are_reported_not_warned(in_process, capsys, tmp_path):
+    (tmp_path / "huge.obj").write_text("v 1e308 1e308 1e308\nv -1e308 -1e308 -1e308\nv 1e308 -1e308 0\n"
+                                       "v 0 0 1e308\nf 1 2 3\nf 1 3 4\nf 1 4 2\nf 2 4 3\n")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", RuntimeWarning)
+        status = in_process(["info", "huge.obj"])
+    out, err = capsys.readouterr()
+    assert status == 0 and err == "", err
+    assert "beyond the float range" in out and "inf" not in out.replace("info", "")
+
+
+def test_a_runtime_warning_in_our_code_is_one_line(in_process, capsys, monkeypatch):
+    from splinekit import cli
+
+    scope = {"__name__": "splinekit.fake_module"}  # the warning is attributed to a splinekit module
+    exec("import numpy as np\ndef overflow(args, console):\n    return int(np.ones(1)[0] * 1e308 * 10 > 0)\n", scope)
+    monkeypatch.setitem(cli.COMMANDS, "list", scope["overflow"])
+    assert in_process(["list"]) == 1
+    err = capsys.readouterr().err
+    assert err.startswith("splinekit: error: numerical failure (overflow") and len(err.splitlines()) == 1
+
+
+def test_control_characters_in_arguments_stay_on_one_line(in_process, capsys):
+    """argparse echoes unknown arguments as they are; the error line escapes them."""
+    with pytest.raises(SystemExit):
+        in_process(["list", "--x\ny\x1b[2J\x1e\u2028"])
+    err = capsys.readouterr().err
+    assert len(err.splitlines()) == 1 and "\\n" in err and "\x1b" not in err and "\\u2028" in err
+    assert in_process(["build", "--format", "st\nl\x1b[2J"]) == 1
+    err = capsys.readouterr().err
+    assert len(err.splitlines()) == 1 and "\x1b" not in err

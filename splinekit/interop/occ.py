@@ -20,6 +20,7 @@ from __future__ import annotations
 import numpy as np
 
 from .._validate import as_positive
+from .._signals import reraise_interrupt
 from ..errors import BackendError, MissingDependencyError, ParameterError, SplineKitError
 
 __all__ = ["to_occ", "from_occ", "to_shape", "to_build123d", "to_cadquery", "require_ocp"]
@@ -28,6 +29,10 @@ _INSTALL_HINT = "pip install 'cadquery==2.8.*' 'build123d>=0.12,<0.13'"
 
 
 def _missing(what: str, exc: Exception) -> MissingDependencyError:
+    """The error for a failed import of ``what``; an import that failed because SIGINT/SIGTERM
+    interrupted it (OCP's pybind11 initialisation reports ``ImportError: initialization failed``
+    caused by the KeyboardInterrupt) re-raises the interrupt instead: it is no missing package."""
+    reraise_interrupt(exc)
     return MissingDependencyError(
         f"{what} is missing: install it with {_INSTALL_HINT} "
         f"(they provide OCP 7.9); the import failed with: {exc}"
@@ -312,7 +317,8 @@ def _unwrap(obj):
     wrapped = getattr(obj, "wrapped", obj)
     try:
         from OCP.TopoDS import TopoDS_Shape
-    except ImportError:
+    except ImportError as exc:
+        reraise_interrupt(exc)
         return None
     return wrapped if isinstance(wrapped, TopoDS_Shape) else None
 
