@@ -429,4 +429,5 @@ def test_fuzz_real_model_parameters(real_registry, case, command):
     assume(_refused(model, name, text))  # an accepted value builds the real model: seconds per case
     with scratch() as folder:
         status, _, err = check([command, model, "--set", f"{name}={text}"], folder, "real parameters")
-        assert status == 1
+        # "--set -x=1" reads as an option to argparse: a usage error (status 2), also refused
+        assert status == 1 or (status == 2 and name.startswith("-"))
