@@ -99,6 +99,7 @@ def test_foreign_step_file_imports_as_valid_solids(name, tmp_path, request):
     export_step(tmp_path / "again.step", solids)
     again = import_step(tmp_path / "again.step")
     assert _counts(brep_list_to_shape([it.geometry for it in again])) == counts
-    # names come back, except those STEP cannot carry intact (long non-ASCII names are not written)
-    assert [it.name for it in again if it.name and it.name.isascii()] == [
-        it.name for it in items if it.name and it.name.isascii()]
+    # names come back, except those STEP cannot carry intact (long non-ASCII names are not written;
+    # unnamed products get OCC's default name, their shape type)
+    kept = [it.name for it in items if it.name and it.name.isascii()]
+    assert [it.name for it in again if it.name in kept] == kept

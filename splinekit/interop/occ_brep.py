@@ -459,7 +459,10 @@ def brep_from_shape(shape, *, name=None, on_error=None):
         bounds = BRepTools.BRepTools.UVBounds_s(face)
         if not all(abs(x) < 1e100 for x in bounds):  # OCC's "infinite" is 2e100
             raise ParameterError(f"cannot convert an unbounded face (UV bounds {list(bounds)}): bound it with edges first")
-    converted = _nurbs_converted(shape)
+    try:
+        converted = _nurbs_converted(shape)
+    except BackendError as exc:
+        return _unconvertible(shape, exc, name, on_error)
     reader = _Reader(shape)
     kinds = TopAbs.TopAbs_ShapeEnum
     counter = iter(range(1 << 62))  # face numbers in error messages, in reading order
@@ -538,6 +541,33 @@ def brep_from_shape(shape, *, name=None, on_error=None):
     if on_error is None and shape.ShapeType() in (kinds.TopAbs_FACE, kinds.TopAbs_SHELL, kinds.TopAbs_SOLID):
         return out[0]
     return out
+
+
+def _unconvertible(shape, exc, name, on_error):
+    """What :func:`brep_from_shape` does when OCC cannot NURBS-convert ``shape`` as a whole: the
+    faces that fail alone are named (BackendError, or ``on_error`` for each); with ``on_error``, a
+    compound's children are then converted one by one, so the good ones are still read."""
+    TopAbs, TopoDS = _ocp("TopAbs", "TopoDS")
+    kinds = TopAbs.TopAbs_ShapeEnum
+    if on_error is not None and shape.ShapeType() in (kinds.TopAbs_COMPOUND, kinds.TopAbs_COMPSOLID):
+        out = []
+        for child in _children(shape):
+            got = brep_from_shape(child, name=name, on_error=on_error)
+            out.extend(got if isinstance(got, list) else [got])
+        return out
+    bad = []
+    for index, face in enumerate(_sub_shapes(shape, "FACE")):
+        try:
+            _nurbs_converted(face)
+        except BackendError as err:
+            bad.append((index, f"face {index}: {err}"))
+    if not bad:
+        bad = [(-1, str(exc))]
+    if on_error is None:
+        raise BackendError("; ".join(msg for _, msg in bad[:5])) from None
+    for index, msg in bad:
+        on_error(index, msg)
+    return []
 
 
 # ----------------------------------------------------------------------------------------
