@@ -158,3 +158,19 @@ def test_bad_paths_and_files(tmp_path):
             read(tmp_path / f"junk.{ext}")
         with pytest.raises(SplineKitError):
             read(tmp_path / f"junk.{ext}", strict="no")
+
+
+def test_cli_info_reads_iges_and_brep(tmp_path):
+    import subprocess
+    import sys
+
+    (solid,) = from_occ(PARTS["box with a through hole"]())
+    for export, _, ext in FORMATS.values():
+        path = tmp_path / f"part.{ext}"
+        export(path, solid)
+        run = subprocess.run([sys.executable, "-m", "splinekit.cli", "info", str(path)], capture_output=True, text=True)
+        assert run.returncode == 0, run.stderr
+        assert "1 solids, 1 shells, 7 faces, 15 edges, 10 vertices" in run.stdout
+        assert "2 trimmed, 5 untrimmed" in run.stdout and "valid (OCC BRepCheck): yes" in run.stdout
+        volume = float(run.stdout.split("volume")[1].split()[0])
+        assert volume == pytest.approx(20**3 - np.pi * 4**2 * 20, rel=1e-7)  # GProp at 1e-9 on NURBS
