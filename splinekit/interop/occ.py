@@ -4,13 +4,15 @@ Geometry: ``to_occ`` builds ``Geom_BSplineCurve`` / ``Geom_BSplineSurface``
 (or the Bézier classes) and ``from_occ`` reads them back, losslessly: knots go
 to OCC as distinct values plus multiplicities and OCC arrays are 1-based.
 
-Topology: ``to_shape`` turns a curve into an edge, a surface into a face and a
-list of surface patches into a sewn shell, or into a solid oriented outward
-when the patches close up; ``to_build123d`` / ``to_cadquery`` wrap that shape
-for those libraries. ``from_occ`` also accepts OCC shapes (and build123d /
-cadquery objects) and returns the B-spline form of their faces or edges,
-converting analytic geometry (planes, cylinders, spheres, lines, circles...)
-with OCC's ``GeomConvert``.
+Topology: ``to_shape`` turns a curve into an edge, a surface into a face, a
+list of surface patches into a sewn shell (or a solid oriented outward when the
+patches close up), and a B-rep ``TrimmedFace`` / ``Shell`` / ``Solid`` into the
+exact OCC face / shell / solid (:mod:`.occ_brep`); ``to_build123d`` /
+``to_cadquery`` wrap that shape for those libraries. ``from_occ`` also accepts
+OCC shapes (and build123d / cadquery objects): faces, shells and solids come
+back as B-rep objects with their trims, orientations and shared edges (or, with
+``surfaces=True``, as the plain B-spline forms of their faces), edges as
+curves, converting analytic geometry exactly.
 
 OCP is imported inside the functions, so ``import splinekit`` does not load it.
 """
