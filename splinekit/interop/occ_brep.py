@@ -717,6 +717,21 @@ def brep_to_shape(obj, *, tolerance: float = 1e-7):
         forward = same[id(r)]
         for node, p in (((r[4], 0 if forward else 1), r[5][0]), ((r[4], 1 if forward else 0), r[5][-1])):
             points.setdefault(uf.find(node), []).append((p, r[3].tolerance))
+    # loops that touch only at a point (no edge between them) share that vertex too: merge the classes
+    # whose points coincide within both classes' tolerances
+    roots = list(points)
+    if len(roots) > 1:
+        from scipy.spatial import cKDTree
+
+        centers = np.array([np.mean([p for p, _ in points[r]], axis=0) for r in roots])
+        tols = np.array([max(t for _, t in points[r]) for r in roots])
+        for a, b in cKDTree(centers).query_pairs(float(tols.max())):
+            if np.linalg.norm(centers[a] - centers[b]) <= min(tols[a], tols[b]):
+                uf.union(roots[a], roots[b])
+        merged: dict = {}
+        for r, items in points.items():
+            merged.setdefault(uf.find(r), []).extend(items)
+        points = merged
     vertices = {}
     for root, items in points.items():
         P = np.array([p for p, _ in items])
