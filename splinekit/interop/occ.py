@@ -267,6 +267,16 @@ def _face_to_surface(face, oriented: bool):
             "bound it with edges first"
         )
     nu0, nu1, nv0, nv1 = surf.Bounds()
+    # clamp to the natural range along non-periodic directions: STEP-rounded bounds a hair past a
+    # sphere's poles made OCC's conversion raise
+    if not surf.IsUPeriodic():
+        u0, u1 = max(u0, nu0), min(u1, nu1)
+    else:  # and to one period along periodic ones (a torus's 2 pi + 1e-15 made it raise too)
+        u1 = min(u1, u0 + surf.UPeriod())
+    if not surf.IsVPeriodic():
+        v0, v1 = max(v0, nv0), min(v1, nv1)
+    else:
+        v1 = min(v1, v0 + surf.VPeriod())
     native = isinstance(surf, (Geom.Geom_BSplineSurface, Geom.Geom_BezierSurface))
     if not (native and _same_range((u0, u1), (nu0, nu1)) and _same_range((v0, v1), (nv0, nv1))):
         surf = _occ_call("trim a surface", Geom.Geom_RectangularTrimmedSurface, surf, u0, u1, v0, v1)
