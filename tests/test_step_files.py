@@ -87,9 +87,7 @@ def test_foreign_step_file_imports_as_valid_solids(name, tmp_path, request):
     occ = _occ_shape(path)
     ours = brep_list_to_shape(solids)
     counts, theirs = _counts(ours), _counts(occ)
-    assert counts[:3] == theirs[:3]  # solids, faces, edges
-    # vertices: two of the Inventor part's vertices are met only through loops touching at a point
-    assert abs(counts[3] - theirs[3]) <= (2 if name.startswith("inventor") else 0)
+    assert counts == theirs  # solids, faces, edges, vertices
     assert sum(len(s.faces) for s in solids) == reference["faces"]
     key = "volume_best" if "volume_best" in reference else "volume"
     assert _volume(ours) == pytest.approx(reference[key], rel=VOLUME_RTOL.get(name, 1e-6))
@@ -99,6 +97,7 @@ def test_foreign_step_file_imports_as_valid_solids(name, tmp_path, request):
     export_step(tmp_path / "again.step", solids)
     again = import_step(tmp_path / "again.step")
     assert _counts(brep_list_to_shape([it.geometry for it in again])) == counts
-    # names come back, except those STEP cannot carry intact (long non-ASCII names are not written)
-    assert [it.name for it in again if it.name and it.name.isascii()] == [
-        it.name for it in items if it.name and it.name.isascii()]
+    # names come back, except those STEP cannot carry intact (long non-ASCII names are not written;
+    # unnamed products get OCC's default name, their shape type)
+    kept = [it.name for it in items if it.name and it.name.isascii()]
+    assert [it.name for it in again if it.name in kept] == kept
