@@ -195,10 +195,11 @@ class _GreenRule:
         self.integrand = integrand
         (ua, ub), (v0, v1) = self.surface.domain
         self.pcurves = _closed_pcurves(face.loops, 1e-14 * max(ub - ua, v1 - v0))
-        _check_in_domain(face, self.pcurves)
+        samples = [_samples(c) for c in self.pcurves]
+        _check_in_domain(face, samples)
         # G is integrated from the trims' leftmost u (any constant u_ref will do): no work on
         # the part of the surface left of the face
-        lo = min(float(np.min(np.asarray(c.control_points)[:, 0])) for c in self.pcurves)
+        lo = min(float(x[:, 0].min()) for x in samples)
         self.u_ref = min(max(lo, ua), ub)
         self.u_end = ub
         self.width = max(ub - self.u_ref, np.finfo(float).tiny)
@@ -327,14 +328,21 @@ OUTSIDE_DOMAIN = 1e-3
 the face is refused: approximated trims overshoot by 1e-4, trims of another period by 1."""
 
 
-def _check_in_domain(face, pcurves):
-    """Raise DomainError when a trim leaves the surface's domain by more than
-    :data:`OUTSIDE_DOMAIN` of its width: the integrand there would be the surface's polynomial
-    extension, not the face, and the result silently wrong."""
+def _samples(curve, per_piece: int = 33):
+    """``(n, 2)`` points of a pcurve, ``per_piece`` on each of its Bézier pieces (ends included)."""
+    b = curve.bezier_breakpoints()
+    t = (b[:-1, None] + (b[1:] - b[:-1])[:, None] * np.linspace(0.0, 1.0, per_piece)).ravel()
+    return curve.evaluate(t)
+
+
+def _check_in_domain(face, samples):
+    """Raise DomainError when a trim (its ``samples``, one ``(n, 2)`` array per pcurve) leaves
+    the surface's domain by more than :data:`OUTSIDE_DOMAIN` of its width: the integrand there
+    would be the surface's polynomial extension, not the face, and the result silently wrong."""
     for k, (a, b) in enumerate(face.surface.domain):
         slack = OUTSIDE_DOMAIN * (b - a)
-        for i, c in enumerate(pcurves):
-            x = np.asarray(c.control_points)[:, k]
+        for i, pts in enumerate(samples):
+            x = pts[:, k]
             lo, hi = float(x.min()), float(x.max())
             if lo < a - slack or hi > b + slack:
                 raise DomainError(
