@@ -1,8 +1,10 @@
 """File writers and readers built on splinekit.
 
 * exact geometry: STEP AP214 through OpenCascade (:func:`export_step`,
-  :func:`import_step`), curves and surfaces as B-spline geometry, bodies as
-  sewn shells or solids, with names and units;
+  :func:`import_step`), curves and surfaces as B-spline geometry, B-rep solids,
+  shells and trimmed faces exactly, with names and units; IGES
+  (:func:`export_iges`, :func:`import_iges`) and OCC's native ``.brep``
+  (:func:`export_brep`, :func:`import_brep`) for the same B-rep objects;
 * meshes: STL (binary and ASCII), OBJ, PLY (binary and ASCII), 3MF and glTF
   binary (.glb), written with numpy; :func:`export_mesh` / :func:`import_mesh`
   choose the format from the suffix.
@@ -13,7 +15,9 @@ damages an existing one.
 """
 
 from ._meshio import export_mesh, import_mesh
+from .brep import export_brep, import_brep
 from .gltf import export_glb, import_glb
+from .iges import export_iges, import_iges
 from .obj import export_obj, import_obj
 from .ply import export_ply, import_ply
 from .step import STEP_UNITS, StepItem, export_step, import_step
@@ -25,6 +29,10 @@ __all__ = [
     "import_step",
     "StepItem",
     "STEP_UNITS",
+    "export_iges",
+    "import_iges",
+    "export_brep",
+    "import_brep",
     "export_mesh",
     "import_mesh",
     "export_stl",

@@ -214,6 +214,14 @@ def _names(names, count: int) -> list:
     return names
 
 
+def _name_ok(name) -> bool:
+    try:
+        _names([name], 1)
+    except ParameterError:
+        return False
+    return True
+
+
 def _products(shapes, names):
     """``(shape, name)`` per STEP product: each named object alone, and each run of
     consecutive unnamed objects as one compound (a STEP product costs OCC about half a
@@ -275,7 +283,10 @@ def export_step(path, objects, *, names=None, unit: str = "mm", tolerance: float
     path = _fspath(path)
     step_unit, metres = _unit(unit)
     items = _objects(objects)
-    labels = _names(default_names(items, names), len(items))
+    if names is None:  # the objects' own names, each kept only if STEP can carry it intact
+        labels = [n if n is None or _name_ok(n) else None for n in (default_names(items, None) or [None] * len(items))]
+    else:
+        labels = _names(names, len(items))
     path = _check_target(path)
     IFSelect, _, _, STEPCAFControl, STEPControl, TCollection, TDataStd, _, _, XCAFDoc = _ocp_step()
     shapes = [to_shape(obj, tolerance=tolerance) for obj in items]

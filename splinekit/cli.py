@@ -4,7 +4,7 @@ Subcommands::
 
     splinekit list                                   the models and their parameters
     splinekit build [MODEL] [--set k=v ...] [-o DIR] [--format step,stl,...] [--tolerance T]
-    splinekit info FILE                              what a STEP or mesh file holds
+    splinekit info FILE                              what a STEP, IGES, BREP or mesh file holds
     splinekit render MODEL|FILE -o picture.png [--color ...] [--size WxH]
     splinekit check MODEL                            cross-check a model against OpenCascade
     splinekit demo [-o picture.png]                  a NURBS surface, timed and drawn
@@ -105,6 +105,7 @@ FORMATS = ("step", "stl", "3mf", "obj", "glb", "ply")
 MESH_FORMATS = FORMATS[1:]
 MESH_SUFFIXES = (".stl", ".obj", ".ply", ".3mf", ".glb")
 STEP_SUFFIXES = (".step", ".stp")
+EXACT_SUFFIXES = STEP_SUFFIXES + (".iges", ".igs", ".brep")  # exact B-rep files `info` reads
 DEFAULT_FORMATS = "step,stl"
 
 
@@ -477,19 +478,50 @@ def _face_kinds(faces) -> dict:
     return kinds
 
 
+def read_exact_shape(path):
+    """``(format name, OCC shape)`` of a STEP, IGES or OCC .brep file."""
+    suffix = os.path.splitext(path)[1].lower()
+    if suffix in STEP_SUFFIXES:
+        return "STEP", read_step_shape(path)
+    from exporters.brep import read_brep_shape
+    from exporters.iges import read_iges_shape
+
+    return ("BREP", read_brep_shape(path)) if suffix == ".brep" else ("IGES", read_iges_shape(path))
+
+
+def _trimmed_count(faces) -> int:
+    """How many ``faces`` are trimmed: holes, or an outer boundary inside the surface's own domain."""
+    BRep, BRepTools, TopoDS = _occ("BRep", "BRepTools", "TopoDS")
+    trimmed = 0
+    for face in faces:
+        face = TopoDS.TopoDS.Face_s(face)
+        if len(_sub_shapes(face, "WIRE")) > 1:
+            trimmed += 1
+            continue
+        box = BRepTools.BRepTools.UVBounds_s(face)
+        natural = BRep.BRep_Tool.Surface_s(face).Bounds()
+        scale = max(1.0, *(abs(x) for x in box))
+        trimmed += any(abs(a - b) > 1e-9 * scale for a, b in zip(box, natural))
+    return trimmed
+
+
 def _info_step(path, console: _Console) -> int:
-    shape = read_step_shape(path)
+    fmt, shape = read_exact_shape(path)
     faces = _sub_shapes(shape, "FACE")
     counts = {k: len(_sub_shapes(shape, k)) for k in ("SOLID", "SHELL", "FACE", "EDGE", "VERTEX")}
-    console.out(f"{path}: STEP, {counts['SOLID']} solids, {counts['SHELL']} shells, {counts['FACE']} faces, "
+    console.out(f"{path}: {fmt}, {counts['SOLID']} solids, {counts['SHELL']} shells, {counts['FACE']} faces, "
                 f"{counts['EDGE']} edges, {counts['VERTEX']} vertices")
+    (BRepCheck,) = _occ("BRepCheck")
+    trimmed = _trimmed_count(faces)
+    console.out(f"  faces: {trimmed} trimmed, {counts['FACE'] - trimmed} untrimmed; "
+                f"valid (OCC BRepCheck): {'yes' if BRepCheck.BRepCheck_Analyzer(shape).IsValid() else 'NO'}")
     for kind, n in sorted(_face_kinds(faces).items(), key=lambda kv: -kv[1]):
         console.out(f"  {n:5d} x {kind}")
     lo, hi = occ_bbox(shape)
     console.out(f"  bounding box {_bbox_text(lo, hi)}")
-    console.out(f"  area   {occ_area(shape):.10g}")
+    console.out(f"  area   {occ_area(shape):.10g}  (OCC GProp)")
     if counts["SOLID"]:
-        console.out(f"  volume {occ_volume(shape):.10g}")
+        console.out(f"  volume {occ_volume(shape):.10g}  (OCC GProp)")
     else:
         console.out("  volume -- (no solid)")
     return 0
@@ -540,11 +572,11 @@ def cmd_info(args, console: _Console) -> int:
     if not os.path.isfile(path):
         raise FileFormatError(f"{path!r} does not exist or is not a file")
     suffix = os.path.splitext(path)[1].lower()
-    if suffix in STEP_SUFFIXES:
+    if suffix in EXACT_SUFFIXES:
         return _info_step(path, console)
     if suffix in MESH_SUFFIXES:
         return _info_mesh(path, console)
-    raise FileFormatError(f"cannot tell the format of {path!r}; expected a suffix among {', '.join(STEP_SUFFIXES + MESH_SUFFIXES)}")
+    raise FileFormatError(f"cannot tell the format of {path!r}; expected a suffix among {', '.join(EXACT_SUFFIXES + MESH_SUFFIXES)}")
 
 
 # ---------------------------------------------------------------------------
@@ -886,8 +918,8 @@ def _parser() -> argparse.ArgumentParser:
     b.add_argument("--format", metavar="LIST", help=f"comma-separated formats among {','.join(FORMATS)} (default: {DEFAULT_FORMATS})")
     b.add_argument("--tolerance", metavar="T", help="chordal tolerance of mesh output in model units (default: 1e-3 of the model size)")
 
-    i = sub.add_parser("info", parents=[common], help="what a STEP or mesh file holds")
-    i.add_argument("file", help="a .step/.stp or .stl/.obj/.ply/.3mf/.glb file")
+    i = sub.add_parser("info", parents=[common], help="what a STEP, IGES, BREP or mesh file holds")
+    i.add_argument("file", help="a .step/.stp/.iges/.igs/.brep or .stl/.obj/.ply/.3mf/.glb file")
 
     from .plot import COLOR_MODES, COLOR_SCALES
 

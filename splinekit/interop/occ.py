@@ -4,13 +4,15 @@ Geometry: ``to_occ`` builds ``Geom_BSplineCurve`` / ``Geom_BSplineSurface``
 (or the Bézier classes) and ``from_occ`` reads them back, losslessly: knots go
 to OCC as distinct values plus multiplicities and OCC arrays are 1-based.
 
-Topology: ``to_shape`` turns a curve into an edge, a surface into a face and a
-list of surface patches into a sewn shell, or into a solid oriented outward
-when the patches close up; ``to_build123d`` / ``to_cadquery`` wrap that shape
-for those libraries. ``from_occ`` also accepts OCC shapes (and build123d /
-cadquery objects) and returns the B-spline form of their faces or edges,
-converting analytic geometry (planes, cylinders, spheres, lines, circles...)
-with OCC's ``GeomConvert``.
+Topology: ``to_shape`` turns a curve into an edge, a surface into a face, a
+list of surface patches into a sewn shell (or a solid oriented outward when the
+patches close up), and a B-rep ``TrimmedFace`` / ``Shell`` / ``Solid`` into the
+exact OCC face / shell / solid (:mod:`.occ_brep`); ``to_build123d`` /
+``to_cadquery`` wrap that shape for those libraries. ``from_occ`` also accepts
+OCC shapes (and build123d / cadquery objects): faces, shells and solids come
+back as B-rep objects with their trims, orientations and shared edges (or, with
+``surfaces=True``, as the plain B-spline forms of their faces), edges as
+curves, converting analytic geometry exactly.
 
 OCP is imported inside the functions, so ``import splinekit`` does not load it.
 """
@@ -265,6 +267,16 @@ def _face_to_surface(face, oriented: bool):
             "bound it with edges first"
         )
     nu0, nu1, nv0, nv1 = surf.Bounds()
+    # clamp to the natural range along non-periodic directions: STEP-rounded bounds a hair past a
+    # sphere's poles made OCC's conversion raise
+    if not surf.IsUPeriodic():
+        u0, u1 = max(u0, nu0), min(u1, nu1)
+    else:  # and to one period along periodic ones (a torus's 2 pi + 1e-15 made it raise too)
+        u1 = min(u1, u0 + surf.UPeriod())
+    if not surf.IsVPeriodic():
+        v0, v1 = max(v0, nv0), min(v1, nv1)
+    else:
+        v1 = min(v1, v0 + surf.VPeriod())
     native = isinstance(surf, (Geom.Geom_BSplineSurface, Geom.Geom_BezierSurface))
     if not (native and _same_range((u0, u1), (nu0, nu1)) and _same_range((v0, v1), (nv0, nv1))):
         surf = _occ_call("trim a surface", Geom.Geom_RectangularTrimmedSurface, surf, u0, u1, v0, v1)

@@ -459,7 +459,10 @@ def brep_from_shape(shape, *, name=None, on_error=None):
         bounds = BRepTools.BRepTools.UVBounds_s(face)
         if not all(abs(x) < 1e100 for x in bounds):  # OCC's "infinite" is 2e100
             raise ParameterError(f"cannot convert an unbounded face (UV bounds {list(bounds)}): bound it with edges first")
-    converted = _nurbs_converted(shape)
+    try:
+        converted = _nurbs_converted(shape)
+    except BackendError as exc:
+        return _unconvertible(shape, exc, name, on_error)
     reader = _Reader(shape)
     kinds = TopAbs.TopAbs_ShapeEnum
     counter = iter(range(1 << 62))  # face numbers in error messages, in reading order
@@ -538,6 +541,33 @@ def brep_from_shape(shape, *, name=None, on_error=None):
     if on_error is None and shape.ShapeType() in (kinds.TopAbs_FACE, kinds.TopAbs_SHELL, kinds.TopAbs_SOLID):
         return out[0]
     return out
+
+
+def _unconvertible(shape, exc, name, on_error):
+    """What :func:`brep_from_shape` does when OCC cannot NURBS-convert ``shape`` as a whole: the
+    faces that fail alone are named (BackendError, or ``on_error`` for each); with ``on_error``, a
+    compound's children are then converted one by one, so the good ones are still read."""
+    TopAbs, TopoDS = _ocp("TopAbs", "TopoDS")
+    kinds = TopAbs.TopAbs_ShapeEnum
+    if on_error is not None and shape.ShapeType() in (kinds.TopAbs_COMPOUND, kinds.TopAbs_COMPSOLID):
+        out = []
+        for child in _children(shape):
+            got = brep_from_shape(child, name=name, on_error=on_error)
+            out.extend(got if isinstance(got, list) else [got])
+        return out
+    bad = []
+    for index, face in enumerate(_sub_shapes(shape, "FACE")):
+        try:
+            _nurbs_converted(face)
+        except BackendError as err:
+            bad.append((index, f"face {index}: {err}"))
+    if not bad:
+        bad = [(-1, str(exc))]
+    if on_error is None:
+        raise BackendError("; ".join(msg for _, msg in bad[:5])) from None
+    for index, msg in bad:
+        on_error(index, msg)
+    return []
 
 
 # ----------------------------------------------------------------------------------------
@@ -687,6 +717,21 @@ def brep_to_shape(obj, *, tolerance: float = 1e-7):
         forward = same[id(r)]
         for node, p in (((r[4], 0 if forward else 1), r[5][0]), ((r[4], 1 if forward else 0), r[5][-1])):
             points.setdefault(uf.find(node), []).append((p, r[3].tolerance))
+    # loops that touch only at a point (no edge between them) share that vertex too: merge the classes
+    # whose points coincide within both classes' tolerances
+    roots = list(points)
+    if len(roots) > 1:
+        from scipy.spatial import cKDTree
+
+        centers = np.array([np.mean([p for p, _ in points[r]], axis=0) for r in roots])
+        tols = np.array([max(t for _, t in points[r]) for r in roots])
+        for a, b in cKDTree(centers).query_pairs(float(tols.max())):
+            if np.linalg.norm(centers[a] - centers[b]) <= min(tols[a], tols[b]):
+                uf.union(roots[a], roots[b])
+        merged: dict = {}
+        for r, items in points.items():
+            merged.setdefault(uf.find(r), []).extend(items)
+        points = merged
     vertices = {}
     for root, items in points.items():
         P = np.array([p for p, _ in items])
