@@ -93,7 +93,7 @@ class ShellTopology:
     vertices : (V, 3) float array
     n_faces, n_loops : int
     tolerance : float
-        The distance within which points were merged.
+        The largest merging distance (pairs merge within the sum of their own tolerances).
     """
 
     uses: np.ndarray
@@ -182,8 +182,10 @@ class ShellTopology:
 def shell_topology(faces, tolerance: float | None = None) -> ShellTopology:
     """Pair the edge uses of ``faces`` and cluster their vertices.
 
-    ``tolerance`` (model units) defaults to twice the largest face or edge tolerance: two uses
-    of one edge each lie within their own tolerance of it.
+    ``tolerance`` (model units): points closer than this are merged. By default each pair of
+    points is merged within the sum of their own tolerances (the larger of the edge's and the
+    face's): each lies within its own tolerance of the true vertex or edge, so one sloppy edge
+    does not widen the merging of every other.
     """
     faces = tuple(faces)
     uses, keys, degenerate, tols = [], [], [], []
@@ -217,8 +219,12 @@ def shell_topology(faces, tolerance: float | None = None) -> ShellTopology:
                 dirs.append(-d if face.reversed else d)
                 lengths.append(total)
     m = len(uses)
+    tols = np.array(tols, dtype=np.float64)
     if tolerance is None:
-        tolerance = 2.0 * max(tols) if tols else 0.0
+        pair_tol = tols  # per point; a pair merges within the sum of its two
+        tolerance = 2.0 * float(tols.max()) if m else 0.0
+    else:
+        pair_tol = np.full(m, 0.5 * float(tolerance))
     uses = np.array(uses, dtype=np.intp).reshape(m, 3)
     degenerate = np.array(degenerate, dtype=bool)
     starts, ends, mids = (np.array(x, dtype=np.float64).reshape(m, 3) for x in (starts, ends, mids))
@@ -227,7 +233,7 @@ def shell_topology(faces, tolerance: float | None = None) -> ShellTopology:
 
     # vertices: every use's start and end clustered within the tolerance
     ends_all = np.concatenate([starts, ends])
-    labels = _clusters(ends_all, tolerance)
+    labels = _clusters(ends_all, np.concatenate([pair_tol, pair_tol]))
     n_vert = int(labels.max()) + 1 if m else 0
     vertices = np.zeros((n_vert, 3))
     np.add.at(vertices, labels, ends_all)
@@ -252,8 +258,10 @@ def shell_topology(faces, tolerance: float | None = None) -> ShellTopology:
                       np.concatenate([ends[keyless], starts[keyless]], axis=1)):
             pairs = cKDTree(query).sparse_distance_matrix(target, 2.0 * tolerance, output_type="coo_matrix")
             i, j = keyless[pairs.row], solid[pairs.col]
-            near = np.linalg.norm(mids[i] - mids[j], axis=1) <= np.maximum(tolerance, _MID_RELATIVE * np.maximum(lengths[i], lengths[j]))
-            keep = near & (i != j)
+            limit = pair_tol[i] + pair_tol[j]
+            ends_ok = pairs.data <= np.sqrt(2.0) * limit  # both ends, as one 6-D distance
+            near = np.linalg.norm(mids[i] - mids[j], axis=1) <= np.maximum(limit, _MID_RELATIVE * np.maximum(lengths[i], lengths[j]))
+            keep = ends_ok & near & (i != j)
             rows += i[keep].tolist()
             cols += j[keep].tolist()
     if m:
@@ -274,12 +282,15 @@ def shell_topology(faces, tolerance: float | None = None) -> ShellTopology:
                          float(tolerance))
 
 
-def _clusters(points: np.ndarray, tolerance: float) -> np.ndarray:
-    """Labels ``(n,)``: points within ``tolerance`` of each other (transitively) share one."""
+def _clusters(points: np.ndarray, tol: np.ndarray) -> np.ndarray:
+    """Labels ``(n,)``: points ``a``, ``b`` closer than ``tol[a] + tol[b]`` (transitively) share one."""
     n = len(points)
     if n == 0:
         return np.zeros(0, dtype=np.intp)
-    pairs = cKDTree(points).query_pairs(tolerance, output_type="ndarray")
+    pairs = cKDTree(points).query_pairs(2.0 * float(tol.max()), output_type="ndarray")
+    if len(pairs):
+        d = np.linalg.norm(points[pairs[:, 0]] - points[pairs[:, 1]], axis=1)
+        pairs = pairs[d <= tol[pairs[:, 0]] + tol[pairs[:, 1]]]
     graph = coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(n, n))
     _, labels = connected_components(graph, directed=False)
     return labels
