@@ -194,3 +194,13 @@ def test_native_primitives_closed_forms():
     # axial moment of the frustum: integral of pi r(z)^4 / 2 dz = pi h (r1^5 - r2^5) / (10 (r1 - r2))
     frustum = P.cone(r1, r2, h, axis=axis).inertia()
     close(axis @ frustum @ axis, PI * h * (r1**5 - r2**5) / (10 * (r1 - r2)))
+
+
+def test_trims_outside_the_domain_are_refused():
+    from splinekit.errors import DomainError
+
+    face = plate_with_holes()
+    shifted = [[c.transform(np.array([[1.0, 0, 0], [0, 1.0, 1.0], [0, 0, 1]])) for c in (e.pcurve for e in loop)]
+               for loop in face.loops]  # every trim moved up by one period in v
+    with pytest.raises(DomainError, match="past the surface's domain"):
+        TrimmedFace(face.surface, shifted).area()

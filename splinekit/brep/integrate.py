@@ -35,7 +35,7 @@ from .. import limits
 from .._validate import as_positive
 from ..basis.bspline import basis_ders_t, find_span
 from ..construct.curves import line
-from ..errors import ParameterError
+from ..errors import DomainError, ParameterError
 
 __all__ = ["Integral", "integrate", "integrate_face", "kronrod15", "DEFAULT_TOLERANCE"]
 
@@ -47,6 +47,11 @@ MAX_PASSES = 80
 
 MAX_INNER_LEVELS = 60
 """Bisection levels of the inner (Green) integrals before their error is accepted as it is."""
+
+MAX_PIECES = 200_000
+"""Cells or intervals in play at once (outer pieces of all faces, or inner intervals of one
+pass) beyond which the integration stops refining and reports what it has (with its error
+estimate and ``converged=False``) instead of exhausting memory on a singular integrand."""
 
 # 7-15 Gauss-Kronrod on [-1, 1]: the non-negative nodes and their weights, computed with 40-digit
 # arithmetic (Stieltjes polynomial roots, moment equations); tests check them against numpy's
@@ -188,10 +193,18 @@ class _GreenRule:
         self.surface = face.surface
         self.sign = -1.0 if face.reversed else 1.0
         self.integrand = integrand
-        (self.u_ref, u1), (v0, v1) = self.surface.domain
-        self.pcurves = _closed_pcurves(face.loops, 1e-14 * max(u1 - self.u_ref, v1 - v0))
-        self.width = max(u1 - self.u_ref, np.finfo(float).tiny)
-        self.u_breaks = self.surface.bezier_breakpoints()[0]
+        (ua, ub), (v0, v1) = self.surface.domain
+        self.pcurves = _closed_pcurves(face.loops, 1e-14 * max(ub - ua, v1 - v0))
+        samples = [_samples(c) for c in self.pcurves]
+        _check_in_domain(face, samples)
+        # G is integrated from the trims' leftmost u (any constant u_ref will do): no work on
+        # the part of the surface left of the face
+        lo = min(float(x[:, 0].min()) for x in samples)
+        self.u_ref = min(max(lo, ua), ub)
+        self.u_end = ub
+        self.width = max(ub - self.u_ref, np.finfo(float).tiny)
+        bu = self.surface.bezier_breakpoints()[0]
+        self.u_breaks = np.concatenate([[self.u_ref], bu[(bu > self.u_ref) & (bu < ub)], [ub]])
         # total variation of v along the loops: bounds how inner errors add up in the outer sum
         total = 0.0
         for c in self.pcurves:
@@ -257,7 +270,7 @@ class _GreenRule:
         """
         n = u.size
         # a pcurve may stray past the domain by rounding: its G is the edge's value
-        u = np.clip(u, self.u_ref, self.u_ref + self.width)
+        u = np.clip(u, self.u_ref, self.u_end)
         v = np.clip(v, *self.surface.domain[1])
         interior = self.u_breaks[1:-1]
         # intervals [u_ref, b1], [b1, b2], ..., [b_j, u] for the breaks b below u
@@ -291,6 +304,9 @@ class _GreenRule:
             else:
                 allowed = tol * (np.abs(h) / self.width)[:, None]
             done = np.all(err <= allowed, axis=1) | (level == MAX_INNER_LEVELS)
+            done |= np.abs(h) <= 1e-13 * self.width  # at rounding level: splitting cannot help
+            if 2 * np.count_nonzero(~done) > MAX_PIECES:
+                done[:] = True
             np.add.at(G, owners[done], qk[done])
             np.add.at(G_err, owners[done], err[done])
             if done.all():
@@ -305,6 +321,34 @@ class _GreenRule:
 
 
 _GL16 = np.polynomial.legendre.leggauss(16)
+
+
+OUTSIDE_DOMAIN = 1e-3
+"""How far (a fraction of the domain's width) trims may stray past the surface's domain before
+the face is refused: approximated trims overshoot by 1e-4, trims of another period by 1."""
+
+
+def _samples(curve, per_piece: int = 33):
+    """``(n, 2)`` points of a pcurve, ``per_piece`` on each of its Bézier pieces (ends included)."""
+    b = curve.bezier_breakpoints()
+    t = (b[:-1, None] + (b[1:] - b[:-1])[:, None] * np.linspace(0.0, 1.0, per_piece)).ravel()
+    return curve.evaluate(t)
+
+
+def _check_in_domain(face, samples):
+    """Raise DomainError when a trim (its ``samples``, one ``(n, 2)`` array per pcurve) leaves
+    the surface's domain by more than :data:`OUTSIDE_DOMAIN` of its width: the integrand there
+    would be the surface's polynomial extension, not the face, and the result silently wrong."""
+    for k, (a, b) in enumerate(face.surface.domain):
+        slack = OUTSIDE_DOMAIN * (b - a)
+        for i, pts in enumerate(samples):
+            x = pts[:, k]
+            lo, hi = float(x.min()), float(x.max())
+            if lo < a - slack or hi > b + slack:
+                raise DomainError(
+                    f"face{f' {face.name!r}' if face.name else ''}: trim {i} spans {'uv'[k]} in [{lo:.10g}, {hi:.10g}], "
+                    f"past the surface's domain [{a:.10g}, {b:.10g}] (trims of another period of a periodic surface?); "
+                    "cannot integrate over it")
 
 
 def _closed_pcurves(loops, tiny):
@@ -422,6 +466,8 @@ def integrate(faces, integrand, *, tol: float = DEFAULT_TOLERANCE, scale=None) -
         targets = np.maximum(tol * np.abs(magnitude), 1e3 * np.finfo(float).eps * tol * total_abs + tiny)
         if np.all(total_err <= targets):
             converged = True
+            break
+        if sum(len(p) for p in pieces) > MAX_PIECES:
             break
         # bisect the pieces that carry the largest share of the error: keep (unsplit) the
         # smallest-error pieces whose errors add up to at most half the budget
