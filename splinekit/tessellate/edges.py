@@ -175,26 +175,29 @@ def _subdivide(owner, a, b, n):
     return t, who
 
 
-def sample_groups(uses, groups, scales, tol, angle_tol, surfaces, pc):
+def sample_groups(uses, groups, scales, tol, angle_tol, surfaces, pc, memo=None):
     """Sample every group (see the module docstring), all groups at once.
 
     ``scales`` ``(F, 2)`` per face: parameter units -> interior grid steps in u and v;
     ``surfaces``: a :class:`.batch.SurfaceBatch` of the faces' surfaces (in face order);
-    ``pc``: a :class:`.batch.CurveBatch` of the uses' pcurves.
+    ``pc``: a :class:`.batch.CurveBatch` of the uses' pcurves; ``memo``: a dict kept with the
+    face set (its tolerance-independent part: representatives, 3-D curve batch, directions,
+    span bounds, filled on the first call).
     Returns a list of :class:`SampledGroup`, one per group.
     """
     from ..mesh.topology import ranges
-    from .batch import CurveBatch
-    from .curves import _span_bounds
 
-    U = len(uses)
-    face = np.array([u.f for u in uses], dtype=np.int64)
+    memo = {} if memo is None else memo
+    if "head" not in memo:
+        face = np.array([u.f for u in uses], dtype=np.int64)
+        degenerate = np.array([uses[g[0]].edge.degenerate for g in groups], dtype=bool)
+        group_of = np.empty(len(uses), dtype=np.int64)
+        for g, members in enumerate(groups):
+            group_of[members] = g
+        memo["head"] = face, degenerate, group_of
+    face, degenerate, group_of = memo["head"]
     pdom = np.column_stack([pc.breaks.lo, pc.breaks.hi])
     G = len(groups)
-    degenerate = np.array([uses[g[0]].edge.degenerate for g in groups], dtype=bool)
-    group_of = np.empty(U, dtype=np.int64)
-    for g, members in enumerate(groups):
-        group_of[members] = g
     out = [SampledGroup() for _ in range(G)]
 
     # degenerate uses: uniform samples at the face grid's spacing, one 3-D point
@@ -216,39 +219,14 @@ def sample_groups(uses, groups, scales, tol, angle_tol, surfaces, pc):
     live = np.flatnonzero(~degenerate)
     if live.size == 0:
         return out
-    # the representative of each group: a use with a 3-D curve if there is one
-    rep = np.array([next((i for i in groups[g] if uses[i].edge.curve is not None), groups[g][0]) for g in live])
-    has_curve = np.array([uses[i].edge.curve is not None for i in rep], dtype=bool)
-    curve_of = np.full(live.size, -1, dtype=np.int64)
-    curve_of[has_curve] = np.arange(int(has_curve.sum()))
-    c3 = CurveBatch([uses[i].edge.curve for i in rep[has_curve]])
-    dom = pdom[rep].copy()
-    if has_curve.any():
-        dom[has_curve] = np.array([uses[i].edge.curve.domain for i in rep[has_curve]])
-    slot = np.full(G, -1, dtype=np.int64)  # group -> index among live groups
-    slot[live] = np.arange(live.size)
-
-    def exact(k, t):
-        """3-D points of live groups ``k`` at the representatives' parameters ``t``."""
-        X = np.empty((t.size, 3))
-        cur = has_curve[k]
-        if cur.any():
-            X[cur] = c3.evaluate(curve_of[k[cur]], t[cur])
-        if not cur.all():
-            r = rep[k[~cur]]
-            uv = pc.evaluate(r, t[~cur])
-            X[~cur] = surfaces.evaluate(face[r], uv[:, 0], uv[:, 1])
-        return X
-
-    # the uses of live groups, and whether each runs against its representative
-    lu = np.flatnonzero(~degenerate[group_of])
-    lg = slot[group_of[lu]]  # live group of each use
+    if "live" not in memo:  # the tolerance-independent part, computed once per face set
+        memo["live"] = _live_groups(uses, groups, live, G, face, pdom, surfaces, pc, group_of, degenerate)
+    rep, has_curve, curve_of, c3, dom, lu, lg, flip, span_bounds = memo["live"]
     a, b = dom[lg, 0], dom[lg, 1]
     c, d = pdom[lu, 0], pdom[lu, 1]
-    ref = exact(lg, a + (b - a) / 3.0)
-    probe = pc.evaluate(np.repeat(lu, 2), np.column_stack([c + (d - c) / 3.0, d - (d - c) / 3.0]).ravel())
-    P = surfaces.evaluate(np.repeat(face[lu], 2), probe[:, 0], probe[:, 1]).reshape(-1, 2, 3)
-    flip = np.linalg.norm(P[:, 1] - ref, axis=1) < np.linalg.norm(P[:, 0] - ref, axis=1)
+
+    def exact(k, t):
+        return _exact(k, t, has_curve, curve_of, c3, rep, pc, surfaces, face)
 
     # initial parameters: the 3-D curve's a-priori counts per Bézier span (the curve
     # tessellator's bounds), or a few steps per pcurve span
@@ -257,8 +235,7 @@ def sample_groups(uses, groups, scales, tol, angle_tol, surfaces, pc):
     n_curve = np.zeros(0)
     if cur.size:
         n_row = {}
-        for p, segs in c3.segs.items():
-            M, L = _span_bounds(p, segs)
+        for p, (M, L) in span_bounds.items():
             n = np.sqrt(M / (8.0 * tol))
             if angle_tol is not None:
                 with np.errstate(divide="ignore", invalid="ignore"):
@@ -333,6 +310,53 @@ def sample_groups(uses, groups, scales, tol, angle_tol, surfaces, pc):
         grp.params[int(lu[o])] = sk_
         grp.uv[int(lu[o])] = uvk
     return out
+
+
+def _exact(k, t, has_curve, curve_of, c3, rep, pc, surfaces, face):
+    """3-D points of live groups ``k`` at the representatives' parameters ``t``: the 3-D curve,
+    or the representative's surface at its pcurve."""
+    X = np.empty((t.size, 3))
+    cur = has_curve[k]
+    if cur.any():
+        X[cur] = c3.evaluate(curve_of[k[cur]], t[cur])
+    if not cur.all():
+        r = rep[k[~cur]]
+        uv = pc.evaluate(r, t[~cur])
+        X[~cur] = surfaces.evaluate(face[r], uv[:, 0], uv[:, 1])
+    return X
+
+
+def _live_groups(uses, groups, live, G, face, pdom, surfaces, pc, group_of, degenerate):
+    """The tolerance-independent data of the non-degenerate groups: ``(rep, has_curve,
+    curve_of, c3, dom, lu, lg, flip, span_bounds)`` (representative use per group, whether it
+    has a 3-D curve, its index in the 3-D curve batch ``c3``, the representative's parameter
+    domain, the uses of live groups and their group, whether each runs against its
+    representative, and the 3-D curves' per-span bounds by degree)."""
+    from .batch import CurveBatch
+    from .curves import _span_bounds
+
+    # the representative of each group: a use with a 3-D curve if there is one
+    rep = np.array([next((i for i in groups[g] if uses[i].edge.curve is not None), groups[g][0]) for g in live])
+    has_curve = np.array([uses[i].edge.curve is not None for i in rep], dtype=bool)
+    curve_of = np.full(live.size, -1, dtype=np.int64)
+    curve_of[has_curve] = np.arange(int(has_curve.sum()))
+    c3 = CurveBatch([uses[i].edge.curve for i in rep[has_curve]])
+    dom = pdom[rep].copy()
+    if has_curve.any():
+        dom[has_curve] = np.array([uses[i].edge.curve.domain for i in rep[has_curve]])
+    slot = np.full(G, -1, dtype=np.int64)  # group -> index among live groups
+    slot[live] = np.arange(live.size)
+    # the uses of live groups, and whether each runs against its representative
+    lu = np.flatnonzero(~degenerate[group_of])
+    lg = slot[group_of[lu]]  # live group of each use
+    a, b = dom[lg, 0], dom[lg, 1]
+    c, d = pdom[lu, 0], pdom[lu, 1]
+    ref = _exact(lg, a + (b - a) / 3.0, has_curve, curve_of, c3, rep, pc, surfaces, face)
+    probe = pc.evaluate(np.repeat(lu, 2), np.column_stack([c + (d - c) / 3.0, d - (d - c) / 3.0]).ravel())
+    P = surfaces.evaluate(np.repeat(face[lu], 2), probe[:, 0], probe[:, 1]).reshape(-1, 2, 3)
+    flip = np.linalg.norm(P[:, 1] - ref, axis=1) < np.linalg.norm(P[:, 0] - ref, axis=1)
+    span_bounds = {p: _span_bounds(p, segs) for p, segs in c3.segs.items()} if has_curve.any() else {}
+    return rep, has_curve, curve_of, c3, dom, lu, lg, flip, span_bounds
 
 
 def _project(use, s, X, c, d, surfaces, rounds: int = 6):

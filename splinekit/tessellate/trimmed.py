@@ -73,12 +73,13 @@ class _FaceGrid:
     __slots__ = ("us", "vs", "scale")
 
 
-def _face_grids(batch, tol, angle_tol):
+def _face_grids(batch, tol, angle_tol, bounds=None):
     """The interior grid of every surface of ``batch`` (a :class:`.batch.SurfaceBatch`): per knot
-    span row (column) the largest a-priori count of its cells, times :data:`GRID_FRACTION`."""
+    span row (column) the largest a-priori count of its cells, times :data:`GRID_FRACTION`
+    (``bounds``: the cell sets' second-derivative bounds, when already known)."""
     from .surfaces import _initial_counts, _span_params
 
-    nu, nv = _initial_counts(batch.cellsets, tol, angle_tol)
+    nu, nv = _initial_counts(batch.cellsets, tol, angle_tol, bounds)
     out = []
     for k in range(len(batch.bu)):
         cells = slice(batch.first[k], batch.first[k] + batch.nsu[k] * batch.nsv[k])
@@ -152,7 +153,8 @@ def _loops(faces, uses, groups, samples, vid_of_group, scales):
             vid = np.concatenate([x[:-1] for x in vids])
             if len(uv) < 2 + (len(uvs) == 1):
                 raise ParameterError(f"{name}: loop {l} encloses no area")
-            area = 0.5 * np.sum(uv[:, 0] * np.roll(uv[:, 1], -1) - np.roll(uv[:, 0], -1) * uv[:, 1])
+            nx = np.concatenate([uv[1:], uv[:1]])
+            area = 0.5 * np.sum(uv[:, 0] * nx[:, 1] - nx[:, 0] * uv[:, 1])
             if (area <= 0) if l == 0 else (area >= 0):
                 want = "counter-clockwise (outer loop)" if l == 0 else "clockwise (inner loop)"
                 raise ParameterError(f"{name}: loop {l} faces the wrong way: it must run {want} in (u, v), material on its left")
@@ -307,22 +309,50 @@ def _keep_inside(T, N, nxt):
     return inside[lab], conflict, along
 
 
+class _Prepared:
+    """What a face set's tessellation needs at any tolerance, computed once per face set and kept
+    in the first face's ``_cache`` (faces are immutable): the surfaces' batch evaluator and
+    second-derivative bounds, the edge uses, their pcurves' batch evaluator (domains checked),
+    the groups of uses that are one edge and the edge sampler's tolerance-independent memo."""
+
+    __slots__ = ("faces", "size", "batch", "bounds", "edge_tol", "uses", "pcurves", "groups", "memo")
+
+    def __init__(self, faces, size):
+        from .batch import CurveBatch, SurfaceBatch
+        from .cells import second_derivative_bounds
+
+        self.faces, self.size = tuple(faces), size
+        self.batch = SurfaceBatch([face.surface for face in faces])
+        self.bounds = [second_derivative_bounds(cs) for cs in self.batch.cellsets]
+        self.edge_tol = max((e.tolerance for face in faces for e in face.edges), default=0.0)
+        self.uses = edge_uses(faces)
+        self.pcurves = CurveBatch([u.edge.pcurve for u in self.uses])
+        check_domains(self.uses, self.pcurves, self.batch)
+        self.groups = group_uses(self.uses, max(WELD * size, 2.0 * self.edge_tol), self.pcurves, self.batch)
+        self.memo = {}
+
+    @classmethod
+    def of(cls, faces, size):
+        """The cached preparation of ``faces`` (the same face objects in the same order and the
+        same model size), else a new one, cached."""
+        cache = faces[0]._cache
+        prep = cache.get("tessellate")
+        if not (prep is not None and prep.size == size and len(prep.faces) == len(faces)
+                and all(a is b for a, b in zip(prep.faces, faces))):  # fmt: skip
+            prep = cache["tessellate"] = cls(faces, size)
+        return prep
+
+
 def tessellate_faces(faces, tol: float, angle_tol, size: float) -> Tessellation:
     """Tessellate :class:`~splinekit.brep.TrimmedFace` objects as one watertight mesh (see
     :func:`splinekit.tessellate.tessellate`). ``tol``: absolute chordal tolerance;
     ``angle_tol``: radians or None; ``size``: model size (bounding-box diagonal)."""
-    from .batch import CurveBatch, SurfaceBatch
-
     triangle = _triangulator()
-    batch = SurfaceBatch([face.surface for face in faces])
-    grids = _face_grids(batch, tol, angle_tol)
+    prep = _Prepared.of(faces, size)
+    batch, uses, groups, edge_tol = prep.batch, prep.uses, prep.groups, prep.edge_tol
+    grids = _face_grids(batch, tol, angle_tol, prep.bounds)
     scales = np.stack([g.scale for g in grids])
-    edge_tol = max((e.tolerance for face in faces for e in face.edges), default=0.0)
-    uses = edge_uses(faces)
-    pcurves = CurveBatch([u.edge.pcurve for u in uses])
-    check_domains(uses, pcurves, batch)
-    groups = group_uses(uses, max(WELD * size, 2.0 * edge_tol), pcurves, batch)
-    samples = sample_groups(uses, groups, scales, tol, angle_tol, batch, pcurves)
+    samples = sample_groups(uses, groups, scales, tol, angle_tol, batch, prep.pcurves, prep.memo)
     vid_of_group, edge_xyz = _edge_vertices(samples, size, edge_tol)
     loops = _loops(faces, uses, groups, samples, vid_of_group, scales)
     layout = _Layout(loops, scales)
