@@ -11,6 +11,10 @@ uninterrupted builds run the same way. Every try must end with
 * each target untouched (its old contents) or complete: byte for byte the uninterrupted build's
   file (the STEP header's time stamp aside).
 
+A signal that meets the process in its very last instant (the files written, the summary printed,
+the exit call under way) cannot be handled any more; such a try must show the complete output
+and complete files with status 0, and is counted apart.
+
 A signal that arrives while the interpreter itself starts, before ``import splinekit`` runs its
 first line, meets Python's own handling, which no program can change (killed by the signal, or
 "Fatal Python error" with status 1 while the site module loads); the test tells that window apart
@@ -131,6 +135,12 @@ def _check(result) -> str:
     if not result["sent"]:  # the build ended before the delay did
         assert result["status"] == 0 and set(result["states"].values()) == {"complete"}, where
         return "finished before the signal"
+    if result["status"] == 0:
+        # the signal met the process in its last instant: the work done, the output flushed, the
+        # exit call under way (no bytecode left to run a handler); only then may it end with 0
+        assert re.search(r"total [0-9.]+ s\n$", result["stdout"]), where
+        assert set(result["states"].values()) == {"complete"} and err == "", where
+        return "finished as the signal came (exit under way)"
     if result["handled"] is False and result["status"] != 128 + signum:
         # sent before `import splinekit` began: Python's own handling (killed by the signal, or
         # a KeyboardInterrupt while the site module loads: "Fatal Python error", status 1);
