@@ -5,8 +5,12 @@ points or triangles):
 
 1. Interior grid. Each face's surface is cut into Bézier cells (:mod:`.cells`); the same a-priori
    bounds on the second derivatives that size the untrimmed patch grids give each cell its
-   ``nu x nv`` steps, and a knot span row (column) takes the largest count of its cells: one
-   tensor grid of parameters per face.
+   ``nu x nv`` steps, and a knot span row (column) takes the largest count of its cells; that
+   grid is evaluated once and each span's count lowered to what its measured chord error needs
+   (the bounds hold over whole cells, so they over-count on spheres and rational arcs): one
+   tensor grid of parameters per face. Everything that does not depend on the tolerance (batch
+   evaluators, bounds, edge uses and their pairing, checks) is computed once per face set and
+   cached on its first face.
 2. Scaled parameter plane. Each face is triangulated in ``(u, v)`` scaled by
    ``(steps in u / range of u, steps in v / range of v)``: there the grid's step is about one in
    both directions, i.e. lengths measure the local chordal error, so Delaunay triangles that are
