@@ -283,3 +283,22 @@ def test_build123d_parts(name):
     volume = _occ_volume(part.wrapped)
     assert mesh.volume > 0
     assert abs(mesh.volume - volume) <= part.area * mesh.tolerance
+
+
+def test_cached_preparation_reused_only_for_the_same_face_set():
+    """The tolerance-independent preparation is cached on the first face: a repeated call gives
+    the very same mesh, another tolerance a valid one, and the same faces in another order (a
+    different face set for the cache) a mesh whose face indices follow the new order."""
+    solid = primitives.box_with_hole(20.0, 4.0)
+    faces = list(solid.faces)
+    first = sk.tessellate(solid, 0.05)
+    again = sk.tessellate(solid, 0.05)
+    np.testing.assert_array_equal(first.vertices, again.vertices)
+    np.testing.assert_array_equal(np.asarray(first.faces), np.asarray(again.faces))
+    fine = sk.tessellate(solid, 0.01)
+    assert fine.is_closed and fine.max_deviation <= 0.01 and measured_deviation(fine, faces) <= 0.01 * (1 + 1e-9)
+    order = faces[::-1]
+    shuffled = sk.tessellate(order, 0.05)
+    assert shuffled.is_closed and measured_deviation(shuffled, order) <= 0.05 * (1 + 1e-9)
+    _, volume, area, _ = SOLIDS["box_with_hole"]
+    assert abs(shuffled.volume - volume) <= area * 0.05 and abs(first.volume - volume) <= area * 0.05
