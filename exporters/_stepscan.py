@@ -7,7 +7,8 @@ fault, which no Python code can catch (measured with OCP 7.9: an 8 MB main-threa
 refuses, with a :class:`~splinekit.errors.FileFormatError` naming the problem and the limit:
 
 - parentheses nested deeper than :data:`MAX_NESTING` outside strings and comments;
-- a statement whose parentheses do not balance, a reference ``#n`` to an entity that is not
+- a byte other than printable ASCII, tab or a line break outside strings and comments, a
+  statement whose parentheses do not balance, a reference ``#n`` to an entity that is not
   defined, or an entity defined twice (OCC reports these syntax errors, then its transfer
   crashes or hangs on what it made of them);
 - a file or entity count whose OCC model would not fit the memory budget
@@ -131,6 +132,16 @@ def scan_step(path, what: str | None = None) -> StepScan:
         raise FileFormatError(f"cannot read {what}: {reason}") from exc
     a = np.frombuffer(data, dtype=np.uint8)
     inside = _inside(data, a)
+    # outside strings and comments a STEP file is printable ASCII (ISO 10303-21's basic alphabet)
+    # and line breaks; OCC's parser crashed on other bytes there
+    odd = ~inside & ((a > 126) | ((a < 32) & (a != 9) & (a != 10) & (a != 13)))
+    if odd.any():
+        at = int(np.argmax(odd))
+        line = data.count(b"\n", 0, at) + 1
+        raise FileFormatError(
+            f"{what}: the byte 0x{a[at]:02X} at line {line} (byte {at}) is outside strings and comments, "
+            "where STEP allows only printable ASCII"
+        )
     marks = np.flatnonzero(((a == ord("(")) | (a == ord(")")) | (a == ord(";"))) & ~inside)
     kinds = a[marks]
     entities = int(np.count_nonzero(kinds == ord(";")))

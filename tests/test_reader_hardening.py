@@ -552,3 +552,14 @@ def test_obj_vertex_with_other_whitespace_is_refused_with_its_line(tmp_path):
     path = write_bytes(tmp_path / "ff.obj", b"v 0 0 0\nv 1\x0c0 0\nv 0 1 0\nf 1 2 3\n")
     with pytest.raises(FileFormatError, match=r"vertex 1 \(line 2\) has fewer than 3 coordinates"):
         exporters.import_obj(path)
+
+
+def test_step_bytes_outside_the_step_alphabet_are_refused(tmp_path):
+    """Two non-ASCII bytes between list items crashed import_step (segmentation fault; found by
+    the long fuzz run); inside strings such bytes stay allowed (CAD systems write raw UTF-8 names)."""
+    body = "#1=CARTESIAN_POINT('pi\u00e8ce \u00e9',(0.,0.,0.));\n"
+    ok = write_bytes(tmp_path / "ok.step", (STEP_HEAD + body + STEP_TAIL).encode("utf-8"))
+    assert _stepscan.scan_step(ok).depth == 2
+    bad = write_bytes(tmp_path / "bad.step", (STEP_HEAD + body + STEP_TAIL).encode().replace(b"(0.,", b"(E\xd5E\xd5 0.,"))
+    with pytest.raises(FileFormatError, match=r"byte 0xD5 at line 8 .* only printable ASCII"):
+        _stepscan.scan_step(bad)
