@@ -32,7 +32,7 @@ import numpy as np
 from splinekit import limits
 from splinekit.errors import FileFormatError
 
-__all__ = ["MAX_NESTING", "StepScan", "scan_step"]
+__all__ = ["MAX_NESTING", "StepScan", "scan_step", "syntax_errors"]
 
 MAX_NESTING = 200
 """Deepest parenthesis nesting accepted. CAD systems write a handful of levels (the deepest of
@@ -101,6 +101,8 @@ def _inside(data: bytes, a: np.ndarray) -> np.ndarray:
 _DEFINITION = re.compile(rb"#(\d+)\s*=")
 _REFERENCE = re.compile(rb"#(\d+)")
 _NOT_A_NAME = re.compile(rb"#(?!\d)")
+# an integer literal (not part of a real, an entity name or an identifier) of ten or more digits
+_BIG_INTEGER = re.compile(rb"(?<![\w.#+-])[+-]?\d{10,}(?![\w.])")
 
 
 def scan_step(path, what: str | None = None) -> StepScan:
@@ -173,11 +175,30 @@ def scan_step(path, what: str | None = None) -> StepScan:
     return StepScan(size, entities, depth)
 
 
+def syntax_errors(step_reader, what: str) -> None:
+    """Raise FileFormatError if OCC's parser reported syntax errors while loading the file into
+    ``step_reader`` (a ``STEPControl_Reader``, after ``ReadFile``). OCC loads such a file anyway
+    (``ReadFile`` returns ``RetDone``), and its transfer then crashes or hangs on the broken
+    entities; this is the net behind :func:`scan_step` for syntax errors the scan does not see."""
+    check = step_reader.StepModel().GlobalCheck()
+    if check.HasFailed():
+        try:
+            first = check.CFail(1)
+        except Exception:  # noqa: BLE001 - only the message is missing
+            first = "?"
+        raise FileFormatError(f"{what}: OpenCascade's parser reports {check.NbFails()} syntax error(s), the first: {first}")
+
+
 def _check_references(text: bytes, what: str) -> None:
     """Refuse a reference ``#n`` to an entity the file does not define, and an entity defined
     twice (``text``: the file with strings and comments blanked). OpenCascade reports an
     unresolved reference and then dereferences it: a segmentation fault or a hang in the
     transfer."""
+    big = _BIG_INTEGER.search(text)
+    if big is not None:
+        line = text.count(b"\n", 0, big.start()) + 1
+        raise FileFormatError(f"{what}: the integer {big.group().decode()[:40]} at line {line} is beyond 32 bits "
+                              "(OCC reads integers as 32-bit and crashed on such counts)")
     stray = _NOT_A_NAME.search(text)
     if stray is not None:
         line = text.count(b"\n", 0, stray.start()) + 1

@@ -27,7 +27,7 @@ from splinekit.errors import ExportError, FileFormatError, ParameterError
 from splinekit.interop.occ import from_occ, require_ocp, to_shape
 
 from ._meshio import _fspath, check_target
-from ._stepscan import scan_step
+from ._stepscan import scan_step, syntax_errors
 
 __all__ = ["export_step", "import_step", "StepItem", "STEP_UNITS"]
 
@@ -377,6 +377,7 @@ def import_step(path, *, unit: str = "mm") -> list[StepItem]:
         status = reader.ReadFile(path)
         if status != IFSelect.IFSelect_ReturnStatus.IFSelect_RetDone:
             raise FileFormatError(f"{path!r} is not a readable STEP file (OpenCascade: {status.name})")
+        syntax_errors(reader.Reader(), f"STEP file {path!r}")
         if not reader.Transfer(doc):
             raise FileFormatError(f"OpenCascade could not translate the STEP file {path!r}")
     from OCP import TopLoc
