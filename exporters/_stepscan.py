@@ -7,7 +7,8 @@ fault, which no Python code can catch (measured with OCP 7.9: an 8 MB main-threa
 refuses, with a :class:`~splinekit.errors.FileFormatError` naming the problem and the limit:
 
 - parentheses nested deeper than :data:`MAX_NESTING` outside strings and comments;
-- a statement whose parentheses do not balance, a reference ``#n`` to an entity that is not
+- a byte other than printable ASCII, tab or a line break outside strings and comments, a
+  statement whose parentheses do not balance, a reference ``#n`` to an entity that is not
   defined, or an entity defined twice (OCC reports these syntax errors, then its transfer
   crashes or hangs on what it made of them);
 - a file or entity count whose OCC model would not fit the memory budget
@@ -31,7 +32,7 @@ import numpy as np
 from splinekit import limits
 from splinekit.errors import FileFormatError
 
-__all__ = ["MAX_NESTING", "StepScan", "scan_step"]
+__all__ = ["MAX_NESTING", "StepScan", "scan_step", "syntax_errors"]
 
 MAX_NESTING = 200
 """Deepest parenthesis nesting accepted. CAD systems write a handful of levels (the deepest of
@@ -100,6 +101,8 @@ def _inside(data: bytes, a: np.ndarray) -> np.ndarray:
 _DEFINITION = re.compile(rb"#(\d+)\s*=")
 _REFERENCE = re.compile(rb"#(\d+)")
 _NOT_A_NAME = re.compile(rb"#(?!\d)")
+# an integer literal (not part of a real, an entity name or an identifier) of ten or more digits
+_BIG_INTEGER = re.compile(rb"(?<![\w.#+-])[+-]?\d{10,}(?![\w.])")
 
 
 def scan_step(path, what: str | None = None) -> StepScan:
@@ -131,6 +134,16 @@ def scan_step(path, what: str | None = None) -> StepScan:
         raise FileFormatError(f"cannot read {what}: {reason}") from exc
     a = np.frombuffer(data, dtype=np.uint8)
     inside = _inside(data, a)
+    # outside strings and comments a STEP file is printable ASCII (ISO 10303-21's basic alphabet)
+    # and line breaks; OCC's parser crashed on other bytes there
+    odd = ~inside & ((a > 126) | ((a < 32) & (a != 9) & (a != 10) & (a != 13)))
+    if odd.any():
+        at = int(np.argmax(odd))
+        line = data.count(b"\n", 0, at) + 1
+        raise FileFormatError(
+            f"{what}: the byte 0x{a[at]:02X} at line {line} (byte {at}) is outside strings and comments, "
+            "where STEP allows only printable ASCII"
+        )
     marks = np.flatnonzero(((a == ord("(")) | (a == ord(")")) | (a == ord(";"))) & ~inside)
     kinds = a[marks]
     entities = int(np.count_nonzero(kinds == ord(";")))
@@ -162,11 +175,30 @@ def scan_step(path, what: str | None = None) -> StepScan:
     return StepScan(size, entities, depth)
 
 
+def syntax_errors(step_reader, what: str) -> None:
+    """Raise FileFormatError if OCC's parser reported syntax errors while loading the file into
+    ``step_reader`` (a ``STEPControl_Reader``, after ``ReadFile``). OCC loads such a file anyway
+    (``ReadFile`` returns ``RetDone``), and its transfer then crashes or hangs on the broken
+    entities; this is the net behind :func:`scan_step` for syntax errors the scan does not see."""
+    check = step_reader.StepModel().GlobalCheck()
+    if check.HasFailed():
+        try:
+            first = check.CFail(1)
+        except Exception:  # noqa: BLE001 - only the message is missing
+            first = "?"
+        raise FileFormatError(f"{what}: OpenCascade's parser reports {check.NbFails()} syntax error(s), the first: {first}")
+
+
 def _check_references(text: bytes, what: str) -> None:
     """Refuse a reference ``#n`` to an entity the file does not define, and an entity defined
     twice (``text``: the file with strings and comments blanked). OpenCascade reports an
     unresolved reference and then dereferences it: a segmentation fault or a hang in the
     transfer."""
+    big = _BIG_INTEGER.search(text)
+    if big is not None:
+        line = text.count(b"\n", 0, big.start()) + 1
+        raise FileFormatError(f"{what}: the integer {big.group().decode()[:40]} at line {line} is beyond 32 bits "
+                              "(OCC reads integers as 32-bit and crashed on such counts)")
     stray = _NOT_A_NAME.search(text)
     if stray is not None:
         line = text.count(b"\n", 0, stray.start()) + 1

@@ -28,7 +28,7 @@ from splinekit.interop.occ import from_occ, require_ocp, to_shape
 
 from ._brep_io import BrepItem, ReadResult, default_names, items_from_shapes
 from ._meshio import _fspath
-from ._stepscan import scan_step
+from ._stepscan import scan_step, syntax_errors
 
 __all__ = ["export_step", "import_step", "StepItem", "ReadResult", "STEP_UNITS"]
 
@@ -413,6 +413,7 @@ def _read_named_shapes(path: str, metres: float) -> list:
         status = reader.ReadFile(path)
         if status != IFSelect.IFSelect_ReturnStatus.IFSelect_RetDone:
             raise FileFormatError(f"{path!r} is not a readable STEP file (OpenCascade: {status.name})")
+        syntax_errors(reader.Reader(), f"STEP file {path!r}")
         if not reader.Transfer(doc):
             raise FileFormatError(f"OpenCascade could not translate the STEP file {path!r}")
     from OCP import TopLoc

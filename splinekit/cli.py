@@ -447,13 +447,14 @@ def read_step_shape(path):
     IFSelect, STEPControl = _occ("IFSelect", "STEPControl")
     if not os.path.isfile(path):
         raise FileFormatError(f"STEP file {path!r} does not exist or is not a file")
-    from exporters._stepscan import scan_step
+    from exporters._stepscan import scan_step, syntax_errors
 
     scan_step(path)  # OCC's parser crashes the process on some inputs: refuse them first
     reader = STEPControl.STEPControl_Reader()
     status = reader.ReadFile(path)
     if status != IFSelect.IFSelect_ReturnStatus.IFSelect_RetDone:
         raise FileFormatError(f"{path!r} is not a readable STEP file (OpenCascade: {status.name})")
+    syntax_errors(reader, f"STEP file {path!r}")
     if reader.TransferRoots() == 0:
         raise FileFormatError(f"the STEP file {path!r} holds no shapes")
     return reader.OneShape()

@@ -552,3 +552,39 @@ def test_obj_vertex_with_other_whitespace_is_refused_with_its_line(tmp_path):
     path = write_bytes(tmp_path / "ff.obj", b"v 0 0 0\nv 1\x0c0 0\nv 0 1 0\nf 1 2 3\n")
     with pytest.raises(FileFormatError, match=r"vertex 1 \(line 2\) has fewer than 3 coordinates"):
         exporters.import_obj(path)
+
+
+def test_step_bytes_outside_the_step_alphabet_are_refused(tmp_path):
+    """Two non-ASCII bytes between list items crashed import_step (segmentation fault; found by
+    the long fuzz run); inside strings such bytes stay allowed (CAD systems write raw UTF-8 names)."""
+    body = "#1=CARTESIAN_POINT('pi\u00e8ce \u00e9',(0.,0.,0.));\n"
+    ok = write_bytes(tmp_path / "ok.step", (STEP_HEAD + body + STEP_TAIL).encode("utf-8"))
+    assert _stepscan.scan_step(ok).depth == 2
+    bad = write_bytes(tmp_path / "bad.step", (STEP_HEAD + body + STEP_TAIL).encode().replace(b"(0.,", b"(E\xd5E\xd5 0.,"))
+    with pytest.raises(FileFormatError, match=r"byte 0xD5 at line 8 .* only printable ASCII"):
+        _stepscan.scan_step(bad)
+
+
+def test_step_syntax_errors_reported_by_occ_stop_the_import(tmp_path):
+    """A keyword split by spaces ("CARTES IAN_POINT") or an integer beyond 32 bits crashed
+    import_step (found by the long fuzz run): the scan refuses the integer, and OCC's own syntax
+    errors stop the import before the transfer."""
+    pytest.importorskip("OCP")
+    from splinekit import BSplineSurface
+
+    net = np.stack(np.meshgrid(np.linspace(0, 2, 3), np.linspace(0, 1, 3), indexing="ij"), axis=-1)
+    net = np.concatenate([net, net[..., :1] * net[..., 1:]], axis=-1)
+    good = tmp_path / "good.step"
+    exporters.export_step(good, [BSplineSurface(2, 2, [0, 0, 0, 1, 1, 1], [0, 0, 0, 1, 1, 1], net)])
+    text = good.read_text()
+    split = write_bytes(tmp_path / "split.step", re.sub(r"(#\d+ = )CARTESIAN_POINT(\('',\(2\.)", r"\1CARTES    IAN_POINT\2",
+                                                         text, count=1).encode())
+    assert b"CARTES    IAN_POINT" in split.read_bytes()
+    code = ("import sys, exporters\ntry:\n    exporters.import_step(sys.argv[1])\n"
+            "except exporters.step.FileFormatError as exc:\n    print('refused:', exc)")
+    done = _run(code, split)
+    assert done.returncode == 0, f"import_step crashed (status {done.returncode})"
+    assert "syntax error" in done.stdout
+    big = write_bytes(tmp_path / "big.step", text.replace("(3,3)", "(4294967296,3)", 1).encode())
+    with pytest.raises(FileFormatError, match="integer 4294967296 at line .* beyond 32 bits"):
+        _stepscan.scan_step(big)

@@ -336,9 +336,12 @@ class StepWorker:
         line = self.proc.stdout.readline() if ready else ""
         if line:
             return json.loads(line)
-        status = self.proc.poll()
+        if not ready:
+            self.close()
+            return f"other: hang (over {CASE_SECONDS * 6:.0f} s)"
+        status = self.proc.wait()  # end of output: the worker died
         self.close()
-        return f"other: hang (over {CASE_SECONDS * 6:.0f} s)" if status is None else f"other: crash (status {status})"
+        return f"other: crash (status {status})"
 
     def peak_mb(self) -> float:
         try:
