@@ -24,7 +24,8 @@ from splinekit.mesh import primitives
 
 PEAK_MB = 500
 """The largest peak resident memory a refused call may reach (an interpreter with
-numpy, scipy and splinekit imported is about 60-150 MB; compiling the numba kernels on a cold cache adds up to a few hundred)."""
+numpy, scipy and splinekit imported is about 60-150 MB; compiling the numba
+kernels on a cold cache adds up to a few hundred)."""
 
 _RUNNER = textwrap.dedent(
     """
