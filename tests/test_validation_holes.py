@@ -234,8 +234,8 @@ def test_cone_beyond_the_float_range_of_its_distance_is_refused():
 
 def test_sweep_along_a_path_beyond_1e154():
     # the rotation-minimizing frames squared raw chord lengths (OverflowError)
-    path = splinekit.BSplineCurve(2, [0, 0, 0, 1, 1, 1], [[0, 0, 0], [0, 0, 0], [0, 0, 1.34e162]])
-    profile = splinekit.BSplineCurve(1, [0, 0, 1, 1], [[0, 0, 0], [1, 0, 0]])
+    path = splinekit.BSplineCurve(2, [0, 0, 0, 1, 1, 1], [[0, 0, 0], [0, 0, 0], [0, 0, 2.0**600]])
+    profile = splinekit.BSplineCurve(2, [0, 0, 0, 1, 1, 1], np.zeros((3, 3)))
     try:
         s = splinekit.sweep(profile, path)
     except SplineKitError:
