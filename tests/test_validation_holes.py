@@ -221,3 +221,23 @@ def test_knot_algebra_that_overflows_is_refused():
         parts = result if isinstance(result, tuple) else (result,)
         out += [np.isfinite(part.control_points).all() for part in parts]
     assert all(out)
+
+
+# -- found by the constructor fuzz (tests/fuzz/test_fuzz_constructors.py) --------------------------------
+def test_cone_beyond_the_float_range_of_its_distance_is_refused():
+    import splinekit.implicit as imp
+
+    with pytest.raises(ParameterError, match="float range"):
+        imp.cone((0, 0, 0), (0, 0, 1), 1e300)  # squared slant length overflowed (OverflowError)
+    assert np.isfinite(imp.cone((0, 0, 0), (0, 0, 1), 1e150)([[0, 0, 0.5]])).all()
+
+
+def test_sweep_along_a_path_beyond_1e154():
+    # the rotation-minimizing frames squared raw chord lengths (OverflowError)
+    path = splinekit.BSplineCurve(2, [0, 0, 0, 1, 1, 1], [[0, 0, 0], [0, 0, 0], [0, 0, 2.0**600]])
+    profile = splinekit.BSplineCurve(2, [0, 0, 0, 1, 1, 1], np.zeros((3, 3)))
+    try:
+        s = splinekit.sweep(profile, path)
+    except SplineKitError:
+        return
+    assert np.isfinite(s.control_points).all()

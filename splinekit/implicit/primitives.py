@@ -391,6 +391,14 @@ def cone(a, b, radius_a, radius_b=0.0) -> Implicit:
     rb = positive(radius_b, "radius_b", allow_zero=True)
     if ra == 0 and rb == 0:
         raise ParameterError("radius_a and radius_b are both 0: the cone has no volume")
+    # the distance projects onto the slanted side through its squared length
+    with np.errstate(over="ignore"):
+        side2 = np.float64(rb - ra) ** 2 + np.float64(np.linalg.norm(b - a)) ** 2
+    if not np.isfinite(side2):
+        raise ParameterError(
+            f"a cone with radii {ra!r}, {rb!r} and axis length {float(np.linalg.norm(b - a))!r} is beyond the float "
+            "range of its distance computation (sizes up to about 1e154)"
+        )
     return Cone(a, b, ra, rb)
 
 

@@ -258,10 +258,16 @@ class SplineSurface:
     def _grid_basis(self, us, vs, order=0):
         """Per direction: ``(span (m,), values (order + 1, p + 1, m))``."""
         (du, dv) = self.domain
+        try:  # sizes first: a broadcast view of a huge length costs nothing until it is converted
+            mu, mv = np.asarray(us).size, np.asarray(vs).size
+        except (ValueError, TypeError):
+            mu = mv = 0  # as_params names the problem
+        # the grid (and its per-order partials, and one temporary each) and the two basis
+        # tables with their parameters, spans and temporaries, before any of it exists
+        grid = 16.0 * mu * mv * (self._coefs.shape[-1] + 1) * (order + 1) ** 2
+        tables = 64.0 * (mu + mv) * (max(self._pu, self._pv) + 1) * (order + 1)
+        limits.check(grid + tables, f"a {mu} x {mv} surface grid")
         us, vs = as_params(us, du, "us").ravel(), as_params(vs, dv, "vs").ravel()
-        # the grid (and its per-order partials, and one temporary each) before any of it exists
-        limits.check(16.0 * us.size * vs.size * (self._coefs.shape[-1] + 1) * (order + 1) ** 2,
-                     f"a {us.size} x {vs.size} surface grid")
         out = []
         for p, U, x in ((self._pu, self._ku, us), (self._pv, self._kv, vs)):
             span = find_span(p, U, x)

@@ -160,8 +160,11 @@ def tessellate(obj, tolerance=None, *, angle_tolerance=DEFAULT_ANGLE_TOLERANCE, 
     collapse to a point (poles) become one vertex. The angle criterion
     ignores edges shorter than the tolerance and normals more than 90 degrees
     apart (folds), and stops refining a cell direction at 64 steps.
-    Raises :class:`~splinekit.errors.ParameterError` for a bad tolerance, an
-    unsupported object, or a tolerance needing more than 50 million triangles.
+    Raises :class:`~splinekit.errors.ParameterError` for a bad tolerance or an
+    unsupported object, and :class:`~splinekit.errors.ResourceLimitError` when a
+    refinement round would need more memory than the budget of
+    :mod:`splinekit.limits` (the estimate is made from the per-cell sample counts
+    before the round's grids are built).
 
     Trimmed faces, shells and solids: every edge is sampled once in 3-D and
     shared by the faces that use it (uses paired by their ``key``, keyless

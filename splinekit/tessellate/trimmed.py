@@ -39,16 +39,16 @@ from __future__ import annotations
 
 import numpy as np
 
+from .. import limits
 from ..errors import ParameterError
 from .edges import _face_name, check_domains, edge_uses, group_uses, sample_groups
 from .result import Tessellation
+from .surfaces import BYTES_PER_TRIANGLE
 
 __all__ = ["tessellate_faces"]
 
 MAX_ROUNDS = 8
 """Largest number of measure-and-refine rounds."""
-MAX_TRIANGLES = 50_000_000
-"""Largest mesh built; a smaller tolerance raises ParameterError."""
 GRID_FRACTION = 0.75
 """The a-priori grid steps are bounds over whole cells; the interior grid starts at this
 fraction of them and the measured refinement adds points where the bound was needed."""
@@ -322,9 +322,7 @@ def _crossing(P, segs):
     count = np.maximum(end - np.arange(1, len(xs) + 1), 0)
     total = int(count.sum())
     if total > 1_000_000:
-        from ..limits import check
-
-        check(total * 64, "the trim crossing test")
+        limits.check(total * 64, "the trim crossing test")
     i = np.repeat(np.arange(len(xs)), count)
     j = i + 1 + (np.arange(i.size) - np.repeat(np.cumsum(count) - count, count))
     a, b = order[i], order[j]
@@ -462,8 +460,7 @@ def tessellate_faces(faces, tol: float, angle_tol, size: float) -> Tessellation:
     max_dev = 0.0
     for round_ in range(MAX_ROUNDS):
         nP = len(pface)
-        if 2 * nP > MAX_TRIANGLES:
-            raise ParameterError(f"tolerance {tol:.3g} needs more than {MAX_TRIANGLES:,} triangles; use a larger tolerance")
+        limits.check(2 * nP * BYTES_PER_TRIANGLE, f"tessellation of trimmed faces at tolerance {tol:.3g} ({2 * nP:,} triangles)")
         P = layout.place(pface, puv)
         nxt = np.concatenate([nxt_b, np.full(nP - nb, -1, dtype=np.int64)])
         r = triangle.triangulate({"vertices": P, "segments": segs}, "pnQ")

@@ -414,15 +414,21 @@ def test_fuzz_long(name):
 
 
 if __name__ == "__main__":
-    target, n = sys.argv[1], int(sys.argv[2])
+    # python tests/fuzz/test_fuzz_constructors.py <target> <cases> [<seconds>]: the cases run in
+    # rounds of 1000 (fresh random examples each), a JSON line after each round, so that a run
+    # stopped by the optional time limit still reports what it tried
     import time
 
+    target, n = sys.argv[1], int(sys.argv[2])
+    limit = float(sys.argv[3]) if len(sys.argv) > 3 else math.inf
     start = time.perf_counter()
-    result = run_target(target, n)
-    print(json.dumps({
-        "target": target,
-        "cases": sum(result.values()),
-        "outcomes": result,
-        "peak_mb": round(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024, 1),
-        "seconds": round(time.perf_counter() - start, 1),
-    }))
+    total = collections.Counter()
+    while sum(total.values()) < n and time.perf_counter() - start < limit:
+        total.update(run_target(target, min(1000, n - sum(total.values()))))
+        print(json.dumps({
+            "target": target,
+            "cases": sum(total.values()),
+            "outcomes": dict(total),
+            "peak_mb": round(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024, 1),
+            "seconds": round(time.perf_counter() - start, 1),
+        }), flush=True)
