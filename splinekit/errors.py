@@ -25,6 +25,8 @@ __all__ = [
     "FileFormatError",
     "ExportError",
     "ResourceLimitError",
+    "BRepError",
+    "TrimError",
 ]
 
 
@@ -109,3 +111,15 @@ class ResourceLimitError(SplineKitError, MemoryError):
     """An operation would allocate more than the memory budget
     (:mod:`splinekit.limits`). Raised before the allocation; the message names
     the estimate, the budget and how to raise it."""
+
+
+class BRepError(SplineKitError):
+    """A boundary representation is invalid: an open shell passed as a solid, neighbouring faces
+    oriented inconsistently, an edge used by more than two faces, a solid pointing inward. The
+    message names the shell, face or edge and the problem (:meth:`splinekit.brep.Solid.check`)."""
+
+
+class TrimError(BRepError):
+    """A trimmed face's loops are invalid: not closed, leaving the surface's domain, crossing
+    themselves or each other, turned the wrong way, or off their 3-D edge curves. The message
+    names the face, the loop and the problem."""

@@ -9,6 +9,8 @@ from ..errors import ParameterError
 from ..surfaces import BezierSurface, SplineSurface
 from .._validate import as_positive
 from .edge import DEFAULT_TOLERANCE, Edge
+from .check import Checkable, check_face
+from .topology import TopologyQueries, shell_topology
 
 __all__ = ["TrimmedFace", "as_surface"]
 
@@ -45,7 +47,7 @@ def _as_loop(loop, index: int, tolerance: float) -> tuple[Edge, ...]:
     return tuple(edges)
 
 
-class TrimmedFace:
+class TrimmedFace(TopologyQueries, Checkable):
     """A bounded piece of a surface: one outer trimming loop and any number of inner ones (holes).
 
     Parameters
@@ -142,6 +144,23 @@ class TrimmedFace:
     def edges(self) -> tuple[Edge, ...]:
         """Every edge use of the face, loop after loop."""
         return tuple(e for lp in self.boundary_loops() for e in lp)
+
+    def contains_uv(self, uv, tolerance: float | None = None) -> np.ndarray:
+        """Classify ``(n, 2)`` parameter points against the trims: ``int8`` codes ``1`` inside,
+        ``0`` on a trim (within ``tolerance``, 3-D units), ``-1`` outside
+        (:func:`splinekit.brep.classify.contains_uv`)."""
+        from .classify import contains_uv
+
+        return contains_uv(self, uv, tolerance)
+
+    def _problems(self):
+        return check_face(self)
+
+    def _topologies(self):
+        # the face alone as a one-face shell: its seams pair up, its other edges are free
+        if "topology" not in self._cache:
+            self._cache["topology"] = shell_topology([self])
+        return (self._cache["topology"],)
 
     def flipped(self) -> "TrimmedFace":
         """The same face with the opposite orientation."""

@@ -4,11 +4,13 @@ from __future__ import annotations
 
 from ..errors import ParameterError
 from .face import TrimmedFace
+from .check import Checkable, check_shell, check_solid
+from .topology import TopologyQueries, shell_topology
 
 __all__ = ["Shell", "Solid"]
 
 
-class Shell:
+class Shell(TopologyQueries, Checkable):
     """Connected trimmed faces that share edges.
 
     Parameters
@@ -49,11 +51,24 @@ class Shell:
     def __len__(self) -> int:
         return len(self._faces)
 
+    def _problems(self):
+        return check_shell(self)
+
+    def _topologies(self):
+        if "topology" not in self._cache:
+            self._cache["topology"] = shell_topology(self._faces)
+        return (self._cache["topology"],)
+
+    @property
+    def edges(self) -> tuple:
+        """The shell's edges as :class:`~splinekit.brep.topology.EdgeGroup` (the uses that are one edge)."""
+        return self.topology.edges
+
     def __repr__(self):
         return f"Shell({len(self._faces)} faces{f', name={self._name!r}' if self._name else ''})"
 
 
-class Solid:
+class Solid(TopologyQueries, Checkable):
     """A solid bounded by closed shells: the outer shell first, then the voids' shells.
 
     Parameters
@@ -93,6 +108,24 @@ class Solid:
     def faces(self) -> tuple[TrimmedFace, ...]:
         """Every face of every shell."""
         return tuple(f for s in self._shells for f in s.faces)
+
+    def _topologies(self):
+        return tuple(s.topology for s in self._shells)
+
+    def _problems(self):
+        return check_solid(self)
+
+    def contains(self, points, tolerance: float | None = None):
+        """Classify ``(n, 3)`` points: ``int8`` codes ``1`` inside, ``0`` on the boundary (within
+        ``tolerance``), ``-1`` outside (:func:`splinekit.brep.classify.contains`)."""
+        from .classify import contains
+
+        return contains(self, points, tolerance)
+
+    @property
+    def edges(self) -> tuple:
+        """Every shell's edges (:class:`~splinekit.brep.topology.EdgeGroup`, face indices per shell)."""
+        return tuple(g for s in self._shells for g in s.edges)
 
     def __repr__(self):
         return f"Solid({len(self._shells)} shell(s), {len(self.faces)} faces{f', name={self._name!r}' if self._name else ''})"

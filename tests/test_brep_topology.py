@@ -1,0 +1,144 @@
+"""Topology of B-reps: edge pairing (by key and geometrically), vertices, free edges, Euler
+characteristic, genus and closedness.
+
+Independent references: OpenCascade's own topology of the same primitives built with build123d
+(vertex / non-degenerate edge / face counts from ``TopExp``), the Euler-Poincaré formula with the
+genus known from the shape (a box or sphere has none, a torus or a box with a through hole one),
+and hand-counted open shells.
+"""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from splinekit.brep import (Shell, Solid, TrimmedFace, box, box_with_hole, cone, cylinder, plate_with_holes,
+                            sphere, torus)
+from splinekit.construct import arc, line
+from splinekit.surfaces import BSplineSurface
+
+sizes = st.floats(0.5, 50.0)
+
+
+def _counts(solid):
+    return len(solid.vertices), solid.topology.n_edges, len(solid.faces)
+
+
+def _occ_counts(shape):
+    """Vertices, non-degenerate edges and faces of an OCC shape, counted by OCC."""
+    from OCP.BRep import BRep_Tool
+    from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE, TopAbs_VERTEX
+    from OCP.TopExp import TopExp
+    from OCP.TopoDS import TopoDS
+    from OCP.TopTools import TopTools_IndexedMapOfShape
+
+    out = []
+    for kind in (TopAbs_VERTEX, TopAbs_EDGE, TopAbs_FACE):
+        m = TopTools_IndexedMapOfShape()
+        TopExp.MapShapes_s(shape, kind, m)
+        if kind == TopAbs_EDGE:
+            out.append(sum(not BRep_Tool.Degenerated_s(TopoDS.Edge_s(m.FindKey(i))) for i in range(1, m.Extent() + 1)))
+        else:
+            out.append(m.Extent())
+    return tuple(out)
+
+
+def test_counts_match_occ_primitives():
+    bd = pytest.importorskip("build123d")
+    pairs = [
+        (box(20, 20, 20), bd.Box(20, 20, 20)),
+        (cylinder(4, 20), bd.Cylinder(4, 20)),
+        (cone(4, 2, 5), bd.Cone(4, 2, 5)),
+        (cone(4, 0, 5), bd.Cone(4, 0, 5)),
+        (sphere(3), bd.Sphere(3)),
+        (torus(5, 1.5), bd.Torus(5, 1.5)),
+        (box_with_hole(20, 4), bd.Box(20, 20, 20) - bd.Cylinder(4, 20)),
+    ]
+    for ours, theirs in pairs:
+        assert _counts(ours) == _occ_counts(theirs.wrapped), ours.name
+
+
+@settings(max_examples=15, deadline=None)
+@given(sizes, sizes, sizes)
+def test_genus_zero_primitives(a, b, c):
+    for s in (box(a, b, c), cylinder(a, b), cone(a, c, b), cone(a, 0.0, b), sphere(a)):
+        assert s.is_closed and s.euler_characteristic == 2 and s.genus == 0, s.name
+        assert s.free_edges == ()
+
+
+@settings(max_examples=15, deadline=None)
+@given(sizes, st.floats(0.05, 0.95), st.floats(0.05, 0.45))
+def test_genus_one_primitives(R, ratio, hole):
+    for s in (torus(R, ratio * R), box_with_hole(R, hole * R)):
+        assert s.is_closed and s.euler_characteristic == 0 and s.genus == 1, s.name
+
+
+def test_plate_with_three_holes_has_genus_three():
+    p = plate_with_holes(30, 20, 5, [(5, 5, 2), (20, 10, 4), (10, 14, 2)])
+    assert p.is_closed and p.genus == 3 and p.euler_characteristic == -4
+    # V: 8 corners + one seam vertex at each end of each hole; E: 12 + 3 per hole; F: 6 + 1 per hole
+    assert _counts(p) == (8 + 6, 12 + 9, 6 + 3)
+
+
+def _keyless(solid):
+    faces = [TrimmedFace(f.surface, [[e.with_key(None) for e in lp] for lp in f.loops], f.reversed, name=f.name)
+             for f in solid.faces]
+    return Shell(faces)
+
+
+@pytest.mark.parametrize("make", [lambda: box(1, 2, 3), lambda: cylinder(2, 5), lambda: sphere(1),
+                                  lambda: torus(3, 1), lambda: box_with_hole(20, 4)])
+def test_geometric_pairing_finds_the_keyed_edges(make):
+    solid = make()
+    keyed, geometric = solid.outer_shell, _keyless(solid)
+    assert sorted(g.uses for g in keyed.edges) == sorted(g.uses for g in geometric.edges)
+    assert geometric.is_closed and geometric.euler_characteristic == keyed.euler_characteristic
+
+
+def test_geometric_pairing_tells_edges_with_the_same_ends_apart():
+    """A disk bounded by two half circles, glued to its mirror image: four uses of two edges with
+    the same end points; only the mid points tell the edges apart."""
+    plane = BSplineSurface(1, 1, [-1, -1, 1, 1], [-1, -1, 1, 1],
+                           np.array([[[-1, -1, 0], [-1, 1, 0]], [[1, -1, 0], [1, 1, 0]]], float))
+    upper = arc((0.0, 0.0), None, 1.0, 0.0, np.pi)
+    lower = arc((0.0, 0.0), None, 1.0, np.pi, 2 * np.pi)
+    disk = TrimmedFace(plane, [[upper, lower]])
+    shell = Shell([disk, disk.flipped()])
+    assert len(shell.edges) == 2 and all(len(g.uses) == 2 for g in shell.edges)
+    assert shell.is_closed and shell.euler_characteristic == 2  # a flat pillow: a sphere
+    assert len(shell.vertices) == 2
+
+
+def test_open_shells_and_faces():
+    b = box(1, 1, 1)
+    open_box = Shell(b.faces[:5])
+    assert not open_box.is_closed and len(open_box.free_edges) == 4
+    assert open_box.topology.n_boundaries == 1 and open_box.genus == 0 and open_box.euler_characteristic == 1
+    top = box_with_hole(20, 4).faces[1]  # an annulus-like face: two boundary curves
+    assert not top.is_closed and top.euler_characteristic == 0 and top.topology.n_boundaries == 2 and top.genus == 0
+    assert len(top.vertices) == 5
+    s = sphere(2).faces[0]  # one face closed on itself through its seam and poles
+    assert s.is_closed and s.euler_characteristic == 2
+    # a face with the same orientation twice is not a closed shell
+    assert not Shell([b.faces[0], b.faces[0]]).is_closed
+
+
+def test_natural_domain_sphere_face_pairs_its_seam_geometrically():
+    s = TrimmedFace(sphere(2).faces[0].surface)
+    assert s.is_closed and len(s.vertices) == 2 and s.topology.n_edges == 1 and s.genus == 0
+
+
+def test_topology_is_cached_and_pairing_scales():
+    holes = [(2 + 3 * i, 2 + 3 * j, 1) for i in range(10) for j in range(10)]
+    p = plate_with_holes(31, 31, 2, holes)
+    t = time.perf_counter()
+    assert p.genus == 100 and p.is_closed
+    first = time.perf_counter() - t
+    t = time.perf_counter()
+    assert p.genus == 100
+    assert time.perf_counter() - t < max(first / 10, 1e-3)
+    assert first < 10.0
