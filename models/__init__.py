@@ -12,7 +12,7 @@ from __future__ import annotations
 from splinekit.errors import ParameterError
 
 from . import bracket, mug, teapot, vase, wing
-from ._base import Model, Parameter, resolve_params, surface_integrals
+from ._base import INTEGRAL_TOLERANCE, Model, Parameter, resolve_params, surface_integrals
 
 __all__ = [
     "DEFAULT_MODEL",
@@ -23,6 +23,7 @@ __all__ = [
     "get_model",
     "resolve_params",
     "surface_integrals",
+    "INTEGRAL_TOLERANCE",
 ]
 
 MODELS = {

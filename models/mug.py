@@ -26,7 +26,7 @@ import numpy as np
 from splinekit import PolyMesh, SubdivisionSurface
 from splinekit.subdiv import Refinement
 
-from ._base import Model, Parameter, resolve_params, surface_integrals
+from ._base import INTEGRAL_TOLERANCE, Model, Parameter, resolve_params, surface_integrals
 
 NAME = "mug"
 
@@ -161,13 +161,13 @@ def build(**params) -> Model:
 
     ``134 * 4**levels`` patches. Checks: ``"euler_characteristic"`` = 0
     (genus 1, of the cage and of the sewn solid's topology), ``"volume"``
-    (mm^3) by divergence-theorem quadrature of the patches (tolerance 1e-6
-    relative), ``"faces"``: the number of patches.
+    (mm^3) by divergence-theorem quadrature of the patches and ``"area"``
+    (mm^2), both adaptive (tolerance 1e-9 relative), ``"faces"``: the number of patches.
     """
     v = resolve_params(NAME, PARAMETERS, params)
     limit = surface(v["size"], v["handle"], v["sharpness"], v["levels"])
     patches, _info = limit.to_bsplines(0)
-    _, volume = surface_integrals(patches)
+    area, volume = surface_integrals(patches)
     return Model(
         name=NAME,
         params=v,
@@ -177,7 +177,8 @@ def build(**params) -> Model:
         closed=True,
         checks={
             "euler_characteristic": (0, 0),  # genus 1: what the cage and any closed mesh of it must have
-            "volume": (volume, 1e-6 * abs(volume)),
+            "volume": (volume, INTEGRAL_TOLERANCE * abs(volume)),
+            "area": (area, INTEGRAL_TOLERANCE * area),
             "faces": (len(patches), 0),
         },
     )

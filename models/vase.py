@@ -21,7 +21,7 @@ import numpy as np
 from splinekit import interpolate_curve, line, revolve
 from splinekit.errors import ParameterError
 
-from ._base import Model, Parameter, gauss_nodes, resolve_params
+from ._base import INTEGRAL_TOLERANCE, Model, Parameter, gauss_nodes, resolve_params, surface_integrals
 
 NAME = "vase"
 
@@ -111,7 +111,8 @@ def build(**params) -> Model:
     """Five revolved NURBS faces bounding the vase (one closed body ``"vase"``).
 
     Checks: ``"volume"`` (mm^3) by Green's theorem on the profiles (Pappus),
-    ``"faces"`` = 5. Raises ParameterError when ``wall`` is too thick for the
+    ``"area"`` (mm^2) by adaptive quadrature of the faces (both to 1e-9
+    relative), ``"faces"`` = 5. Raises ParameterError when ``wall`` is too thick for the
     narrowest radius or ``base`` too thick for the height.
     """
     v = resolve_params(NAME, PARAMETERS, params)
@@ -138,6 +139,7 @@ def build(**params) -> Model:
     ]
     faces = [revolve(c, np.zeros(3), _Z_AXIS) for c in pieces]
     volume = _pappus_volume(outer, inner)
+    area, _ = surface_integrals(faces)
     return Model(
         name=NAME,
         params=v,
@@ -145,5 +147,9 @@ def build(**params) -> Model:
         body_names=["vase"],
         mesh=None,
         closed=True,
-        checks={"volume": (volume, 1e-6 * volume), "faces": (5, 0)},
+        checks={
+            "volume": (volume, INTEGRAL_TOLERANCE * volume),
+            "area": (area, INTEGRAL_TOLERANCE * area),
+            "faces": (5, 0),
+        },
     )

@@ -20,7 +20,7 @@ import numpy as np
 
 from splinekit import interpolate_curve, loft, ruled
 
-from ._base import Model, Parameter, resolve_params, surface_integrals
+from ._base import INTEGRAL_TOLERANCE, Model, Parameter, resolve_params, surface_integrals
 
 NAME = "wing"
 
@@ -120,7 +120,7 @@ def build(**params) -> Model:
     """The wing as four exact faces (one closed body ``"wing"``).
 
     Checks: ``"volume"`` (mm^3) by divergence-theorem quadrature of the faces
-    (tolerance 1e-6 relative), ``"faces"`` = 4.
+    and ``"area"`` (mm^2), both adaptive (tolerance 1e-9 relative), ``"faces"`` = 4.
     """
     v = resolve_params(NAME, PARAMETERS, params)
     ups, lows = sections(v)
@@ -133,7 +133,7 @@ def build(**params) -> Model:
     # S_u x S_v outward: u runs toward the leading edge (-x), v spanwise (+y) on the skins and
     # from the upper to the lower half (-z) on the caps
     faces = [upper_skin.reverse("u"), lower_skin, root_cap, tip_cap.reverse("u")]
-    _, volume = surface_integrals(faces)
+    area, volume = surface_integrals(faces)
     return Model(
         name=NAME,
         params=v,
@@ -141,5 +141,9 @@ def build(**params) -> Model:
         body_names=["wing"],
         mesh=None,
         closed=True,
-        checks={"volume": (volume, 1e-6 * abs(volume)), "faces": (4, 0)},
+        checks={
+            "volume": (volume, INTEGRAL_TOLERANCE * abs(volume)),
+            "area": (area, INTEGRAL_TOLERANCE * area),
+            "faces": (4, 0),
+        },
     )

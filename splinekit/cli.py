@@ -745,8 +745,13 @@ def _check_model(registry, name, sets, console: _Console) -> int:
             for i, n in enumerate(n_solids):
                 table.truth(f"body {i} is a closed solid", n >= 1, f"{n} solid(s)")
         measures["faces"] = sum(len(_sub_shapes(s, "FACE")) for s in shapes)
-        measures["area"] = sum(occ_area(s) for s in shapes)
-        measures["volume"] = sum(occ_volume(s) for s in shapes) if model.closed else None
+        # area and volume: an independent reference (OCC's GProp where reliable, else scipy)
+        from .interop.gprop import reference_integrals
+
+        sewn = shapes if len(shapes) == len(model.bodies) else None
+        reference = reference_integrals(model.bodies, closed=model.closed, shapes=sewn)
+        measures["area"], measures["volume"] = reference.area, reference.volume
+        sources = dict.fromkeys(("area", "volume"), f"{reference.source} ({reference.reason})")
         measures["euler_characteristic"] = sum(_euler_characteristic(s) for s in shapes)
         size = np.ptp(np.concatenate([np.asarray(p.control_points).reshape(-1, 3) for p in patches]), axis=0).max()
         worst, count = point_deviation(patches)
@@ -763,6 +768,7 @@ def _check_model(registry, name, sets, console: _Console) -> int:
         measures["volume"] = float(mesh.volume) if mesh.is_closed else None
         measures["euler_characteristic"] = mesh.euler_characteristic
         source = "mesh"
+        sources = {}
     chi = measures["euler_characteristic"]
     measures["genus"] = (2 - chi) / 2
     for key, value in (model.checks or {}).items():
@@ -778,7 +784,7 @@ def _check_model(registry, name, sets, console: _Console) -> int:
         elif measures[measure] is None:
             table.compare(key, None, expected, tol, f"{source}: no closed solid to measure")
         else:
-            table.compare(key, measures[measure], expected, tol, f"{source} {measure}")
+            table.compare(key, measures[measure], expected, tol, sources.get(measure, f"{source} {measure}"))
     if model.bodies and model.closed:
         try:
             tessellate = _tessellator()

@@ -7,9 +7,10 @@ a :class:`Shell` is faces sharing edges; a :class:`Solid` is closed shells, oute
 from .edge import Edge
 from .face import TrimmedFace
 from .shell import Shell, Solid
+from .mass import MassProperties
 from .primitives import box, box_with_hole, cone, cylinder, plate_with_holes, sphere, torus
 
 __all__ = [
-    "Edge", "Shell", "Solid", "TrimmedFace",
+    "Edge", "MassProperties", "Shell", "Solid", "TrimmedFace",
     "box", "box_with_hole", "cone", "cylinder", "plate_with_holes", "sphere", "torus",
 ]

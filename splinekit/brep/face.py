@@ -175,6 +175,28 @@ class TrimmedFace(TopologyQueries, Checkable):
         n = np.divide(n, length, out=np.zeros_like(n), where=length > 0)
         return -n if self._reversed else n
 
+    # -- mass properties (splinekit.brep.mass) ------------------------------------------------
+    def area(self, tol: float = 1e-10) -> float:
+        """Area of the trimmed face to relative tolerance ``tol`` (adaptive quadrature)."""
+        from .mass import area
+        return area(self, tol)
+
+    def centroid(self, tol: float = 1e-10) -> np.ndarray:
+        """``(3,)`` centroid of the face's area."""
+        from .mass import centroid
+        return centroid(self, tol)
+
+    def inertia(self, tol: float = 1e-10) -> np.ndarray:
+        """``(3, 3)`` inertia tensor of the face (unit areal density) about its centroid."""
+        from .mass import inertia
+        return inertia(self, tol)
+
+    def mass_properties(self, tol: float = 1e-10):
+        """Area, centroid, inertia, principal moments and axes with error estimates
+        (:class:`splinekit.brep.mass.MassProperties`)."""
+        from .mass import mass_properties
+        return mass_properties(self, tol)
+
     def __repr__(self):
         holes = len(self._loops) - 1 if self._loops else 0
         kind = type(self._surface).__name__

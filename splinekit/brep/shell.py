@@ -64,6 +64,33 @@ class Shell(TopologyQueries, Checkable):
         """The shell's edges as :class:`~splinekit.brep.topology.EdgeGroup` (the uses that are one edge)."""
         return self.topology.edges
 
+    # -- mass properties (splinekit.brep.mass) ------------------------------------------------
+    def area(self, tol: float = 1e-10) -> float:
+        """Total area of the faces to relative tolerance ``tol``."""
+        from .mass import area
+        return area(self, tol)
+
+    def volume(self, tol: float = 1e-10) -> float:
+        """Enclosed volume by the divergence theorem over the oriented faces (meaningful when the shell is closed)."""
+        from .mass import volume
+        return volume(self, tol)
+
+    def centroid(self, tol: float = 1e-10):
+        """``(3,)`` centroid of the enclosed solid (unit density)."""
+        from .mass import centroid
+        return centroid(self, tol)
+
+    def inertia(self, tol: float = 1e-10):
+        """``(3, 3)`` inertia tensor of the enclosed solid (unit density) about its centroid."""
+        from .mass import inertia
+        return inertia(self, tol)
+
+    def mass_properties(self, tol: float = 1e-10):
+        """Area, volume, centroid, inertia, principal moments and axes with error estimates
+        (:class:`splinekit.brep.mass.MassProperties`)."""
+        from .mass import mass_properties
+        return mass_properties(self, tol)
+
     def __repr__(self):
         return f"Shell({len(self._faces)} faces{f', name={self._name!r}' if self._name else ''})"
 
@@ -126,6 +153,33 @@ class Solid(TopologyQueries, Checkable):
     def edges(self) -> tuple:
         """Every shell's edges (:class:`~splinekit.brep.topology.EdgeGroup`, face indices per shell)."""
         return tuple(g for s in self._shells for g in s.edges)
+
+    # -- mass properties (splinekit.brep.mass) ------------------------------------------------
+    def area(self, tol: float = 1e-10) -> float:
+        """Total area of the faces to relative tolerance ``tol``."""
+        from .mass import area
+        return area(self, tol)
+
+    def volume(self, tol: float = 1e-10) -> float:
+        """Enclosed volume by the divergence theorem over the oriented faces (void shells, pointing into their voids, count negative)."""
+        from .mass import volume
+        return volume(self, tol)
+
+    def centroid(self, tol: float = 1e-10):
+        """``(3,)`` centroid of the enclosed solid (unit density)."""
+        from .mass import centroid
+        return centroid(self, tol)
+
+    def inertia(self, tol: float = 1e-10):
+        """``(3, 3)`` inertia tensor of the enclosed solid (unit density) about its centroid."""
+        from .mass import inertia
+        return inertia(self, tol)
+
+    def mass_properties(self, tol: float = 1e-10):
+        """Area, volume, centroid, inertia, principal moments and axes with error estimates
+        (:class:`splinekit.brep.mass.MassProperties`)."""
+        from .mass import mass_properties
+        return mass_properties(self, tol)
 
     def __repr__(self):
         return f"Solid({len(self._shells)} shell(s), {len(self.faces)} faces{f', name={self._name!r}' if self._name else ''})"
