@@ -100,10 +100,12 @@ def _cellset(p, q, index, surfaces) -> CellSet:
 def _split(p, q, surface):
     """``(nets (k, p + 1, q + 1, 4), boxes (k, 4), spans (k, 2))`` of a multi-span patch's
     Bézier cells, ``(iu, iv)`` order with ``iu`` major."""
+    from .batch import bezier_matrix
+
     coefs = np.asarray(surface.homogeneous_points)
-    bu, su = algebra.bezier_segments(p, surface.knots_u, coefs)  # (nsu, p + 1, nv, 4)
-    bv, sv = algebra.bezier_segments(q, surface.knots_v, su.transpose(2, 0, 1, 3))  # (nsv, q + 1, nsu, p + 1, 4)
-    nets = sv.transpose(2, 0, 3, 1, 4)  # (nsu, nsv, p + 1, q + 1, 4)
+    bu, Mu = bezier_matrix(p, tuple(surface.knots_u.tolist()))  # (nsu, p + 1, nu)
+    bv, Mv = bezier_matrix(q, tuple(surface.knots_v.tolist()))  # (nsv, q + 1, nv)
+    nets = np.einsum("aik,bjl,klc->abijc", Mu, Mv, coefs, optimize=True)  # (nsu, nsv, p + 1, q + 1, 4)
     nsu, nsv = nets.shape[:2]
     iu, iv = np.meshgrid(np.arange(nsu), np.arange(nsv), indexing="ij")
     iu, iv = iu.ravel(), iv.ravel()

@@ -18,12 +18,39 @@ DEFAULT_ANGLE_TOLERANCE = 0.5
 triangle edge (tangents of a polyline segment); OpenCascade's BRepMesh default."""
 
 
+def _brep_faces(obj):
+    """The trimmed faces of a TrimmedFace, Shell, Solid or a list of them, or None when ``obj``
+    is none of these."""
+    from ..brep import Shell, Solid, TrimmedFace
+
+    kinds = (TrimmedFace, Shell, Solid)
+    if isinstance(obj, kinds):
+        obj = [obj]
+    elif isinstance(obj, (str, bytes)) or not isinstance(obj, (list, tuple)) or not obj:
+        return None
+    if not any(isinstance(o, kinds) for o in obj):
+        return None
+    faces = []
+    for i, o in enumerate(obj):
+        if isinstance(o, TrimmedFace):
+            faces.append(o)
+        elif isinstance(o, (Shell, Solid)):
+            faces.extend(o.faces)
+        else:
+            raise ParameterError(f"item {i} is a {type(o).__name__}; a list to tessellate holds TrimmedFace, Shell and Solid objects, or surfaces, not both")
+    return faces
+
+
 def _patches(obj, levels):
-    """``(kind, items)``: ``("curve", curve)`` or ``("surfaces", [SplineSurface, ...])``."""
+    """``(kind, items)``: ``("curve", curve)``, ``("faces", [TrimmedFace, ...])`` or
+    ``("surfaces", [SplineSurface, ...])``."""
     from ..curves import BezierCurve, SplineCurve
     from ..subdiv.surface import SubdivisionSurface
     from ..surfaces import BezierSurface, SplineSurface
 
+    faces = _brep_faces(obj)
+    if faces is not None:
+        return "faces", faces
     if isinstance(obj, BezierCurve):
         return "curve", obj.to_bspline()
     if isinstance(obj, SplineCurve):
@@ -90,7 +117,11 @@ def tessellate(obj, tolerance=None, *, angle_tolerance=DEFAULT_ANGLE_TOLERANCE, 
         :class:`~splinekit.NurbsSurface`), a list of them (a body: patches
         that share edges are stitched), or a Catmull-Clark
         :class:`~splinekit.SubdivisionSurface` (through ``to_bsplines(levels)``)
-        -> :class:`Tessellation`. Surfaces must be 3-D.
+        -> :class:`Tessellation`. Surfaces must be 3-D. A B-rep
+        :class:`~splinekit.brep.TrimmedFace`, :class:`~splinekit.brep.Shell` or
+        :class:`~splinekit.brep.Solid`, or a list of them -> one watertight
+        :class:`Tessellation` (``face_patch`` / ``vertex_patch`` index the faces in
+        order; see :mod:`splinekit.tessellate.trimmed`).
     tolerance : float, optional
         Chordal tolerance, an absolute distance in model units (or, with
         ``relative=True``, a fraction of the model size). The model size is
@@ -131,6 +162,18 @@ def tessellate(obj, tolerance=None, *, angle_tolerance=DEFAULT_ANGLE_TOLERANCE, 
     apart (folds), and stops refining a cell direction at 64 steps.
     Raises :class:`~splinekit.errors.ParameterError` for a bad tolerance, an
     unsupported object, or a tolerance needing more than 50 million triangles.
+
+    Trimmed faces, shells and solids: every edge is sampled once in 3-D and
+    shared by the faces that use it (uses paired by their ``key``, keyless
+    uses geometrically), so a closed shell gives a closed mesh; the trims
+    are the constraints of a constrained Delaunay triangulation of each face's
+    parameter plane (scaled so that the interior grid's step is one in both
+    directions), refined where the measured deviation exceeds the tolerance.
+    Triangles follow the faces' orientation (``reversed``). ``max_deviation``
+    is measured as above, at every triangle's centre and edge midpoint. A face
+    whose trims are invalid (not closed, leaving the domain, crossing, facing
+    the wrong way, a hole outside the outer loop) raises ParameterError naming
+    the face.
     """
     if tolerance is not None:
         tolerance = as_real(tolerance, "tolerance")
@@ -146,6 +189,8 @@ def tessellate(obj, tolerance=None, *, angle_tolerance=DEFAULT_ANGLE_TOLERANCE, 
     kind, item = _patches(obj, levels)
     if kind == "curve":
         size = _diagonal(np.asarray(item.control_points))
+    elif kind == "faces":
+        size = _diagonal(np.concatenate([np.asarray(f.surface.control_points).reshape(-1, 3) for f in item]))
     else:
         size = _diagonal(np.concatenate([np.asarray(s.control_points).reshape(-1, 3) for s in item]))
     if not np.isfinite(size):
@@ -162,6 +207,10 @@ def tessellate(obj, tolerance=None, *, angle_tolerance=DEFAULT_ANGLE_TOLERANCE, 
         from .curves import tessellate_curve
 
         return tessellate_curve(item, tol, angle_tolerance)
+    if kind == "faces":
+        from .trimmed import tessellate_faces
+
+        return tessellate_faces(item, tol, angle_tolerance, size)
     from .surfaces import tessellate_patches
 
     return tessellate_patches(item, tol, angle_tolerance, size)

@@ -458,11 +458,12 @@ def _components(n, a, b):
     return lab
 
 
-def _initial_counts(cellsets, tol, angle_tol):
-    """A-priori sample counts ``(nu, nv)`` per global cell."""
+def _initial_counts(cellsets, tol, angle_tol, bounds=None):
+    """A-priori sample counts ``(nu, nv)`` per global cell (``bounds``: the cell sets'
+    :func:`.cells.second_derivative_bounds` when already computed; they do not depend on ``tol``)."""
     nu, nv = [], []
-    for cs in cellsets:
-        Muu, Muv, Mvv, Lu, Lv = second_derivative_bounds(cs)
+    for i, cs in enumerate(cellsets):
+        Muu, Muv, Mvv, Lu, Lv = second_derivative_bounds(cs) if bounds is None else bounds[i]
         # h_u^2 (Muu + Muv) / 8 + h_v^2 (Mvv + Muv) / 8 >= the bound (h_u^2 Muu + 2 h_u h_v Muv + h_v^2 Mvv) / 8
         a = np.sqrt((Muu + Muv) / (4.0 * tol))
         b = np.sqrt((Mvv + Muv) / (4.0 * tol))

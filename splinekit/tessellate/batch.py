@@ -1,0 +1,223 @@
+"""Evaluate many curves or many surfaces at once.
+
+A B-rep has dozens to thousands of edges and faces, each with its own degree and knots; calling
+every curve's or surface's own evaluator costs a Python round trip per object and round. Here
+every object is cut once into Bézier pieces (curve segments; surface cells, :mod:`.cells`),
+grouped by degree, and a batch of ``(object, parameter)`` queries is answered with one Bernstein
+evaluation per degree group: locate the piece (one ``searchsorted`` over all objects' breaks),
+map to the piece's local parameter, combine.
+"""
+
+from __future__ import annotations
+
+import functools
+
+import numpy as np
+
+from ..basis import algebra
+from .cells import cells_of_patches
+
+__all__ = ["CurveBatch", "SurfaceBatch"]
+
+CHUNK = 1 << 16
+"""Queries evaluated per block (bounds the gathered control nets' memory)."""
+
+
+def _bernstein(p, t):
+    """``(p + 1, n)`` Bernstein polynomials of degree ``p`` at ``t`` ``(n,)``, by the
+    triangular recurrence on whole arrays (no argument checks: the batch evaluators' inner
+    loop; :func:`~splinekit.basis.bernstein.all_bernstein` is the checked public form)."""
+    B = np.zeros((p + 1, t.size))
+    B[0] = 1.0
+    s = 1.0 - t
+    for j in range(1, p + 1):
+        saved = np.zeros(t.size)
+        for k in range(j):
+            tmp = B[k].copy()
+            B[k] = saved + s * tmp
+            saved = t * tmp
+        B[j] = saved
+    return B
+
+
+def _bernstein_d(p, t):
+    """``(p + 1, n)`` first derivatives of the degree-``p`` Bernstein polynomials at ``t``."""
+    D = np.zeros((p + 1, t.size))
+    if p > 0:
+        B = _bernstein(p - 1, t)
+        D[1:] += p * B
+        D[:-1] -= p * B
+    return D
+
+
+class _Breaks:
+    """Locates parameters among the breaks of many objects: object ``k`` has pieces
+    ``first[k] .. first[k] + count[k] - 1`` over the sorted breaks ``breaks[k]``."""
+
+    def __init__(self, breaks, first):
+        self.count = np.array([len(b) - 1 for b in breaks], dtype=np.int64)
+        self.first = np.asarray(first, dtype=np.int64)
+        self.lo = np.array([b[0] for b in breaks])
+        self.hi = np.array([b[-1] for b in breaks])
+        self.a = np.concatenate([b[:-1] for b in breaks])  # per piece, in object order
+        self.b = np.concatenate([b[1:] for b in breaks])
+        # all breaks on one increasing axis: object k occupies [2 k, 2 k + 1]
+        self.key = np.concatenate([2 * k + (b[:-1] - b[0]) / (b[-1] - b[0]) for k, b in enumerate(breaks)])
+        self.start = np.concatenate([[0], np.cumsum(self.count)[:-1]]).astype(np.int64)
+
+    def locate(self, k, t):
+        """``(piece (n,), local (n,))``: the piece of object ``k`` holding ``t`` (by object
+        order) and the local parameter in [0, 1] (slightly outside for ``t`` off the domain)."""
+        g = 2 * k + (t - self.lo[k]) / (self.hi[k] - self.lo[k])
+        j = np.searchsorted(self.key, g, side="right") - 1
+        j = np.clip(j, self.start[k], self.start[k] + self.count[k] - 1)
+        return j, (t - self.a[j]) / (self.b[j] - self.a[j])
+
+
+class CurveBatch:
+    """Many spline curves of one dimension, evaluated together: ``evaluate(k, t)`` gives the points
+    of curve ``k[i]`` at ``t[i]``."""
+
+    def __init__(self, curves):
+        self.dim = curves[0].dim if curves else 0
+        self.degree = np.array([c.degree for c in curves], dtype=np.int64)
+        # curves on one knot vector share one decomposition matrix: one product per knot vector
+        by_knots: dict = {}
+        for i, c in enumerate(curves):
+            by_knots.setdefault((c.degree, tuple(c.knots.tolist())), []).append(i)
+        breaks = [None] * len(curves)
+        segs = [None] * len(curves)
+        for (p, knots), members in by_knots.items():
+            br, M = bezier_matrix(p, knots)
+            coefs = np.stack([_homogeneous(curves[i]) for i in members])  # (m, n, dim + 1)
+            S = np.einsum("sij,mjk->msik", M, coefs)
+            for r, i in enumerate(members):
+                breaks[i], segs[i] = br, S[r]
+        rows: dict = {}
+        first = np.zeros(len(curves), dtype=np.int64)
+        segs_by_p: dict = {}
+        for i, c in enumerate(curves):
+            p = c.degree
+            first[i] = rows.get(p, 0)
+            rows[p] = first[i] + len(segs[i])
+            segs_by_p.setdefault(p, []).append(segs[i])
+        self.segs = {p: np.concatenate(v) for p, v in segs_by_p.items()}
+        self.breaks = _Breaks(breaks, first) if curves else None
+        self.first_row = first
+
+    def segments(self, k):
+        """``(p, rows)``: the degree and Bézier segment rows of curve ``k``."""
+        p = int(self.degree[k])
+        return p, self.first_row[k] + np.arange(self.breaks.count[k])
+
+    def evaluate(self, k, t):
+        k = np.asarray(k, dtype=np.int64)
+        t = np.asarray(t, dtype=np.float64)
+        out = np.empty((t.size, self.dim))
+        if t.size == 0:
+            return out
+        j, s = self.breaks.locate(k, t)
+        row = self.breaks.first[k] + (j - self.breaks.start[k])
+        deg = self.degree[k]
+        for p in np.unique(deg):
+            sel = np.flatnonzero(deg == p) if len(self.segs) > 1 else slice(None)
+            B = _bernstein(int(p), s[sel])  # (p + 1, n)
+            h = np.einsum("in,nik->nk", B, self.segs[int(p)][row[sel]])
+            out[sel] = h[:, :-1] / h[:, -1:]
+        return out
+
+
+def _homogeneous(curve):
+    """``(n, dim + 1)`` homogeneous control points (unit weights for a polynomial curve)."""
+    if curve.is_rational:
+        return np.asarray(curve.homogeneous_points)
+    P = np.asarray(curve.control_points)
+    return np.column_stack([P, np.ones(len(P))])
+
+
+@functools.lru_cache(maxsize=256)
+def bezier_matrix(p, knots):
+    """``(breaks, M (s, p + 1, n))``: the Bézier segments of any degree-``p`` spline on ``knots``
+    (a tuple) are ``M @ coefficients``. Cached: B-reps repeat a few knot vectors (lines, circles,
+    arcs) over and over, and the decomposition by knot refinement costs far more than the
+    product (read-only arrays)."""
+    U = np.asarray(knots, dtype=np.float64)
+    n = U.size - p - 1
+    if U.size == 2 * (p + 1) and U[0] == U[p] and U[p + 1] == U[-1]:  # one Bézier span
+        breaks, M = np.array([U[0], U[-1]]), np.eye(n)[None]
+    else:
+        breaks, M = algebra.bezier_segments(p, U, np.eye(n))
+    for a in (breaks, M):
+        a.setflags(write=False)
+    return breaks, M
+
+
+class SurfaceBatch:
+    """Many spline surfaces evaluated together: ``evaluate(k, u, v)`` gives the points of
+    surface ``k[i]`` at ``(u[i], v[i])``; ``partials`` also the first derivatives."""
+
+    def __init__(self, surfaces):
+        self.cellsets = cells_of_patches(surfaces)
+        sizes = [len(cs) for cs in self.cellsets]
+        self.offsets = np.concatenate([[0], np.cumsum(sizes)]).astype(np.int64)
+        self.set_of = np.repeat(np.arange(len(self.cellsets)), sizes)
+        patch = np.concatenate([cs.patch for cs in self.cellsets])
+        span = np.concatenate([cs.span for cs in self.cellsets])
+        box = np.concatenate([cs.box for cs in self.cellsets])
+        C, S = len(patch), len(surfaces)
+        self.first = np.full(S, C, dtype=np.int64)
+        np.minimum.at(self.first, patch, np.arange(C))
+        self.nsv = np.zeros(S, dtype=np.int64)
+        np.maximum.at(self.nsv, patch, span[:, 1] + 1)
+        ncell = np.bincount(patch, minlength=S)
+        self.nsu = ncell // self.nsv
+        # cells of one surface are contiguous, (iu, iv) order with iu major
+        bu = [np.append(box[self.first[k] : self.first[k] + ncell[k] : self.nsv[k], 0], box[self.first[k] + ncell[k] - 1, 1])
+              for k in range(S)]  # fmt: skip
+        bv = [np.append(box[self.first[k] : self.first[k] + self.nsv[k], 2], box[self.first[k] + ncell[k] - 1, 3]) for k in range(S)]
+        self.bu, self.bv = bu, bv
+        self.lu = _Breaks(bu, np.zeros(S))
+        self.lv = _Breaks(bv, np.zeros(S))
+        self.box = box
+
+    def _cells(self, k, u, v):
+        iu, s = self.lu.locate(k, u)
+        iv, t = self.lv.locate(k, v)
+        iu -= self.lu.start[k]
+        iv -= self.lv.start[k]
+        return self.first[k] + iu * self.nsv[k] + iv, s, t
+
+    def evaluate(self, k, u, v):
+        """``(n, 3)`` points of surfaces ``k`` ``(n,)`` at ``(u, v)`` ``(n,)`` each."""
+        return self._run(k, u, v, False)
+
+    def partials(self, k, u, v):
+        """``(S, Su, Sv)`` ``(n, 3)`` each: points and first partials in the surfaces' parameters."""
+        return self._run(k, u, v, True)
+
+    def _run(self, k, u, v, partial):
+        k = np.asarray(k, dtype=np.int64)
+        n = k.size
+        out = [np.empty((n, 3)) for _ in range(3 if partial else 1)]
+        if n == 0:
+            return tuple(out) if partial else out[0]
+        g, s, t = self._cells(k, np.asarray(u, dtype=np.float64), np.asarray(v, dtype=np.float64))
+        sets = self.set_of[g]
+        for c in np.unique(sets):
+            sel = np.flatnonzero(sets == c) if len(self.cellsets) > 1 else np.arange(n)
+            cs = self.cellsets[c]
+            for lo in range(0, sel.size, CHUNK):
+                part = sel[lo : lo + CHUNK]
+                nets = cs.nets[g[part] - self.offsets[c]]  # (m, p + 1, q + 1, 4) homogeneous
+                Bu, Bv = _bernstein(cs.p, s[part]), _bernstein(cs.q, t[part])
+                T0 = np.einsum("in,nijk->njk", Bu, nets)
+                h = np.einsum("jn,njk->nk", Bv, T0)
+                S = h[:, :3] / h[:, 3:]
+                out[0][part] = S
+                if partial:  # quotient rule, then local -> surface parameters
+                    hu = np.einsum("jn,njk->nk", Bv, np.einsum("in,nijk->njk", _bernstein_d(cs.p, s[part]), nets))
+                    hv = np.einsum("jn,njk->nk", _bernstein_d(cs.q, t[part]), T0)
+                    box = self.box[g[part]]
+                    out[1][part] = (hu[:, :3] - hu[:, 3:] * S) / (h[:, 3:] * (box[:, 1] - box[:, 0])[:, None])
+                    out[2][part] = (hv[:, :3] - hv[:, 3:] * S) / (h[:, 3:] * (box[:, 3] - box[:, 2])[:, None])
+        return tuple(out) if partial else out[0]

@@ -1,0 +1,482 @@
+"""Watertight tessellation of trimmed faces, shells and solids.
+
+Design (whole-array work; Python loops run over faces, edges and refinement rounds, never over
+points or triangles):
+
+1. Interior grid. Each face's surface is cut into Bézier cells (:mod:`.cells`); the same a-priori
+   bounds on the second derivatives that size the untrimmed patch grids give each cell its
+   ``nu x nv`` steps, and a knot span row (column) takes the largest count of its cells: one
+   tensor grid of parameters per face.
+2. Scaled parameter plane. Each face is triangulated in ``(u, v)`` scaled by
+   ``(steps in u / range of u, steps in v / range of v)``: there the grid's step is about one in
+   both directions, i.e. lengths measure the local chordal error, so Delaunay triangles that are
+   well shaped in this plane are the ones that spend the fewest triangles on the tolerance
+   (a cylinder's long, thin triangles along its rulings; square ones on a sphere).
+3. Edges (:mod:`.edges`): every edge is sampled once in 3-D, to the tolerance, and every face
+   that uses it gets the ``(u, v)`` images of the same points, so the mesh is watertight by
+   construction: shared vertices are shared indices, not welded copies. Loop corners are the
+   edge end points, welded once.
+4. Constrained Delaunay triangulation of every face at once (Shewchuk's Triangle, through the
+   ``triangle`` package): the faces' scaled planes are laid side by side, the trims are the
+   segments, grid points within half a step of a trim are dropped (no slivers). Triangles are
+   kept or dropped by region: a triangle whose edge runs along a trim in the trim's direction
+   lies on the material side (loops keep the material on their left), and the label spreads
+   over the triangles connected without crossing a trim (one sparse connected-components pass).
+5. Measure and refine: the deviation is measured at every triangle's centre and every edge's
+   midpoint (the surface at the barycentric ``(u, v)`` against the flat triangle's point); the
+   midpoints of interior edges over the tolerance (and the centres of triangles over it whose
+   edges are fine) are added to the point set and the faces triangulated again, for a few rounds.
+6. Orientation: triangles run counter-clockwise in ``(u, v)``, so their normals follow
+   ``Su x Sv``; a reversed face's triangles are flipped. Triangles that collapse in 3-D (two
+   corners on one pole) are dropped.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..errors import ParameterError
+from .edges import _face_name, check_domains, edge_uses, group_uses, sample_groups
+from .result import Tessellation
+
+__all__ = ["tessellate_faces"]
+
+MAX_ROUNDS = 8
+"""Largest number of measure-and-refine rounds."""
+MAX_TRIANGLES = 50_000_000
+"""Largest mesh built; a smaller tolerance raises ParameterError."""
+GRID_FRACTION = 0.75
+"""The a-priori grid steps are bounds over whole cells; the interior grid starts at this
+fraction of them and the measured refinement adds points where the bound was needed."""
+UV_GAP = 0.25
+"""Largest gap (scaled grid steps) between one edge's last (u, v) and the next edge's first."""
+CLEARANCE = 0.5
+"""Grid points closer than this (in scaled grid steps) to a trim are dropped."""
+WELD = 1e-8
+"""Weld distance of edge end points, relative to the model's bounding-box diagonal (or the
+edges' own tolerances where larger)."""
+
+
+def _triangulator():
+    try:
+        import triangle
+    except ImportError as exc:  # pragma: no cover - a core dependency
+        from ..errors import BackendError
+
+        raise BackendError("tessellating trimmed faces needs the 'triangle' package: pip install triangle") from exc
+    return triangle
+
+
+class _FaceGrid:
+    """A face's interior parameter grid ``us`` x ``vs`` and its scale (steps per parameter unit)."""
+
+    __slots__ = ("us", "vs", "scale")
+
+
+def _face_grids(batch, tol, angle_tol, bounds=None):
+    """The interior grid of every surface of ``batch`` (a :class:`.batch.SurfaceBatch`): per knot
+    span row (column) the largest a-priori count of its cells, times :data:`GRID_FRACTION`
+    (``bounds``: the cell sets' second-derivative bounds, when already known)."""
+    from .surfaces import _initial_counts, _span_params
+
+    nu, nv = _initial_counts(batch.cellsets, tol, angle_tol, bounds)
+    out = []
+    for k in range(len(batch.bu)):
+        cells = slice(batch.first[k], batch.first[k] + batch.nsu[k] * batch.nsv[k])
+        shape = (batch.nsu[k], batch.nsv[k])
+        cu = np.maximum(np.ceil(nu[cells].reshape(shape).max(axis=1) * GRID_FRACTION), 1).astype(np.int64)
+        cv = np.maximum(np.ceil(nv[cells].reshape(shape).max(axis=0) * GRID_FRACTION), 1).astype(np.int64)
+        bu, bv = batch.bu[k], batch.bv[k]
+        g = _FaceGrid()
+        g.us, _ = _span_params(bu, cu)
+        g.vs, _ = _span_params(bv, cv)
+        g.scale = np.array([cu.sum() / (bu[-1] - bu[0]), cv.sum() / (bv[-1] - bv[0])])
+        out.append(g)
+    return out
+
+
+class _Points:
+    """The growing point set of the triangulation: per point its face, ``(u, v)``, 3-D position
+    and mesh vertex (boundary points of several faces share a mesh vertex)."""
+
+    def __init__(self):
+        self.face, self.uv, self.xyz, self.vid = [], [], [], []
+
+    def add(self, face, uv, xyz, vid):
+        self.face.append(np.broadcast_to(np.asarray(face, dtype=np.int64), (len(uv),)))
+        self.uv.append(np.asarray(uv, dtype=np.float64).reshape(-1, 2))
+        self.xyz.append(np.asarray(xyz, dtype=np.float64).reshape(-1, 3))
+        self.vid.append(np.asarray(vid, dtype=np.int64).reshape(-1))
+
+    def arrays(self):
+        return (np.concatenate(self.face), np.concatenate(self.uv), np.concatenate(self.xyz), np.concatenate(self.vid))
+
+
+def _loops(faces, uses, groups, samples, vid_of_group, scales):
+    """Per face, its loops as ``(uv (k, 2), xyz (k, 3), vid (k,))`` closed polygons (last point
+    not repeated), checked: closed in 3-D and in ``(u, v)``, inside the surface's domain, the
+    outer loop counter-clockwise and the inner loops clockwise."""
+    group_of = np.empty(len(uses), dtype=np.int64)
+    for g, group in enumerate(groups):
+        group_of[group] = g
+    out = [[] for _ in faces]
+    k = 0
+    for f, face in enumerate(faces):
+        name = _face_name(face, f)
+        for l, loop in enumerate(face.boundary_loops()):
+            uvs, xyzs, vids = [], [], []
+            for _ in loop:
+                g = group_of[k]
+                smp = samples[g]
+                uv, vid = smp.uv[k], vid_of_group[g]
+                xyz = np.broadcast_to(smp.points[:1], (len(uv), 3)) if smp.degenerate else smp.points
+                s = smp.params[k]
+                if s[-1] < s[0]:  # this use runs against the group's samples
+                    uv, vid, xyz = uv[::-1], vid[::-1], xyz[::-1]
+                uvs.append(uv)
+                xyzs.append(xyz)
+                vids.append(vid)
+                k += 1
+            # closure: each edge must end where the next one starts, in 3-D and in (u, v)
+            for j in range(len(uvs)):
+                nxt = (j + 1) % len(uvs)
+                if vids[j][-1] != vids[nxt][0]:
+                    gap = float(np.linalg.norm(xyzs[j][-1] - xyzs[nxt][0]))
+                    raise ParameterError(f"{name}: loop {l} is not closed: edge {j} ends {gap:.3g} away from where edge {nxt} starts")
+                # (a corner at a pole may jump in u: the gap must only stay well below the grid step)
+                if np.hypot(*((uvs[j][-1] - uvs[nxt][0]) * scales[f])) > UV_GAP:
+                    raise ParameterError(
+                        f"{name}: loop {l} is not closed in (u, v): edge {j} ends at {uvs[j][-1].tolist()}, "
+                        f"edge {nxt} starts at {uvs[nxt][0].tolist()}")
+            uv = np.concatenate([x[:-1] for x in uvs])
+            xyz = np.concatenate([x[:-1] for x in xyzs])
+            vid = np.concatenate([x[:-1] for x in vids])
+            if len(uv) < 2 + (len(uvs) == 1):
+                raise ParameterError(f"{name}: loop {l} encloses no area")
+            nx = np.concatenate([uv[1:], uv[:1]])
+            area = 0.5 * np.sum(uv[:, 0] * nx[:, 1] - nx[:, 0] * uv[:, 1])
+            if (area <= 0) if l == 0 else (area >= 0):
+                want = "counter-clockwise (outer loop)" if l == 0 else "clockwise (inner loop)"
+                raise ParameterError(f"{name}: loop {l} faces the wrong way: it must run {want} in (u, v), material on its left")
+            out[f].append((uv, xyz, vid))
+    return out
+
+
+def _edge_vertices(samples, size, tolerance):
+    """Mesh vertices of the edge samples: end points welded (within the weld distance), inner
+    samples numbered after them. Returns ``(vid_of_group, xyz (n, 3))``."""
+    from .surfaces import _close_pairs, _components
+
+    ends = np.concatenate([[s.points[0], s.points[-1]] for s in samples]) if samples else np.zeros((0, 3))
+    pairs = _close_pairs(ends, max(WELD * size, 10.0 * tolerance))
+    lab = _components(len(ends), pairs[:, 0], pairs[:, 1]) if len(pairs) else np.arange(len(ends))
+    first, end_vid = np.unique(lab, return_index=True, return_inverse=True)[1:]
+    end_vid = end_vid.reshape(-1, 2)
+    xyz = [ends[first]]
+    n = len(first)
+    vid_of_group = []
+    for g, s in enumerate(samples):
+        if s.degenerate:
+            m = len(next(iter(s.uv.values())))
+            vid_of_group.append(np.full(m, end_vid[g, 0]))
+            continue
+        m = len(s.points)
+        vid_of_group.append(np.concatenate([[end_vid[g, 0]], np.arange(n, n + m - 2), [end_vid[g, 1]]]))
+        xyz.append(s.points[1:-1])
+        n += m - 2
+    return vid_of_group, np.concatenate(xyz)
+
+
+def _grid_points(grids, layout, dense):
+    """Interior grid points of every face (scaled, laid out) at least :data:`CLEARANCE` from the
+    trims (``dense``: the trims' polylines densified, scaled, laid out). Returns ``(face, uv)``."""
+    from scipy.spatial import cKDTree
+
+    fs, uvs = [], []
+    for f, g in enumerate(grids):
+        lo, hi = layout.lo[f], layout.hi[f]
+        margin = CLEARANCE / g.scale
+        us = g.us[(g.us > lo[0] + margin[0]) & (g.us < hi[0] - margin[0])]
+        vs = g.vs[(g.vs > lo[1] + margin[1]) & (g.vs < hi[1] - margin[1])]
+        if us.size and vs.size:
+            U, V = np.meshgrid(us, vs, indexing="ij")
+            uvs.append(np.column_stack([U.ravel(), V.ravel()]))
+            fs.append(np.full(U.size, f))
+    if not uvs:
+        return np.zeros(0, dtype=np.int64), np.zeros((0, 2))
+    fidx, uv = np.concatenate(fs), np.concatenate(uvs)
+    d, _ = cKDTree(dense).query(layout.place(fidx, uv), distance_upper_bound=CLEARANCE)
+    keep = ~np.isfinite(d)
+    return fidx[keep], uv[keep]
+
+
+class _Layout:
+    """The faces' scaled parameter planes side by side: face ``f``'s point ``uv`` sits at
+    ``(uv - lo[f]) * scale[f] + (x0[f], 0)``."""
+
+    GAP = 4.0
+
+    def __init__(self, loops, scales):
+        self.scale = scales
+        self.lo = np.stack([lp[0][0].min(axis=0) for lp in loops])
+        self.hi = np.stack([lp[0][0].max(axis=0) for lp in loops])
+        width = (self.hi[:, 0] - self.lo[:, 0]) * scales[:, 0]
+        self.x0 = np.concatenate([[0.0], np.cumsum(width + self.GAP)[:-1]])
+
+    def place(self, fidx, uv):
+        out = (uv - self.lo[fidx]) * self.scale[fidx]
+        out[:, 0] += self.x0[fidx]
+        return out
+
+
+def _densify(P, segs, step):
+    """Points every ``step`` or closer along the segments ``P[segs]``."""
+    a, b = P[segs[:, 0]], P[segs[:, 1]]
+    n = np.maximum(np.ceil(np.linalg.norm(b - a, axis=1) / step), 1).astype(np.int64)
+    seg = np.repeat(np.arange(len(segs)), n)
+    frac = (np.arange(n.sum()) - np.repeat(np.cumsum(n) - n, n)) / n[seg]
+    return a[seg] + (b - a)[seg] * frac[:, None]
+
+
+def _crossing(P, segs):
+    """Index of a segment that crosses or touches another non-adjacent one (``P[segs]``
+    ``(s, 2, 2)``), or -1. A sweep along x: candidate pairs have overlapping x ranges (few, for
+    trims made of short chords), then exact orientation tests. Triangle must never see crossing
+    segments: it splits them at new points (or, for some inputs, crashes)."""
+    A, B = P[segs[:, 0]], P[segs[:, 1]]
+    x0, x1 = np.minimum(A[:, 0], B[:, 0]), np.maximum(A[:, 0], B[:, 0])
+    order = np.argsort(x0, kind="stable")
+    xs = x0[order]
+    end = np.searchsorted(xs, x1[order], side="right")
+    count = np.maximum(end - np.arange(1, len(xs) + 1), 0)
+    total = int(count.sum())
+    if total > 1_000_000:
+        from ..limits import check
+
+        check(total * 64, "the trim crossing test")
+    i = np.repeat(np.arange(len(xs)), count)
+    j = i + 1 + (np.arange(i.size) - np.repeat(np.cumsum(count) - count, count))
+    a, b = order[i], order[j]
+    shared = (segs[a, 0] == segs[b, 0]) | (segs[a, 0] == segs[b, 1]) | (segs[a, 1] == segs[b, 0]) | (segs[a, 1] == segs[b, 1])
+    a, b = a[~shared], b[~shared]
+
+    def orient(p, q, r):
+        return np.sign((q[:, 0] - p[:, 0]) * (r[:, 1] - p[:, 1]) - (q[:, 1] - p[:, 1]) * (r[:, 0] - p[:, 0]))
+
+    o1, o2 = orient(A[a], B[a], A[b]), orient(A[a], B[a], B[b])
+    o3, o4 = orient(A[b], B[b], A[a]), orient(A[b], B[b], B[a])
+    hit = (o1 * o2 <= 0) & (o3 * o4 <= 0)
+    # collinear pairs (all orientations zero) cross only if their extents overlap
+    col = (o1 == 0) & (o2 == 0)
+    if col.any():
+        ya0, ya1 = np.minimum(A[a, 1], B[a, 1]), np.maximum(A[a, 1], B[a, 1])
+        yb0, yb1 = np.minimum(A[b, 1], B[b, 1]), np.maximum(A[b, 1], B[b, 1])
+        xa0, xa1, xb0, xb1 = x0[a], x1[a], x0[b], x1[b]
+        overlap = (np.maximum(xa0, xb0) <= np.minimum(xa1, xb1)) & (np.maximum(ya0, yb0) <= np.minimum(ya1, yb1))
+        hit &= ~col | overlap
+    k = np.flatnonzero(hit)
+    return int(a[k[0]]) if k.size else -1
+
+
+def _half_edges(T):
+    """``(a, b)`` ``(t, 3)``: the edge opposite corner ``k`` of each counter-clockwise triangle,
+    directed as the triangle runs (Triangle's ``neighbors[:, k]`` lies across it)."""
+    return T[:, [1, 2, 0]], T[:, [2, 0, 1]]
+
+
+def _keep_inside(T, N, nxt):
+    """Which triangles ``T`` ``(t, 3)`` (counter-clockwise; ``N`` their neighbours across each
+    corner's opposite edge, -1 on the hull) lie on the material side of the trims (``nxt[i]``:
+    the point after boundary point ``i`` in its loop, -1 for other points). A triangle with an
+    edge running along a trim lies to its left, inside; one running against it lies outside;
+    the label spreads over triangles connected across non-trim edges. Returns ``(keep (t,)
+    bool, conflict, along (t, 3) bool)``: ``conflict`` is a triangle whose region is both inside
+    and outside (crossing or badly nested loops), or -1; ``along`` marks edges on a trim."""
+    from .surfaces import _components
+
+    a, b = _half_edges(T)
+    fwd = nxt[a] == b  # nxt of an interior point is -1, never a point index
+    rev = nxt[b] == a
+    along = fwd | rev
+    t, k = np.nonzero((N >= 0) & ~along)
+    lab = _components(len(T), t, N[t, k])
+    inside = np.zeros(len(T), dtype=bool)
+    outside = np.zeros(len(T), dtype=bool)
+    inside[lab[np.nonzero(fwd)[0]]] = True
+    outside[lab[np.nonzero(rev)[0]]] = True
+    both = np.flatnonzero(inside & outside)
+    conflict = int(np.flatnonzero(np.isin(lab, both))[0]) if both.size else -1
+    return inside[lab], conflict, along
+
+
+class _Prepared:
+    """What a face set's tessellation needs at any tolerance, computed once per face set and kept
+    in the first face's ``_cache`` (faces are immutable): the surfaces' batch evaluator and
+    second-derivative bounds, the edge uses, their pcurves' batch evaluator (domains checked),
+    the groups of uses that are one edge and the edge sampler's tolerance-independent memo."""
+
+    __slots__ = ("faces", "size", "batch", "bounds", "edge_tol", "uses", "pcurves", "groups", "memo")
+
+    def __init__(self, faces, size):
+        from .batch import CurveBatch, SurfaceBatch
+        from .cells import second_derivative_bounds
+
+        self.faces, self.size = tuple(faces), size
+        self.batch = SurfaceBatch([face.surface for face in faces])
+        self.bounds = [second_derivative_bounds(cs) for cs in self.batch.cellsets]
+        self.edge_tol = max((e.tolerance for face in faces for e in face.edges), default=0.0)
+        self.uses = edge_uses(faces)
+        self.pcurves = CurveBatch([u.edge.pcurve for u in self.uses])
+        check_domains(self.uses, self.pcurves, self.batch)
+        self.groups = group_uses(self.uses, max(WELD * size, 2.0 * self.edge_tol), self.pcurves, self.batch)
+        self.memo = {}
+
+    @classmethod
+    def of(cls, faces, size):
+        """The cached preparation of ``faces`` (the same face objects in the same order and the
+        same model size), else a new one, cached."""
+        cache = faces[0]._cache
+        prep = cache.get("tessellate")
+        if not (prep is not None and prep.size == size and len(prep.faces) == len(faces)
+                and all(a is b for a, b in zip(prep.faces, faces))):  # fmt: skip
+            prep = cache["tessellate"] = cls(faces, size)
+        return prep
+
+
+def tessellate_faces(faces, tol: float, angle_tol, size: float) -> Tessellation:
+    """Tessellate :class:`~splinekit.brep.TrimmedFace` objects as one watertight mesh (see
+    :func:`splinekit.tessellate.tessellate`). ``tol``: absolute chordal tolerance;
+    ``angle_tol``: radians or None; ``size``: model size (bounding-box diagonal)."""
+    triangle = _triangulator()
+    prep = _Prepared.of(faces, size)
+    batch, uses, groups, edge_tol = prep.batch, prep.uses, prep.groups, prep.edge_tol
+    grids = _face_grids(batch, tol, angle_tol, prep.bounds)
+    scales = np.stack([g.scale for g in grids])
+    samples = sample_groups(uses, groups, scales, tol, angle_tol, batch, prep.pcurves, prep.memo)
+    vid_of_group, edge_xyz = _edge_vertices(samples, size, edge_tol)
+    loops = _loops(faces, uses, groups, samples, vid_of_group, scales)
+    layout = _Layout(loops, scales)
+
+    # boundary points and segments (each loop closed on itself)
+    pts = _Points()
+    segs, seg_loop = [], []
+    n = 0
+    for f, face_loops in enumerate(loops):
+        for l, (uv, xyz, vid) in enumerate(face_loops):
+            k = len(uv)
+            idx = np.arange(n, n + k)
+            segs.append(np.column_stack([idx, np.roll(idx, -1)]))
+            seg_loop.append(np.full(k, l))
+            pts.add(f, uv, xyz, vid)
+            n += k
+    segs, seg_loop = np.concatenate(segs), np.concatenate(seg_loop)
+    pface, puv, pxyz, pvid = pts.arrays()
+    nb = len(pface)
+    dense = _densify(layout.place(pface, puv), segs, 0.5 * CLEARANCE)
+    gf, guv = _grid_points(grids, layout, dense)
+    n_vid = len(edge_xyz)
+    # the point after each boundary point in its loop (-1: not a boundary point), grown with the points
+    nxt_b = np.full(nb, -1, dtype=np.int64)
+    nxt_b[segs[:, 0]] = segs[:, 1]
+    pface = np.concatenate([pface, gf])
+    puv = np.concatenate([puv, guv])
+    pxyz = np.concatenate([pxyz, batch.evaluate(gf, guv[:, 0], guv[:, 1])])
+    pvid = np.concatenate([pvid, np.arange(n_vid, n_vid + len(gf))])
+    n_vid += len(gf)
+
+    bad = _crossing(layout.place(pface[:nb], puv[:nb]), segs)
+    if bad >= 0:
+        f = int(pface[segs[bad, 0]])
+        raise ParameterError(f"{_face_name(faces[f], f)}: its trimming loops cross or touch each other (or themselves)")
+    max_dev = 0.0
+    for round_ in range(MAX_ROUNDS):
+        nP = len(pface)
+        if 2 * nP > MAX_TRIANGLES:
+            raise ParameterError(f"tolerance {tol:.3g} needs more than {MAX_TRIANGLES:,} triangles; use a larger tolerance")
+        P = layout.place(pface, puv)
+        nxt = np.concatenate([nxt_b, np.full(nP - nb, -1, dtype=np.int64)])
+        r = triangle.triangulate({"vertices": P, "segments": segs}, "pnQ")
+        if len(r["vertices"]) != nP:  # Triangle split crossing segments at new points
+            x = r["vertices"][nP, 0]
+            f = int(np.searchsorted(layout.x0, x, side="right") - 1)
+            raise ParameterError(f"{_face_name(faces[f], f)}: its trimming loops cross or touch each other (or themselves)")
+        T = np.asarray(r["triangles"], dtype=np.int64)
+        N = np.asarray(r["neighbors"], dtype=np.int64)
+        keep, conflict, along = _keep_inside(T, N, nxt)
+        if conflict >= 0:
+            f = int(pface[T[conflict, 0]])
+            raise ParameterError(f"{_face_name(faces[f], f)}: its trimming loops cross, overlap or nest wrongly (a hole outside the outer loop?)")
+        ha, hb = _half_edges(T)
+        if round_ == 0:  # every trim must bound some material on its left
+            covered = np.zeros(nb, dtype=bool)
+            on = keep[:, None] & (nxt[ha] == hb)
+            covered[ha[on]] = True
+            if not covered.all():
+                k = int(np.flatnonzero(~covered)[0])
+                f, l = int(pface[k]), int(seg_loop[k])
+                raise ParameterError(f"{_face_name(faces[f], f)}: loop {l} bounds no material: it lies outside the outer loop "
+                                     "or inside another hole, or the loops cross")
+        V = pvid[T]
+        live = keep & (V[:, 0] != V[:, 1]) & (V[:, 1] != V[:, 2]) & (V[:, 2] != V[:, 0])  # not collapsed at a pole
+        # measure: triangle centres and edge midpoints, each edge once (from its lower live triangle)
+        n_side = np.where(N >= 0, N, 0)
+        other_live = (N >= 0) & live[n_side]
+        own = live[:, None] & (~other_live | (np.arange(len(T))[:, None] < N))
+        et, ek = np.nonzero(own)
+        ea, eb = ha[et, ek], hb[et, ek]
+        tl = np.flatnonzero(live)
+        Tl = T[tl]
+        fid = np.concatenate([pface[ea], pface[Tl[:, 0]]])
+        uv = np.concatenate([0.5 * (puv[ea] + puv[eb]), puv[Tl].mean(axis=1)])
+        flat = np.concatenate([0.5 * (pxyz[ea] + pxyz[eb]), pxyz[Tl].mean(axis=1)])
+        exact = batch.evaluate(fid, uv[:, 0], uv[:, 1])
+        dev = np.linalg.norm(exact - flat, axis=1)
+        max_dev = float(dev.max()) if dev.size else 0.0
+        ne = len(ea)
+        bad_edge = (dev[:ne] > tol) & ~along[et, ek]
+        # a triangle's centre is added only when none of its edges is split
+        split = np.zeros(len(T), dtype=bool)
+        split[et[bad_edge]] = True
+        nb_t = N[et[bad_edge], ek[bad_edge]]
+        split[nb_t[nb_t >= 0]] = True
+        bad_tri = (dev[ne:] > tol) & ~split[tl]
+        new = np.concatenate([np.flatnonzero(bad_edge), ne + np.flatnonzero(bad_tri)])
+        if new.size == 0 or round_ == MAX_ROUNDS - 1:
+            break
+        pface = np.concatenate([pface, fid[new]])
+        puv = np.concatenate([puv, uv[new]])
+        pxyz = np.concatenate([pxyz, exact[new]])
+        pvid = np.concatenate([pvid, np.arange(n_vid, n_vid + new.size)])
+        n_vid += new.size
+    return _assemble(faces, batch, T[live], pface, puv, pxyz, pvid, n_vid, max_dev, tol)
+
+
+def _assemble(faces, batch, T, pface, puv, pxyz, pvid, n_vid, max_dev, tol):
+    """The :class:`Tessellation` of the final triangles ``T`` (point indices)."""
+    flip = np.array([face.reversed for face in faces])[pface[T[:, 0]]]
+    T = np.where(flip[:, None], T[:, [0, 2, 1]], T)
+    used = np.zeros(n_vid, dtype=bool)
+    used[pvid[T]] = True
+    new_id = np.cumsum(used) - 1
+    tri = new_id[pvid[T]]
+    # one representative point per vertex (its face, (u, v) and position)
+    rep = np.full(n_vid, -1, dtype=np.int64)
+    rep[pvid[::-1]] = np.arange(len(pvid))[::-1]
+    rep = rep[used]
+    V = pxyz[rep]
+    UV = puv[rep]
+    VP = pface[rep]
+    _, Su, Sv = batch.partials(VP, UV[:, 0], UV[:, 1])
+    N = np.cross(Su, Sv)
+    length = np.linalg.norm(N, axis=1)
+    scale = np.einsum("ij,ij->i", Su, Su) + np.einsum("ij,ij->i", Sv, Sv)
+    weak = length <= 1e-10 * scale
+    N /= np.where(weak, 1.0, length)[:, None]
+    N[np.array([face.reversed for face in faces])[VP]] *= -1.0
+    if weak.any():  # collapsed points (poles): the mean of the adjacent triangles' normals
+        X = V[tri]
+        fn = np.cross(X[:, 1] - X[:, 0], X[:, 2] - X[:, 0])
+        acc = np.stack([sum(np.bincount(tri[:, k], fn[:, j], len(V)) for k in range(3)) for j in range(3)], axis=1)
+        length = np.linalg.norm(acc, axis=1, keepdims=True)
+        N[weak] = (acc / np.where(length > 0, length, 1.0))[weak]
+    return Tessellation._build(V, tri, N, UV, VP, pface[T[:, 0]], puv[T], max_dev, tol)

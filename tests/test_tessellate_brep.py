@@ -1,0 +1,285 @@
+"""Tessellation of trimmed faces, shells and solids: watertight, oriented, within the tolerance.
+
+Judged against things the tessellator does not compute: closed-form volumes and areas, the
+surfaces' own evaluators at the triangles' barycentric (u, v) (the chordal deviation), exact
+distances to the analytic sphere / torus / cylinder, and the topology (Euler characteristic) of
+the solids.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+import splinekit as sk
+from splinekit.brep import Edge, Shell, Solid, TrimmedFace, primitives
+from splinekit.construct.curves import line
+from splinekit.errors import SplineKitError
+
+import _brep_shapes as shapes
+
+BARY = np.array([[1 / 3, 1 / 3, 1 / 3], [0.5, 0.5, 0.0], [0.0, 0.5, 0.5], [0.5, 0.0, 0.5]])
+
+
+def measured_deviation(mesh, faces):
+    """Largest distance between each face's own surface at the barycentric (u, v) of every
+    triangle's centre and edge midpoints and the flat triangle's point there."""
+    F = np.asarray(mesh.faces)
+    X = mesh.vertices[F]
+    worst = 0.0
+    for f in np.unique(mesh.face_patch):
+        sel = np.flatnonzero(mesh.face_patch == f)
+        uv = np.einsum("bj,fjd->fbd", BARY, mesh.corner_uv[sel]).reshape(-1, 2)
+        flat = np.einsum("bj,fjd->fbd", BARY, X[sel]).reshape(-1, 3)
+        exact = faces[f].surface.evaluate(uv[:, 0], uv[:, 1])
+        worst = max(worst, float(np.linalg.norm(exact - flat, axis=1).max()))
+    return worst
+
+
+def flat_points(mesh):
+    F = np.asarray(mesh.faces)
+    return np.einsum("bj,fjd->fbd", BARY, mesh.vertices[F]).reshape(-1, 3)
+
+
+R_SPHERE, R_MAJOR, R_MINOR = 1.5, 2.0, 0.6
+SOLIDS = {
+    # name: (factory, exact volume, exact area, genus)
+    "sphere": (lambda: primitives.sphere(R_SPHERE), 4 / 3 * math.pi * R_SPHERE**3, 4 * math.pi * R_SPHERE**2, 0),
+    "torus": (lambda: primitives.torus(R_MAJOR, R_MINOR), 2 * math.pi**2 * R_MAJOR * R_MINOR**2,
+              4 * math.pi**2 * R_MAJOR * R_MINOR, 1),  # fmt: skip
+    "cylinder": (lambda: primitives.cylinder(1.0, 3.0), 3 * math.pi, 8 * math.pi, 0),
+    "cone": (lambda: primitives.cone(1.0, 0.0, 2.0), 2 * math.pi / 3, math.pi * (1 + math.sqrt(5)), 0),
+    "box_with_hole": (lambda: primitives.box_with_hole(20.0, 4.0), 20**3 - math.pi * 16 * 20,
+                      6 * 400 + 2 * math.pi * 4 * 20 - 2 * math.pi * 16, 1),  # fmt: skip
+    "plate_with_holes": (lambda: primitives.plate_with_holes(40.0, 30.0, 5.0, [(10, 10, 4), (28, 20, 5), (33, 8, 2.5)]),
+                         40 * 30 * 5 - math.pi * 5 * (16 + 25 + 6.25),
+                         2 * (1200 + 200 + 150) + sum(2 * math.pi * r * 5 - 2 * math.pi * r * r for r in (4, 5, 2.5)), 3),  # fmt: skip
+    # keyless edges on natural-domain faces: paired geometrically by the tessellator
+    "sphere_natural": (lambda: shapes.sphere(1.0)[0], 4 / 3 * math.pi, 4 * math.pi, 0),
+    "torus_natural": (lambda: shapes.torus(2.0, 0.6)[0], 2 * math.pi**2 * 2.0 * 0.36, 4 * math.pi**2 * 2.0 * 0.6, 1),
+    "cylinder_keyless": (lambda: shapes.cylinder(1.0, 3.0)[0], 3 * math.pi, 8 * math.pi, 0),
+    "box_with_holes_keyless": (lambda: shapes.plate_with_holes()[0], shapes.plate_with_holes()[1], shapes.plate_with_holes()[2], 3),
+}
+
+
+@pytest.mark.parametrize("rel", [1e-3, 1e-4])
+@pytest.mark.parametrize("name", sorted(SOLIDS))
+def test_solid_closed_oriented_within_tolerance(name, rel):
+    make, volume, area, genus = SOLIDS[name]
+    solid = make()
+    mesh = sk.tessellate(solid, rel, relative=True)
+    tol = mesh.tolerance
+    assert mesh.is_closed
+    assert mesh.euler_characteristic == 2 - 2 * genus
+    dev = measured_deviation(mesh, solid.faces)
+    assert dev <= tol * (1 + 1e-9)
+    assert mesh.max_deviation <= tol * (1 + 1e-9)
+    assert abs(mesh.max_deviation - dev) <= 1e-9 * tol + 1e-12  # the same yardstick
+    # outward: positive volume within the bound the tolerance implies
+    assert mesh.volume > 0
+    assert abs(mesh.volume - volume) <= area * tol
+    # every triangle faces like its face's exact outward normal at the triangle's centre
+    F = np.asarray(mesh.faces)
+    X = mesh.vertices[F]
+    fn = np.cross(X[:, 1] - X[:, 0], X[:, 2] - X[:, 0])
+    uv = mesh.corner_uv.mean(axis=1)
+    exact = np.empty_like(fn)
+    for f in np.unique(mesh.face_patch):
+        sel = mesh.face_patch == f
+        exact[sel] = solid.faces[f].normals(uv[sel, 0], uv[sel, 1])
+    assert (np.einsum("fj,fj->f", fn, exact) > 0).all()
+
+
+def test_geometric_deviation_against_the_analytic_surfaces():
+    tol = 1e-3
+    for solid, dist in (
+        (primitives.sphere(R_SPHERE), lambda p: np.abs(np.linalg.norm(p, axis=1) - R_SPHERE)),
+        (primitives.torus(R_MAJOR, R_MINOR),
+         lambda p: np.abs(np.hypot(np.hypot(p[:, 0], p[:, 1]) - R_MAJOR, p[:, 2]) - R_MINOR)),  # fmt: skip
+    ):
+        mesh = sk.tessellate(solid, tol)
+        d = dist(flat_points(mesh))
+        assert d.max() <= tol
+        assert d.max() > 0.2 * tol  # not far finer than asked
+
+
+def test_triangle_count_scales_like_the_inverse_tolerance():
+    # on a doubly curved surface the triangle count grows like 1 / tol
+    solid = primitives.sphere(1.0)
+    n1 = sk.tessellate(solid, 1e-3).n_faces
+    n2 = sk.tessellate(solid, 1e-4).n_faces
+    assert 5 < n2 / n1 < 20
+
+
+def test_shared_edges_use_the_same_vertices():
+    solid = primitives.box_with_hole(20.0, 4.0)
+    mesh = sk.tessellate(solid, 1e-2)
+    # every mesh edge is used by exactly two triangles, and no two vertices coincide
+    F = np.asarray(mesh.faces)
+    e = np.sort(np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]]), axis=1)
+    _, counts = np.unique(e, axis=0, return_counts=True)
+    assert (counts == 2).all()
+    V = np.round(mesh.vertices / 1e-9)
+    assert len(np.unique(V, axis=0)) == len(V)
+
+
+def test_reversed_faces_turn_the_mesh_inside_out():
+    solid = primitives.cylinder(1.0, 2.0)
+    inward = Solid(Shell([f.flipped() for f in solid.faces]))
+    a = sk.tessellate(solid, 1e-3)
+    b = sk.tessellate(inward, 1e-3)
+    assert b.is_closed and a.n_faces == b.n_faces
+    assert b.volume == pytest.approx(-a.volume, rel=1e-12)
+
+
+def test_single_trimmed_face_and_lists():
+    solid = primitives.plate_with_holes(40.0, 30.0, 5.0, [(10, 10, 4), (28, 20, 5)])
+    top = next(f for f in solid.faces if f.name == "top")
+    mesh = sk.tessellate(top, 1e-2)
+    assert not mesh.is_closed
+    area = 1200 - math.pi * (16 + 25)
+    assert abs(mesh.area - area) <= 1e-2 * 2 * math.pi * 9 * 1.01  # chords cut off at most tol per unit of trim length
+    F = np.asarray(mesh.faces)
+    assert np.allclose(mesh.vertices[F][:, :, 2], 5.0)
+    # a list of faces and a list of solids
+    both = sk.tessellate([solid, primitives.sphere(1.0, center=(100, 0, 0))], 1e-2)
+    assert both.is_closed
+    assert both.euler_characteristic == (2 - 2 * 2) + 2
+
+
+@settings(max_examples=8, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(
+    x=st.floats(8.0, 32.0), y=st.floats(8.0, 22.0), r=st.floats(0.5, 6.0),
+    rel=st.sampled_from([3e-3, 1e-3, 3e-4]),
+)  # fmt: skip
+def test_plate_with_a_random_hole(x, y, r, rel):
+    solid = primitives.plate_with_holes(40.0, 30.0, 4.0, [(x, y, min(r, x - 0.5, y - 0.5, 39.5 - x, 29.5 - y))])
+    mesh = sk.tessellate(solid, rel, relative=True)
+    assert mesh.is_closed and mesh.euler_characteristic == 0
+    assert measured_deviation(mesh, solid.faces) <= mesh.tolerance * (1 + 1e-9)
+
+
+# -- bad input ------------------------------------------------------------------------------
+
+
+def _plane():
+    return shapes.plane([0, 0, 0], [1, 0, 0], [0, 1, 0])
+
+
+def _square(a=0.1, b=0.9):
+    c = np.array([[a, a], [b, a], [b, b], [a, b]])
+    return [line(c[k], c[(k + 1) % 4]) for k in range(4)]
+
+
+def test_open_loop_names_the_face():
+    c = np.array([[0.1, 0.1], [0.9, 0.1], [0.9, 0.9], [0.1, 0.8]])
+    loop = [line(c[k], c[k + 1]) for k in range(3)] + [line([0.1, 0.9], [0.1, 0.1])]
+    face = TrimmedFace(_plane(), [loop], name="lid")
+    with pytest.raises(SplineKitError, match=r"face 0 \('lid'\).*not closed"):
+        sk.tessellate(face, 1e-3)
+
+
+def test_loop_facing_the_wrong_way_names_the_face():
+    ok = TrimmedFace(_plane(), [_square()])
+    bad = TrimmedFace(_plane(), [[e.reverse() for e in reversed(_square())]], name="upside")
+    sk.tessellate(ok, 1e-3)
+    with pytest.raises(SplineKitError, match=r"face 1 \('upside'\).*wrong way"):
+        sk.tessellate([ok, bad], 1e-3)
+
+
+def test_hole_facing_the_wrong_way():
+    face = TrimmedFace(_plane(), [_square(0.0, 1.0), _square(0.3, 0.6)])  # hole counter-clockwise
+    with pytest.raises(SplineKitError, match="face 0.*loop 1.*wrong way"):
+        sk.tessellate(face, 1e-3)
+
+
+def test_loop_leaving_the_domain():
+    face = TrimmedFace(_plane(), [_square(0.5, 1.5)])
+    with pytest.raises(SplineKitError, match="face 0.*leaves the surface's domain"):
+        sk.tessellate(face, 1e-3)
+
+
+def test_crossing_loops():
+    hole_a = [e.reverse() for e in reversed(_square(0.2, 0.6))]
+    hole_b = [e.reverse() for e in reversed(_square(0.4, 0.8))]
+    face = TrimmedFace(_plane(), [_square(0.0, 1.0), hole_a, hole_b], name="sieve")
+    with pytest.raises(SplineKitError, match=r"face 0 \('sieve'\).*cross"):
+        sk.tessellate(face, 1e-3)
+
+
+def test_self_crossing_loop():
+    c = np.array([[0.1, 0.1], [0.9, 0.9], [0.9, 0.1], [0.1, 0.9]])  # a bow tie
+    loop = [line(c[k], c[(k + 1) % 4]) for k in range(4)]
+    with pytest.raises(SplineKitError, match="face 0"):
+        sk.tessellate(TrimmedFace(_plane(), [loop]), 1e-3)
+
+
+def test_hole_outside_the_outer_loop():
+    outer = _square(0.0, 0.4)
+    hole = [e.reverse() for e in reversed(_square(0.6, 0.9))]
+    with pytest.raises(SplineKitError, match="face 0.*loop 1 bounds no material"):
+        sk.tessellate(TrimmedFace(_plane(), [outer, hole]), 1e-3)
+
+
+def test_mixed_list_is_refused():
+    with pytest.raises(SplineKitError, match="item 1"):
+        sk.tessellate([primitives.sphere(1.0), _plane()], 1e-3)
+
+
+def test_edges_with_explicit_keys_and_curves_pair_with_keyless_ones():
+    # a cylinder whose caps carry keyed edges with 3-D curves and whose side is natural-domain
+    solid = primitives.cylinder(1.0, 2.0)
+    side = next(f for f in solid.faces if f.name == "side")
+    natural = TrimmedFace(side.surface, reversed=side.reversed)
+    caps = [f for f in solid.faces if f.name != "side"]
+    caps = [TrimmedFace(f.surface, [[Edge(e.pcurve, e.curve) for e in f.outer_loop]], f.reversed) for f in caps]
+    mesh = sk.tessellate(Solid(Shell([natural] + caps)), 1e-3)
+    assert mesh.is_closed and mesh.euler_characteristic == 2
+    assert abs(mesh.volume - 2 * math.pi) <= 6 * math.pi * 1e-3
+
+
+# -- parts made by build123d (OCC), read through from_occ -----------------------------------
+
+
+def _build123d_parts():
+    bd = pytest.importorskip("build123d")
+    box = bd.Box(20, 20, 20)
+    plate = bd.Box(40, 30, 5) - bd.Pos(-10, -5, 0) * bd.Cylinder(4, 5) - bd.Pos(8, 6, 0) * bd.Cylinder(5, 5)
+    return {
+        "box - cylinder": (box - bd.Cylinder(4, 20), 1),
+        "plate with two holes": (plate, 2),
+        "filleted box": (bd.fillet(box.edges(), 3), 0),
+        "chamfered block": (bd.chamfer(bd.Box(30, 20, 10).edges().group_by(bd.Axis.Z)[-1], 2), 0),
+        "sphere": (bd.Sphere(5), 0),
+        "torus": (bd.Torus(10, 3), 1),
+        "revolved part": (bd.Cone(5, 2, 8) + bd.Pos(0, 0, 4) * bd.Cylinder(3, 12), 0),
+    }
+
+
+def _occ_volume(shape):
+    from OCP.BRepGProp import BRepGProp
+    from OCP.GProp import GProp_GProps
+
+    props = GProp_GProps()
+    BRepGProp.VolumeProperties_s(shape, props, 1e-9)
+    return props.Mass()
+
+
+@pytest.mark.parametrize("name", ["box - cylinder", "plate with two holes", "filleted box", "chamfered block", "sphere",
+                                  "torus", "revolved part"])  # fmt: skip
+def test_build123d_parts(name):
+    part, genus = _build123d_parts()[name]
+    got = sk.occ.from_occ(part)
+    solids = got if isinstance(got, list) else [got]  # a boolean's result comes as a compound
+    assert len(solids) == 1 and isinstance(solids[0], Solid)
+    mesh = sk.tessellate(solids, 1e-3, relative=True)
+    assert mesh.is_closed
+    assert mesh.euler_characteristic == 2 - 2 * genus
+    assert measured_deviation(mesh, solids[0].faces) <= mesh.tolerance * (1 + 1e-9)
+    volume = _occ_volume(part.wrapped)
+    assert mesh.volume > 0
+    assert abs(mesh.volume - volume) <= part.area * mesh.tolerance
