@@ -201,6 +201,7 @@ class _Reader:
             raise BackendError(f"face {index}: OpenCascade gives it no wire (an unbounded face cannot be converted)")
         uv = np.concatenate([e.pcurve.evaluate(np.linspace(*e.domain, 17)) for lp in loops for e in lp])
         surface = self._surface(cfwd, index, uv.min(axis=0), uv.max(axis=0))
+        loops = [[_same_parameter(surface, use) for use in lp] for lp in loops]
         return TrimmedFace(surface, loops, reversed=reversed_, tolerance=tol_face, name=name)
 
     def _surface(self, fwd, index, lo, hi):
@@ -248,6 +249,11 @@ class _Reader:
             raise BackendError(f"face {index}: edge {key} has no pcurve on the face")
         first, last = tool.Range_s(src_edge, src_face)
         pcurve = _curve2d_from_occ(pc, first, last)
+        conv_tolerance = tool.Tolerance_s(cedge)
+        if not native and not degenerate and conv_tolerance > 10.0 * max(tool.Tolerance_s(edge), 1e-7):
+            better = _isoline_pcurve(edge, fwd, cedge, cfwd, pcurve)
+            if better is not pcurve:  # OCC's widened tolerance covered the stray pcurve only
+                pcurve, conv_tolerance = better, 0.0
         curve = None
         if not degenerate:
             if (key, native) not in self.curves:
@@ -255,11 +261,98 @@ class _Reader:
             curve = self.curves[(key, native)]
             if curve is not None and not _same_domain(curve.domain, pcurve.domain):
                 curve = None  # not SameRange: keep the trim only, the 3-D curve is rebuilt on export
-        # the conversion may widen the tolerance to cover its approximations: keep the larger
-        tolerance = max(tool.Tolerance_s(edge), tool.Tolerance_s(cedge), 1e-7)
+        # the conversion may widen the tolerance to cover its approximations: keep the larger. OCC's
+        # vertex tolerances may exceed the edge's (an edge's end lies within its VERTEX's tolerance of
+        # the vertex, not its own): fold them in, or two edges meeting there look like an open loop
+        TopExp = _ocp("TopExp")[0]
+        ends = [TopExp.TopExp.FirstVertex_s(edge), TopExp.TopExp.LastVertex_s(edge)]
+        tolerance = max([tool.Tolerance_s(edge), conv_tolerance, 1e-7]
+                        + [tool.Tolerance_s(v) for v in ends if not v.IsNull()])
         use = Edge(pcurve, curve, key=key, degenerate=degenerate, tolerance=tolerance)
         # the wire runs the edge backwards: reverse the pcurve (and 3-D curve) so the material stays left
         return use.reversed() if edge.Orientation() == TopAbs.TopAbs_Orientation.TopAbs_REVERSED else use
+
+
+def _isoline_pcurve(edge, fwd, cedge, cfwd, pcurve):
+    """A better pcurve than OCC's re-approximated ``pcurve`` of the converted edge ``cedge``, or
+    ``pcurve`` itself.
+
+    The NURBS conversion re-approximates every pcurve of an analytic or revolved face, and on some
+    files the result strays far (OCC then raises the edge's tolerance to cover it: 0.056 on a CADDS
+    meridian, whose pcurve leaves the surface's domain). When the original pcurve is an isoline
+    (one coordinate constant, a meridian or a seam), the converted surface keeps the other
+    coordinate and maps the isoline to an isoline: the converted pcurve with that coordinate set
+    to the constant (read at one of its ends, which sit on exact vertices) follows the 3-D curve.
+    It is kept only if it lies closer to the 3-D curve, measured through OCC. (The 3-D curve and
+    the original pcurve may disagree in parameter, as on that CADDS meridian: the conversion's
+    pcurve follows the 3-D curve's parameter, so its other coordinate is kept.)"""
+    from ..curves import BSplineCurve, NurbsCurve
+
+    (BRep,) = _ocp("BRep")
+    tool = BRep.BRep_Tool
+    opc = tool.CurveOnSurface_s(edge, fwd, 0.0, 0.0)
+    if opc is None:
+        return pcurve
+    orig = _curve2d_from_occ(opc, *tool.Range_s(edge, fwd))
+    if not _same_domain(orig.domain, pcurve.domain):
+        return pcurve
+    P = np.array(orig.control_points, dtype=np.float64)
+    span = np.ptp(P, axis=0)
+    const = np.flatnonzero(span <= 1e-12 * max(1.0, float(np.abs(P).max())))
+    if len(const) != 1:
+        return pcurve
+    k = int(const[0])
+    surf, c3 = tool.Surface_s(cfwd), tool.Curve_s(cedge, 0.0, 0.0)
+    if c3 is None:
+        return pcurve
+    t = np.linspace(*pcurve.domain, 33)
+
+    def deviation(c):
+        uv = c.evaluate(t)
+        return max(surf.Value(float(u), float(v)).Distance(c3.Value(float(x))) for (u, v), x in zip(uv, t))
+
+    best, best_dev = pcurve, deviation(pcurve)
+    # the constant at either end (one end may sit on a pole, where that coordinate is free)
+    Q = np.array(pcurve.control_points, dtype=np.float64)
+    for c in np.unique(pcurve.evaluate(np.array(pcurve.domain))[:, k]):
+        Q[:, k] = c
+        cand = (BSplineCurve(pcurve.degree, pcurve.knots, Q) if pcurve.weights is None
+                else NurbsCurve(pcurve.degree, pcurve.knots, Q, pcurve.weights))
+        dev = deviation(cand)
+        if dev < best_dev:
+            best, best_dev = cand, dev
+    return best
+
+
+def _same_parameter(surface, use):
+    """``use`` (an Edge on ``surface``) with its tolerance covering how far its 3-D curve is from
+    the surface at its pcurve at the same parameter (the data model's SameParameter).
+
+    OCC measures that deviation on its own samples and the NURBS conversion re-approximates
+    curves, so the figure read from OCC can fall short of the one the curves really have.
+    Where the two curves are the same point set within a much smaller distance (only their
+    parameters disagree), the 3-D curve is dropped instead (the surface at the pcurve is then the
+    edge's geometry, as for a use without a 3-D curve) and the tolerance covers that distance."""
+    from ..brep import Edge
+    from ..closest import project
+
+    if use.curve is None or use.degenerate:
+        return use
+    a, b = use.domain
+    br = np.union1d(use.pcurve.bezier_breakpoints(), use.curve.bezier_breakpoints())
+    br = np.union1d(br[(br > a) & (br < b)], [a, b])
+    t = (br[:-1, None] + (br[1:] - br[:-1])[:, None] * np.linspace(0.0, 1.0, 17)[None]).ravel()
+    uv = use.pcurve.evaluate(t)
+    (u0, u1), (v0, v1) = surface.domain
+    on_surface = surface.evaluate(np.clip(uv[:, 0], u0, u1), np.clip(uv[:, 1], v0, v1))
+    dev = float(np.linalg.norm(on_surface - use.curve.evaluate(t), axis=1).max())
+    if dev <= use.tolerance:
+        return use
+    apart = float(project(use.curve, on_surface).distances.max())
+    margin = 1.1  # the check samples the same parameters; the margin covers rounding only
+    if apart < 0.5 * dev:
+        return Edge(use.pcurve, None, key=use.key, tolerance=max(use.tolerance, margin * apart))
+    return Edge(use.pcurve, use.curve, key=use.key, tolerance=margin * dev)
 
 
 def _children(shape) -> list:
