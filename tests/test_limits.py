@@ -58,6 +58,10 @@ def run_fresh(codes, budget: str | None = "1G", timeout: float = 300) -> list[di
     process's peak resident memory so far)."""
     env = dict(os.environ)
     env.pop(limits.ENV_VAR, None)
+    # the numpy path: compiling numba kernels on a cold cache (a clean CI checkout) costs up to
+    # a gigabyte of its own, which says nothing about the refusal; the budget checks come
+    # before either path allocates
+    env["SPLINEKIT_NUMBA"] = "0"
     if budget is not None:
         env[limits.ENV_VAR] = budget
     root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))  # for models/
