@@ -50,8 +50,6 @@ _UNVERIFIED = {
     "sw2012_multibody_4solids.step": "a run grew to 15 GB and was killed: to investigate before it runs here",
     "nx9_piattello.stp": "not yet run with this branch's conversion",
     "inventor2013_part_11752.stp": "not yet run with this branch's conversion (its volume raises DomainError)",
-    "proe2001_k1_extrusion.stp": "not yet run with this branch's conversion",
-    "alias_k1_allbspline.stp": "not yet run with this branch's conversion",
 }
 
 
