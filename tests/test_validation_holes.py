@@ -163,7 +163,8 @@ def test_curves_near_the_float_limit_evaluate_to_finite_points(data):
     except DomainError:
         return  # a derivative beyond the float range: refused, never returned as inf
     assert np.isfinite(D).all()
-    assert np.array_equal(D[0], P)
+    # the same points up to rounding: near the float limit the value path clips to the box
+    assert (np.abs(D[0] - P) <= slack).all()
 
 
 @st.composite
