@@ -200,7 +200,7 @@ def poisson_disk(source, radius: float, rng=None, *, oversampling: float = 8.0) 
         A = V[tris]
         area = 0.5 * np.linalg.norm(np.cross(A[:, 1] - A[:, 0], A[:, 2] - A[:, 0]), axis=1).sum()
         with np.errstate(over="ignore", divide="ignore"):  # a tiny radius: refused below, not cast
-            count = float(np.ceil(over * area / (np.pi * (0.5 * r) ** 2)))
+            count = float(np.ceil(over * area / (np.pi * np.float64(0.5 * r) ** 2)))
         if not count <= MAX_SAMPLES:
             raise ParameterError(
                 f"radius = {r!r} needs about {count:.3g} samples of the mesh, more than {MAX_SAMPLES}; use a larger radius"
