@@ -1085,6 +1085,11 @@ def _run(args, console: _Console) -> int:
                     "the input values are too extreme for double precision")
         return 1
     except Exception as exc:  # a bug: still one line, the traceback on request
+        cause = exc
+        while cause is not None:  # an interrupt wrapped by Python (RuntimeError from __set_name__, ...)
+            if isinstance(cause, KeyboardInterrupt):
+                raise cause from None
+            cause = cause.__cause__ or cause.__context__
         _traceback(verbose)
         hint = "" if verbose else "; run with --verbose for the traceback"
         _error_line(f"splinekit: error: unexpected {type(exc).__name__}: {_first_line(exc)}{hint}")
