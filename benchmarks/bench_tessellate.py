@@ -85,7 +85,7 @@ import numpy as np
 
 import splinekit as sk
 from splinekit.basis.knots import clamped_uniform
-from splinekit.tessellate import tessellate
+from splinekit.tessellation import tessellate
 
 S2 = np.sqrt(0.5)
 

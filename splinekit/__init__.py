@@ -51,15 +51,11 @@ from .interop.booleans import difference, intersection, union, union_all
 from .mesh import PolyMesh
 from .subdiv import Refinement, SubdivisionSurface, subdivide, subdivision_matrix
 from .surfaces import BezierSurface, BSplineSurface, NurbsSurface, SplineSurface
-from .tessellate import Tessellation
-from .tessellate import tessellate as _tessellate_function
+from .tessellation import Tessellation, tessellate
 from .tolerances import Tolerances
 
 # ``import splinekit.occ`` / ``from splinekit.occ import to_occ`` as the design notes spell it
 _sys.modules[__name__ + ".occ"] = occ
-# ``splinekit.tessellate`` is the function (as the design notes spell it); the
-# subpackage stays importable: ``from splinekit.tessellate import Tessellation``
-tessellate = _tessellate_function
 
 _LAZY_SUBMODULES = ("implicit", "pointcloud", "levelset", "convert")
 

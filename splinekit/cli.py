@@ -294,10 +294,10 @@ def _tolerance(text):
 
 def _tessellator():
     try:
-        from .tessellate import tessellate
+        from .tessellation import tessellate
     except ImportError as exc:
         _signals.reraise_interrupt(exc)
-        raise MissingDependencyError(f"mesh output needs splinekit.tessellate, which does not import: {exc}") from None
+        raise MissingDependencyError(f"mesh output needs splinekit.tessellation, which does not import: {exc}") from None
     return tessellate
 
 
@@ -317,7 +317,7 @@ def model_mesh(model, tolerance=None, label: str = "tessellating"):
     """``(mesh, max_deviation or None)``: the model's own mesh, or its bodies tessellated.
 
     ``tolerance`` is the absolute chordal tolerance (model units); None takes
-    :func:`splinekit.tessellate.tessellate`'s default (1e-3 of the model size).
+    :func:`splinekit.tessellation.tessellate`'s default (1e-3 of the model size).
     """
     solids = list(getattr(model, "solids", None) or [])
     if not model.bodies and not solids:

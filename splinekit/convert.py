@@ -133,7 +133,7 @@ def nurbs_to_mesh(surface, tolerance=None, *, samples: int = DEFAULT_SAMPLES, rn
     Returns
     -------
     Conversion
-        ``result`` a :class:`~splinekit.tessellate.Tessellation`; ``error`` the
+        ``result`` a :class:`~splinekit.tessellation.Tessellation`; ``error`` the
         two-sided distance: the max over points of the mesh (random and triangle
         centres) of the distance to the patch the triangle came from
         (:func:`splinekit.project`), and the max over random points of the
@@ -141,7 +141,7 @@ def nurbs_to_mesh(surface, tolerance=None, *, samples: int = DEFAULT_SAMPLES, rn
     """
     from .closest import project
     from .pointcloud.sampling import sample_surface
-    from .tessellate import tessellate
+    from .tessellation import tessellate
 
     patches = _patch_list(surface)
     n = _samples(samples)

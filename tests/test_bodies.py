@@ -63,7 +63,7 @@ from splinekit.errors import NotManifoldError, ParameterError
 from splinekit.interop.booleans import difference, intersection, union, union_all
 from splinekit.interop.occ import to_shape  # splinekit.occ is this module
 from splinekit.mesh.primitives import torus as torus_cage
-from splinekit.tessellate import Tessellation, tessellate
+from splinekit.tessellation import Tessellation, tessellate
 
 TOL = 1e-3  # chordal tolerance (model units) for the single bodies; they are 2 to 5 units across
 BOOL_TOL = 2e-3  # coarser for the booleans: the bound scales with it, the cost with 1 / TOL

@@ -402,14 +402,14 @@ def test_manifold_in_error_state_raises_backend_error():
 
 def test_tessellate_is_called_with_tolerance(monkeypatch):
     calls = []
-    fake = type(sys)("splinekit.tessellate")
+    fake = type(sys)("splinekit.tessellation")
 
     def tessellate(obj, tolerance):
         calls.append((obj, tolerance))
         return icosphere(2, center=(0.5, 0, 0))
 
     fake.tessellate = tessellate
-    monkeypatch.setitem(sys.modules, "splinekit.tessellate", fake)
+    monkeypatch.setitem(sys.modules, "splinekit.tessellation", fake)
     token = object()
     r = union(icosphere(2), token, tolerance=0.01)
     assert calls == [(token, 0.01)]

@@ -378,10 +378,10 @@ def test_bad_input_is_a_one_line_error_in_process(in_process, capsys, monkeypatc
 
 
 def test_missing_tessellator_is_named_in_one_line(in_process, capsys, monkeypatch, tmp_path):
-    monkeypatch.setitem(sys.modules, "splinekit.tessellate", None)  # as if it did not import
+    monkeypatch.setitem(sys.modules, "splinekit.tessellation", None)  # as if it did not import
     assert in_process(["build", "--format", "stl"]) == 1
     err = capsys.readouterr().err
-    assert err.startswith("splinekit: error: ") and "splinekit.tessellate" in err and len(err.splitlines()) == 1
+    assert err.startswith("splinekit: error: ") and "splinekit.tessellation" in err and len(err.splitlines()) == 1
     assert os.listdir(tmp_path) == []
     assert in_process(["build", "--format", "step"]) == 0  # exact output does not need it
     assert os.listdir(tmp_path) == ["ball.step"]

@@ -245,7 +245,7 @@ def test_closed_bodies_tessellate_watertight(name, euler):
     """Patch edges are shared whole (no T-junctions, same Bezier pieces), so the
     tessellator stitches the exact body into a closed mesh of the body's topology
     whose volume is within area x max deviation of the exact one."""
-    from splinekit.tessellate import tessellate
+    from splinekit.tessellation import tessellate
 
     model = models.build_model(name)
     mesh = tessellate(model.bodies[0], 0.05)
@@ -369,7 +369,7 @@ def test_teapot_scale_and_step(tmp_path):
 
 
 def test_teapot_stl(tmp_path):
-    from splinekit.tessellate import tessellate
+    from splinekit.tessellation import tessellate
 
     model = teapot.build(scale=10.0)
     tolerance = 0.05
@@ -542,7 +542,7 @@ def test_bracket_closed_forms_by_hand():
 def test_bracket_step_and_stl(bracket_model, tmp_path):
     """The exact STEP read back by build123d (valid, one solid, 19 faces, the same volume) and the
     tessellation closed with genus 4 and within area x deviation of the exact volume."""
-    from splinekit.tessellate import tessellate
+    from splinekit.tessellation import tessellate
 
     model = bracket_model
     (solid,) = model.solids

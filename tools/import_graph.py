@@ -35,7 +35,7 @@ LAYERS: tuple[tuple[str, tuple[str, ...]], ...] = (
     ("mesh", ("splinekit.mesh",)),
     ("subdiv", ("splinekit.subdiv",)),
     ("implicit/pointcloud", ("splinekit.implicit", "splinekit.pointcloud", "splinekit.levelset")),
-    ("tessellate", ("splinekit.tessellate", "splinekit.tessellation")),
+    ("tessellation", ("splinekit.tessellation",)),
     ("convert/analysis/plot", ("splinekit.convert", "splinekit.analysis", "splinekit.plot")),
     ("interop", ("splinekit.interop",)),
     ("optional", ("splinekit.neural", "splinekit.sweep", "splinekit.compare")),

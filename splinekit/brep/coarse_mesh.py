@@ -1,6 +1,6 @@
 """Coarse triangle meshes of trimmed faces, for winding numbers, distance bands and volume signs.
 
-Not the tessellation (:mod:`splinekit.tessellate` meshes to a requested tolerance, watertight
+Not the tessellation (:mod:`splinekit.tessellation` meshes to a requested tolerance, watertight
 across edges): these meshes only need a known, measured deviation from the face. Vertices are
 exact surface points: the trims sampled per Bézier piece and a ``(u, v)`` grid kept clear of them,
 triangulated by Delaunay in ``(u, v)`` and kept where the triangles' centroids lie inside the

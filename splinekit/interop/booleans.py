@@ -4,7 +4,7 @@ Every operand is a closed, consistently oriented triangle or polygon
 :class:`~splinekit.mesh.polymesh.PolyMesh` (polygons are fan-triangulated from
 their first corner, so they should be convex, or at least star-shaped from that
 corner), a ``manifold3d.Manifold``, or anything
-:func:`splinekit.tessellate.tessellate` turns into such a mesh (the
+:func:`splinekit.tessellation.tessellate` turns into such a mesh (the
 ``tolerance`` keyword is passed on to it), such as a
 :class:`splinekit.brep.Solid`, whose trimmed faces tessellate watertight. The
 result is always a triangle ``PolyMesh`` in the operands' length unit. These
@@ -194,11 +194,11 @@ def _as_mesh(obj, tolerance, name: str):
     if isinstance(obj, PolyMesh):
         return obj
     try:
-        from ..tessellate import tessellate
+        from ..tessellation import tessellate
     except ImportError as exc:
         raise ParameterError(
             f"{name} is a {type(obj).__name__}; a boolean operand must be a PolyMesh, a manifold3d.Manifold "
-            f"or something splinekit.tessellate accepts (splinekit.tessellate is unavailable: {exc})"
+            f"or something splinekit.tessellate accepts (splinekit.tessellation is unavailable: {exc})"
         ) from None
     mesh = tessellate(obj, tolerance)
     if not isinstance(mesh, PolyMesh):

@@ -121,7 +121,7 @@ def tessellate(obj, tolerance=None, *, angle_tolerance=DEFAULT_ANGLE_TOLERANCE, 
         :class:`~splinekit.brep.TrimmedFace`, :class:`~splinekit.brep.Shell` or
         :class:`~splinekit.brep.Solid`, or a list of them -> one watertight
         :class:`Tessellation` (``face_patch`` / ``vertex_patch`` index the faces in
-        order; see :mod:`splinekit.tessellate.trimmed`).
+        order; see :mod:`splinekit.tessellation.trimmed`).
     tolerance : float, optional
         Chordal tolerance, an absolute distance in model units (or, with
         ``relative=True``, a fraction of the model size). The model size is

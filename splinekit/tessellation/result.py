@@ -1,4 +1,4 @@
-"""Result types of :func:`splinekit.tessellate.tessellate`.
+"""Result types of :func:`splinekit.tessellation.tessellate`.
 
 :class:`Tessellation` is a triangle :class:`~splinekit.PolyMesh` that also
 carries, per vertex, the exact surface normal, the patch parameters and the

@@ -414,7 +414,7 @@ class _Prepared:
 
 def tessellate_faces(faces, tol: float, angle_tol, size: float) -> Tessellation:
     """Tessellate :class:`~splinekit.brep.TrimmedFace` objects as one watertight mesh (see
-    :func:`splinekit.tessellate.tessellate`). ``tol``: absolute chordal tolerance;
+    :func:`splinekit.tessellation.tessellate`). ``tol``: absolute chordal tolerance;
     ``angle_tol``: radians or None; ``size``: model size (bounding-box diagonal)."""
     triangle = _triangulator()
     prep = _Prepared.of(faces, size)

@@ -4,7 +4,7 @@ weld sweep and its components, vertex gathering, the post-weld triangle remap, p
 normals and the orientation test).
 
 Imported lazily through :func:`splinekit.basis.jit._load` (never by ``import
-splinekit``); :mod:`splinekit.tessellate.surfaces` keeps a numpy path with the
+splinekit``); :mod:`splinekit.tessellation.surfaces` keeps a numpy path with the
 same results (bit for bit, except the rounding of the fused pass's normals) for when
 numba is absent or ``SPLINEKIT_NUMBA=0``.
 """

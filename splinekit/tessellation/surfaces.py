@@ -83,7 +83,7 @@ def _kernels():
 
     if not jit._enabled():
         return None
-    return jit._load("splinekit.tessellate._kernels")
+    return jit._load("splinekit.tessellation._kernels")
 
 
 def _product(A, B):
@@ -505,7 +505,7 @@ def _edge_locals(n, m):
 
 
 def tessellate_patches(patches, tol: float, angle_tol, weld_scale: float) -> Tessellation:
-    """Tessellate validated 3-D spline patches (see :func:`splinekit.tessellate.tessellate`).
+    """Tessellate validated 3-D spline patches (see :func:`splinekit.tessellation.tessellate`).
 
     ``tol`` is the absolute chordal tolerance, ``angle_tol`` radians or None,
     ``weld_scale`` the model size (bounding-box diagonal) used for welding.

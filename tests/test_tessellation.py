@@ -21,7 +21,7 @@ from hypothesis import strategies as st
 import splinekit as sk
 from splinekit.errors import SplineKitError
 from splinekit.mesh.primitives import torus
-from splinekit.tessellate import Polyline, Tessellation, tessellate
+from splinekit.tessellation import Polyline, Tessellation, tessellate
 
 S2 = np.sqrt(0.5)
 
@@ -472,7 +472,7 @@ def test_close_pairs_match_a_kd_tree():
     plane across the sweep direction (which takes the k-d tree fallback)."""
     from scipy.spatial import cKDTree
 
-    from splinekit.tessellate.surfaces import _SWEEP, _close_pairs
+    from splinekit.tessellation.surfaces import _SWEEP, _close_pairs
 
     rng = np.random.default_rng(3)
     g = np.stack(np.meshgrid(np.arange(30.0), np.arange(30.0), indexing="ij"), axis=-1).reshape(-1, 2)
@@ -501,7 +501,7 @@ def test_components_match_scipy_connected_components():
     from scipy.sparse import coo_matrix
     from scipy.sparse.csgraph import connected_components
 
-    from splinekit.tessellate.surfaces import _components
+    from splinekit.tessellation.surfaces import _components
 
     rng = np.random.default_rng(5)
     for n, m in [(1, 0), (10, 0), (50, 30), (400, 390), (1000, 600)]:
@@ -525,7 +525,7 @@ def test_cells_of_a_mixed_patch_list_reproduce_their_patches():
     degrees: every Bezier cell's net, evaluated at interior points, gives the patch's own
     point at the mapped parameters, and the cells keep the order of their patches."""
     from splinekit.basis.bernstein import all_bernstein
-    from splinekit.tessellate.cells import cells_of_patches
+    from splinekit.tessellation.cells import cells_of_patches
 
     rng = np.random.default_rng(11)
     bez = sk.BSplineSurface(2, 3, [0, 0, 0, 1, 1, 1], [0, 0, 0, 0, 2, 2, 2, 2], rng.random((3, 4, 3)))
@@ -612,7 +612,7 @@ def test_weld_triangles_match_a_plain_loop_reference(kernel_path):
     """Random ring triangles with merged vertices (collapsed and repeated triangles in
     both windings): the survivors, their patches, their pre-weld corners and the kept
     ring vertices are those of a one-triangle-at-a-time reference."""
-    from splinekit.tessellate import surfaces
+    from splinekit.tessellation import surfaces
 
     rng = np.random.default_rng(11)
     for NI, NR, t in [(0, 3, 1), (5, 8, 40), (20, 30, 200), (0, 50, 300), (100, 6, 50)]:
@@ -644,7 +644,7 @@ def test_volume_sign_test_on_both_paths(kernel_path):
     """The cheap orientation test: a closed outward sphere (volume about 4/3 pi) is clearly
     positive; the same mesh with every triangle flipped is not, nor is a flat mesh of zero
     volume."""
-    from splinekit.tessellate.surfaces import _clearly_positive_volume
+    from splinekit.tessellation.surfaces import _clearly_positive_volume
 
     mesh = tessellate(sphere_patches(), 1e-3)
     V, F = np.array(mesh.vertices), np.array(mesh.faces)
@@ -659,7 +659,7 @@ def test_rational_second_derivative_bounds_agree_on_both_paths(monkeypatch):
     """The compiled sampler of |S_uu|, |S_uv|, |S_vv| of rational cells reproduces the
     numpy one bit for bit (the sample counts derive from it)."""
     pytest.importorskip("numba")
-    from splinekit.tessellate.cells import _sampled_second_derivatives, cells_of_patches
+    from splinekit.tessellation.cells import _sampled_second_derivatives, cells_of_patches
 
     patches = [random_surface(s, rational=True) for s in range(6)] + sphere_patches()
     for cs in cells_of_patches(patches):

@@ -159,7 +159,7 @@ def _sampled_second_derivatives(nets, p, q, samples: int = 6):
     """Max of ``|S_uu|``, ``|S_uv|``, ``|S_vv|`` of rational cells on a ``samples^2`` grid."""
     Bu = _bernstein_table(p, samples, 2)  # (3, p + 1, s)
     Bv = _bernstein_table(q, samples, 2)
-    kernels = jit._load("splinekit.tessellate._kernels") if jit._enabled() else None
+    kernels = jit._load("splinekit.tessellation._kernels") if jit._enabled() else None
     if kernels is not None:
         M = kernels.sampled_second_derivatives(np.ascontiguousarray(nets), np.ascontiguousarray(Bu), np.ascontiguousarray(Bv))
         return M[:, 0], M[:, 1], M[:, 2]

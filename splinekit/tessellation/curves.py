@@ -58,7 +58,7 @@ def _params(breaks, counts):
 
 
 def tessellate_curve(curve, tol: float, angle_tol) -> Polyline:
-    """Polyline of a :class:`~splinekit.SplineCurve` (see :func:`splinekit.tessellate.tessellate`)."""
+    """Polyline of a :class:`~splinekit.SplineCurve` (see :func:`splinekit.tessellation.tessellate`)."""
     p = curve.degree
     breaks, segs = algebra.bezier_segments(p, curve.knots, np.asarray(curve.homogeneous_points))
     M, L = _span_bounds(p, segs)
