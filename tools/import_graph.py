@@ -46,6 +46,9 @@ LAYERS: tuple[tuple[str, tuple[str, ...]], ...] = (
     ("cli", ("splinekit.cli", "splinekit.__main__")),
 )
 
+MAX_LINES = 520
+"""A module longer than this (about 500 lines) holds more than one thing: split it along what it holds."""
+
 # Packages whose import inside a function is legitimate: heavy or optional backends.
 OPTIONAL_BACKENDS = ("OCP", "build123d", "cadquery", "manifold3d", "numba", "triangle", "matplotlib",
                      "jax", "optax", "torch", "dask", "distributed", "pandas", "pyarrow", "trimesh", "lxml",
@@ -69,8 +72,8 @@ class Graph:
     inner: dict[str, list[tuple[str, int]]] = field(default_factory=dict)  # in-function imports (target, line)
 
 
-def _module_name(path: Path) -> str:
-    parts = list(path.relative_to(ROOT).with_suffix("").parts)
+def _module_name(path: Path, root: Path) -> str:
+    parts = list(path.relative_to(root).with_suffix("").parts)
     if parts[-1] == "__init__":
         parts.pop()
     return ".".join(parts)
@@ -100,11 +103,12 @@ def _in_type_checking(parents: list[ast.AST]) -> bool:
     return any(isinstance(p, ast.If) and "TYPE_CHECKING" in ast.unparse(p.test) for p in parents)
 
 
-def build() -> Graph:
+def build(root: Path = ROOT, packages: tuple[str, ...] = PACKAGES) -> Graph:
+    """The import graph of the packages ``packages`` found under the folder ``root``."""
     g = Graph()
-    for package in PACKAGES:
-        for path in sorted((ROOT / package).rglob("*.py")):
-            g.modules[_module_name(path)] = path
+    for package in packages:
+        for path in sorted((root / package).rglob("*.py")):
+            g.modules[_module_name(path, root)] = path
     known = set(g.modules)
     for module, path in g.modules.items():
         tree = ast.parse(path.read_text(encoding="utf-8"), filename=str(path))
@@ -188,6 +192,12 @@ def inner_project_imports(g: Graph) -> list[tuple[str, str, int]]:
     return sorted({(m, t, line) for m, items in g.inner.items() for t, line in items if t.split(".")[0] in PACKAGES})
 
 
+def long_modules(g: Graph, limit: int = MAX_LINES) -> list[tuple[str, int]]:
+    """Modules with more than ``limit`` lines, longest first."""
+    sizes = ((m, len(p.read_text(encoding="utf-8").splitlines())) for m, p in g.modules.items())
+    return sorted(((m, n) for m, n in sizes if n > limit), key=lambda item: -item[1])
+
+
 def layer_edges(g: Graph) -> dict[tuple[str, str], int]:
     """Counts of module-level imports between distinct layers."""
     known = set(g.modules)
@@ -258,11 +268,15 @@ def main(argv=None) -> int:
     print(f"in-function imports of project modules: {len(inner)}")
     for a, b, line in inner:
         print(f"  {a}:{line} -> {b}")
+    long = long_modules(g)
+    print(f"modules over {MAX_LINES} lines: {len(long)}")
+    for m, n in long:
+        print(f"  {m}: {n}")
     if args.dot:
         Path(args.dot).write_text(to_dot(g) + "\n", encoding="utf-8")
     if args.png:
         draw_png(g, args.png)
-    return 1 if (cyc or up) else 0
+    return 1 if (cyc or up or inner or long) else 0
 
 
 if __name__ == "__main__":

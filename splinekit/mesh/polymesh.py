@@ -15,6 +15,7 @@ import numpy as np
 from .. import limits
 from .._validate import as_float_array
 from ..errors import MeshTopologyError
+from . import geometry
 from .topology import Topology
 
 __all__ = ["BYTES_PER_CORNER", "PolyMesh", "as_face_arrays", "check_mesh_size"]
@@ -253,37 +254,27 @@ class PolyMesh:
     @cached_property
     def face_areas(self) -> np.ndarray:
         """``(F,)`` face areas (sum of fan-triangle areas)."""
-        from . import geometry
-
         return self._readonly(geometry.face_areas(self))
 
     @cached_property
     def area(self) -> float:
         """Total surface area."""
-        from . import geometry
-
         return geometry.total_area(self)
 
     @cached_property
     def face_normals(self) -> np.ndarray:
         """``(F, 3)`` unit face normals (normalized vector area; zero for zero-area faces)."""
-        from . import geometry
-
         return self._readonly(geometry.face_normals(self))
 
     @cached_property
     def vertex_normals(self) -> np.ndarray:
         """``(V, 3)`` angle-weighted unit vertex normals (zero at isolated vertices)."""
-        from . import geometry
-
         geometry.check_dimension(self, "vertex normals", need_3d=True)
         return self._readonly(geometry.vertex_normals(self, face_normals=self.face_normals))
 
     @cached_property
     def cotangent_laplacian(self):
         """``(V, V)`` CSR cotangent Laplacian, positive semi-definite convention (read-only arrays)."""
-        from . import geometry
-
         L = geometry.cotangent_laplacian(self)
         for a in (L.data, L.indices, L.indptr):
             a.setflags(write=False)
@@ -292,15 +283,11 @@ class PolyMesh:
     @cached_property
     def mixed_areas(self) -> np.ndarray:
         """``(V,)`` mixed Voronoi areas (Meyer et al. 2003)."""
-        from . import geometry
-
         return self._readonly(geometry.mixed_areas(self))
 
     @cached_property
     def mean_curvature_normal(self) -> np.ndarray:
         """``(V, dim)`` mean-curvature normal ``H n`` (zero on the boundary)."""
-        from . import geometry
-
         geometry.check_dimension(self, "the mean-curvature normal")
         return self._readonly(geometry.mean_curvature_normal(self, laplacian=self.cotangent_laplacian))
 
@@ -308,8 +295,6 @@ class PolyMesh:
     def mean_curvature(self) -> np.ndarray:
         """``(V,)`` signed mean curvature, ``-1/R`` on a sphere with outward normals (the
         convention of :func:`splinekit.curvature` and OCC); 0 on the boundary."""
-        from . import geometry
-
         geometry.check_dimension(self, "mean curvature", need_3d=True)
         return self._readonly(
             geometry.mean_curvature(self, laplacian=self.cotangent_laplacian, normals=self.vertex_normals)
@@ -318,15 +303,11 @@ class PolyMesh:
     @cached_property
     def gaussian_curvature(self) -> np.ndarray:
         """``(V,)`` angle-defect Gaussian curvature; 0 on the boundary."""
-        from . import geometry
-
         return self._readonly(geometry.gaussian_curvature(self))
 
     @cached_property
     def volume(self) -> float:
         """Signed enclosed volume of a closed mesh (MeshTopologyError if open)."""
-        from . import geometry
-
         return geometry.volume(self)
 
 
