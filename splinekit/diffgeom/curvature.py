@@ -21,7 +21,8 @@ from .._validate import as_float_array
 from ..basis import jit
 from ..errors import ParameterError
 from ..surfaces import SplineSurface
-from .protocol import ImplicitSurface, _nonzero_norm, as_surface
+from .implicit_surface import ImplicitSurface, _nonzero_norm
+from .protocol import as_surface
 
 __all__ = ["SINGULAR_OFFSET", "ImplicitCurvature", "SurfaceCurvature", "curvature"]
 
