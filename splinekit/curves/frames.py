@@ -45,7 +45,7 @@ def rotation_minimizing_frames(curve, u, normal=None):
     Returns
     -------
     T, N, B : ndarray, shape (n, 3)
-        Unit tangents (as :func:`tangent`), rotation-minimizing normals and
+        Unit tangents (as :func:`splinekit.diffgeom.curves.tangent`), rotation-minimizing normals and
         ``B = T x N``.
 
     The reflections are built for all steps at once. A pair of reflections is
