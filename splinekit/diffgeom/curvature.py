@@ -21,8 +21,7 @@ from .._validate import as_float_array
 from ..basis import jit
 from ..errors import ParameterError
 from ..surfaces import SplineSurface
-from .implicit_surface import ImplicitSurface, _nonzero_norm
-from .protocol import as_surface
+from .protocol import ImplicitSurface, _nonzero_norm, as_surface
 
 __all__ = ["SINGULAR_OFFSET", "ImplicitCurvature", "SurfaceCurvature", "curvature"]
 

@@ -38,7 +38,7 @@ import numpy as np
 from .._validate import as_float_array, as_int, as_real
 from ..errors import DomainError, ParameterError, SplineKitError
 from .differences import _call_points, numeric_derivatives
-from .implicit_surface import ImplicitSurface, _nonzero_norm  # noqa: F401  (_nonzero_norm: splinekit.implicit.base imports it from here)
+from .implicit_surface import ImplicitSurface, _nonzero_norm  # noqa: F401  (diffgeom.curvature and implicit.base import _nonzero_norm from here)
 
 __all__ = [
     "ExplicitSurface",
