@@ -544,11 +544,11 @@ def test_bad_input():
 def test_newton_failure_raises_convergence_error(monkeypatch):
     """With no iteration budget Newton cannot reach a stationary point away from the
     geometry: a ConvergenceError names the point instead of a silent wrong answer."""
-    from splinekit import closest
+    from splinekit.closest import newton
 
     s = smooth_surface(np.random.default_rng(1), rational=True)
     Q = np.array([[2.0, 1.5, 0.0], [2.13, 1.37, 3.0]])
-    monkeypatch.setattr(closest, "MAX_ITERATIONS", 0)
+    monkeypatch.setattr(newton, "MAX_ITERATIONS", 0)
     with pytest.raises(ConvergenceError, match=r"points\[\d\]"):
         project(s, Q)
 
@@ -571,13 +571,13 @@ def test_duck_typed_curve():
 
 
 def test_chunks_give_the_same_result(monkeypatch):
-    from splinekit import closest
+    from splinekit.closest import projection
 
     rng = np.random.default_rng(17)
     s = smooth_surface(rng, rational=True)
     Q = points_around(rng, s.control_points, 50)
     seeds = rng.uniform(0, 1, (50, 2, 2))
     whole, local = project(s, Q), project(s, Q, seeds=seeds)
-    monkeypatch.setattr(closest, "CHUNK", 7)
+    monkeypatch.setattr(projection, "CHUNK", 7)
     np.testing.assert_array_equal(project(s, Q).distances, whole.distances)
     np.testing.assert_array_equal(project(s, Q, seeds=seeds).parameters, local.parameters)

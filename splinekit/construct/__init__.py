@@ -7,7 +7,8 @@ revolved, skinned (loft), swept, Coons and Gordon surfaces.
 
 from .compat import make_compatible
 from .curves import arc, arc_through_points, circle, ellipse, line, polyline
-from .surfaces import bicubic_coons, coons, extrude, gordon, loft, revolve, ruled
+from .patches import bicubic_coons, coons, gordon
+from .surfaces import extrude, loft, revolve, ruled
 from .sweep import sweep
 
 __all__ = [

@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from .._validate import as_float_array, as_real
+from ..curves import SplineCurve
 from ..errors import ParameterError
 
 
@@ -40,8 +41,6 @@ def as_positive(value, name: str) -> float:
 
 def as_curve(value, name: str):
     """A splinekit B-spline or NURBS curve."""
-    from ..curves import SplineCurve
-
     if not isinstance(value, SplineCurve):
         raise ParameterError(f"{name} must be a BSplineCurve or NurbsCurve, got {type(value).__name__}")
     return value

@@ -14,7 +14,9 @@ import numpy as np
 
 from .._validate import as_degree, as_int, as_params, as_real
 from ..basis import design_matrix
+from ..curves.frames import rotation_minimizing_frames
 from ..errors import ConvergenceError, ParameterError
+from ..fit import interpolate_curve
 from ._checks import as_curve
 from .surfaces import _size, _surface
 
@@ -45,8 +47,6 @@ def _subdivided(params: np.ndarray, parts: int) -> np.ndarray:
 def _frames(path, params, normal):
     """Rotation-minimizing frames ``(len(params), 3, 3)`` (rows T, N, B) at sorted ``params``,
     computed on ``_SUBSTEPS`` sub-steps per interval for accuracy."""
-    from ..diffgeom.curves import rotation_minimizing_frames
-
     fine = _subdivided(params, _SUBSTEPS) if params.size > 1 else params
     T, N, B = rotation_minimizing_frames(path, fine, normal)
     pick = np.arange(params.size) * _SUBSTEPS
@@ -85,7 +85,7 @@ def sweep(profile, path, *, n_sections=None, tolerance=None, normal=None, degree
         within half of ``tolerance`` (ConvergenceError beyond 2049 stations).
     normal : (3,) array_like, optional
         Start normal ``N(v0)`` of the frame (see
-        :func:`splinekit.diffgeom.curves.rotation_minimizing_frames`); it sets
+        :func:`splinekit.curves.frames.rotation_minimizing_frames`); it sets
         the orientation of a 2-D profile.
     degree : int
         Degree in ``v`` (the skinning interpolation).
@@ -204,8 +204,6 @@ def _skin_knots(stations: np.ndarray, n_spans: int, q: int) -> np.ndarray:
 
 def _sweep_once(profile, path, per_span, normal, q):
     """The skin through ``per_span`` stations per path span, and its deviation at the midpoints."""
-    from ..fit import interpolate_curve
-
     n_spans = path.bezier_breakpoints().size - 1
     stations = _stations(path, per_span)
     # check points: the interior quarter points of every station interval

@@ -1,6 +1,5 @@
 """Bézier, B-spline and NURBS curves."""
 
-from .bezier import BezierCurve
-from .bspline import BSplineCurve, NurbsCurve, SplineCurve
+from .bspline import BezierCurve, BSplineCurve, NurbsCurve, SplineCurve
 
 __all__ = ["BezierCurve", "BSplineCurve", "NurbsCurve", "SplineCurve"]

@@ -1,11 +1,16 @@
-"""B-spline and NURBS curves as immutable value types.
+"""B-spline, NURBS and Bézier curves as immutable value types.
 
 A curve of degree ``p`` has ``n`` control points ``(n, dim)``, a knot vector of
 ``n + p + 1`` values and, when rational, ``n`` positive weights. Internally a
 rational curve keeps its homogeneous coefficients ``(w * P, w)`` ``(n, dim + 1)``
 and every knot operation (insertion, refinement, removal, elevation,
 splitting) acts on them, so rational and polynomial curves share one code path
-(:mod:`splinekit.basis.algebra`).
+(:mod:`splinekit.basis.algebra`). The knot operations and the measures are
+mixins from :mod:`.knot_algebra` and :mod:`.measures`.
+
+:class:`BezierCurve` lives here too: it wraps a B-spline curve on Bézier knots,
+and :meth:`SplineCurve.to_bezier` returns Bézier curves; the two types convert
+into each other, so they share one module rather than import each other.
 """
 
 from __future__ import annotations
@@ -15,11 +20,7 @@ from math import comb
 import numpy as np
 
 from .._validate import (
-    MAX_DEGREE,
-    as_affine,
     as_degree,
-    as_float_array,
-    as_int,
     as_order,
     as_params,
     as_points,
@@ -31,26 +32,19 @@ from .._validate import (
     overflow_safe,
 )
 from ..basis import algebra
+from ..basis.bernstein import bezier_knots
 from ..basis.bspline import basis_ders_t, basis_funs_t, combine, find_span, span_bounds
 from ..basis.jit import kernels
-from ..basis.knots import clamped_uniform, domain, is_clamped, reparametrized, validate_knots
+from ..basis.knots import clamped_uniform, domain, validate_knots
 from ..basis.rational import rational_curve_derivatives
-from ..errors import (
-    DegreeError,
-    DomainError,
-    KnotRemovalError,
-    KnotVectorError,
-    ParameterError,
-)
-from ..tolerances import DEFAULT, geometric_tolerance
+from ..errors import KnotRemovalError, ParameterError
+from .knot_algebra import CurveKnotAlgebra, _elevation_step
+from .measures import CurveMeasures
 
-__all__ = ["SplineCurve", "BSplineCurve", "NurbsCurve"]
-
-# Gauss-Legendre rule used per knot span (and per sub-interval) for arc length.
-_GL_X, _GL_W = np.polynomial.legendre.leggauss(8)
+__all__ = ["SplineCurve", "BSplineCurve", "NurbsCurve", "BezierCurve"]
 
 
-class SplineCurve:
+class SplineCurve(CurveKnotAlgebra, CurveMeasures):
     """Common implementation of :class:`BSplineCurve` and :class:`NurbsCurve`.
 
     Do not instantiate directly; the subclasses validate their arguments.
@@ -278,204 +272,18 @@ class SplineCurve:
         out = np.divide(vec, n[:, None], out=np.zeros_like(vec), where=n[:, None] > 0)
         return out.reshape(u.shape + (self.dim,))
 
-    # -- knot algebra -----------------------------------------------------------------
-    def _knot_value(self, u, name="u"):
-        """A single parameter in the domain (clamped within the parameter
-        slack), snapped onto an existing knot within the knot tolerance."""
-        a, b = self.domain
-        value = as_params(u, (a, b), name)
-        if value.ndim != 0:
-            raise ParameterError(f"{name} must be a single number, got an array of shape {value.shape}")
-        u = float(value)
-        near = np.abs(self._knots - u) <= DEFAULT.knot * (b - a)
-        return float(self._knots[near][0]) if near.any() else u
-
-    def elevation_matrix(self, by: int = 1):
-        """Sparse ``(n_new, n)`` matrix mapping control coefficients onto the
-        degree-elevated curve's (see :meth:`elevate_degree`)."""
-        import scipy.sparse as sp
-
-        by = _elevation_step(by, self._degree)
-        if by == 0:
-            return sp.identity(len(self), format="csr")
-        _, M = algebra.elevate(self._degree, self._knots, np.eye(len(self)), by)
-        M[np.abs(M) < 1e-15] = 0.0
-        return sp.csr_matrix(M)
-
-    def refine(self, knots):
-        """Insert every value of ``knots`` (repeats allowed) at once (knot refinement)."""
-        extra = as_float_array(knots, "knots", KnotVectorError).ravel()
-        if extra.size == 0:
-            return self
-        extra = np.array([self._knot_value(x, "knots") for x in extra])
-        tau = np.sort(np.concatenate([self._knots, extra]), kind="stable")
-        tau = validate_knots(tau, self._degree, tau.size - self._degree - 1, "refined knots")
-        coefs = algebra.refine(self._degree, self._knots, self._coefs, tau)
-        return self._like(self._degree, tau, coefs)
-
-    def insert_knot(self, u, times: int = 1):
-        """Insert the knot ``u`` ``times`` times (its multiplicity may reach the degree)."""
-        times = as_int(times, "times", minimum=0)
-        u = self._knot_value(u)
-        have = int(np.count_nonzero(self._knots == u))
-        a, b = self.domain
-        limit = self._degree if a < u < b else self._degree + 1
-        if have + times > limit:
-            raise KnotVectorError(
-                f"inserting knot {u!r} {times} times would give multiplicity {have + times}; at most {limit} allowed"
-            )
-        return self.refine(np.full(times, u))
-
-    def remove_knot(self, u, times: int = 1, tol: float | None = None):
-        """Remove the interior knot ``u`` ``times`` times, moving the curve at most ``tol``.
-
-        ``tol`` is a distance in model units; the default is ``1e-9`` times the
-        size of the control net (its largest coordinate, at least 1). Raises
-        :class:`KnotRemovalError` when the knot is absent or the removal would
-        move the curve further than ``tol``.
-        """
-        times = as_int(times, "times", minimum=1)
-        tol = geometric_tolerance(tol, self.control_points)
-        u = self._knot_value(u)
-        a, b = self.domain
-        have = int(np.count_nonzero(self._knots == u))
-        if not a < u < b or have == 0:
-            raise KnotRemovalError(f"{u!r} is not an interior knot of this curve")
-        if times > have:
-            raise KnotRemovalError(f"knot {u!r} has multiplicity {have}; cannot remove it {times} times")
-        tau, coefs, dev = algebra.remove_knots(self._degree, self._knots, self._coefs, u, times)
-        allowed = tol
-        if self._rational:
-            # NURBS Book eq. (5.30): a homogeneous bound that implies the Cartesian one
-            w = self._coefs[:, -1]
-            allowed = tol * w.min() / (1.0 + np.linalg.norm(self.control_points, axis=1).max())
-        if float(dev) > allowed:
-            raise KnotRemovalError(
-                f"removing knot {u!r} {times} time(s) would move the curve by up to {float(dev):.3g} "
-                f"(coefficient space), more than the tolerance {allowed:.3g}"
-            )
-        return self._like(self._degree, tau, coefs)
-
-    def elevate_degree(self, by: int = 1):
-        """The same curve with degree raised by ``by`` (continuity kept at every knot)."""
-        by = _elevation_step(by, self._degree)
-        if by == 0:
-            return self
-        U, coefs = algebra.elevate(self._degree, self._knots, self._coefs, by)
-        return self._like(self._degree + by, U, coefs)
-
-    def clamp(self):
-        """The same curve on a clamped knot vector (end knots of multiplicity p + 1)."""
-        if is_clamped(self._degree, self._knots):
-            return self
-        U, coefs = algebra.clamp(self._degree, self._knots, self._coefs)
-        return self._like(self._degree, U, coefs)
-
+    # -- conversions ------------------------------------------------------------------
     def to_bezier(self):
         """Bézier decomposition: a list of :class:`~splinekit.BezierCurve`, one per
         non-empty knot span in order, each on the local parameter [0, 1]."""
-        from .bezier import BezierCurve
-
         _, segs = algebra.bezier_segments(self._degree, self._knots, self._coefs)
         return [BezierCurve._from_coefs(s, self._rational) for s in segs]
-
-    def bezier_breakpoints(self) -> np.ndarray:
-        """Distinct knots of the domain: the span ``i`` of :meth:`to_bezier` is ``[b[i], b[i+1]]``."""
-        a, b = self.domain
-        k = self._knots
-        return np.unique(k[(k >= a) & (k <= b)])
-
-    def split(self, u):
-        """Two curves ``(left, right)`` on ``[a, u]`` and ``[u, b]``."""
-        u = self._knot_value(u)
-        a, b = self.domain
-        if not a < u < b:
-            raise DomainError(f"split parameter {u!r} must lie strictly inside the domain ({a!r}, {b!r})")
-        (kl, cl), (kr, cr) = algebra.split(self._degree, self._knots, self._coefs, u)
-        return self._like(self._degree, kl, cl), self._like(self._degree, kr, cr)
-
-    def segment(self, u0, u1):
-        """The piece of the curve on ``[u0, u1]``, keeping its parametrization."""
-        u0, u1 = self._knot_value(u0, "u0"), self._knot_value(u1, "u1")
-        if not u0 < u1:
-            raise DomainError(f"segment needs u0 < u1, got [{u0!r}, {u1!r}]")
-        a, b = self.domain
-        curve = self
-        if u1 < b:
-            curve = curve.split(u1)[0]
-        if u0 > a:
-            curve = curve.split(u0)[1]
-        return curve
-
-    def reverse(self):
-        """The same point set traversed backwards, on the same domain."""
-        U, coefs = algebra.reverse(self._degree, self._knots, self._coefs)
-        return self._like(self._degree, U, coefs)
-
-    def reparametrize(self, start: float, end: float):
-        """The same curve with its domain mapped affinely onto ``[start, end]``."""
-        U = reparametrized(self._degree, self._knots, start, end)
-        return self._like(self._degree, U, self._coefs)
-
-    def transform(self, matrix):
-        """Apply an affine map: ``(dim, dim)`` linear or ``(dim + 1, dim + 1)`` homogeneous.
-
-        Affine invariance: mapping the Cartesian control points maps the curve;
-        the weights stay as they are.
-        """
-        L, t = as_affine(matrix, self.dim)
-        with np.errstate(over="ignore", invalid="ignore"):
-            P = finite_points(self.control_points @ L.T + t, "the transform")
-        if self._rational:
-            return self._like(self._degree, self._knots, homogeneous(P, self._coefs[:, -1]))
-        return self._like(self._degree, self._knots, P)
 
     def to_nurbs(self):
         """This curve as a :class:`NurbsCurve` (unit weights if polynomial)."""
         if self._rational:
             return self
         return NurbsCurve._trusted(self._degree, self._knots, self.homogeneous_points, True)
-
-    # -- measures ---------------------------------------------------------------------
-    def arc_length(self, start=None, end=None, tol: float = 1e-12) -> float:
-        """Length of the curve between parameters ``start`` and ``end`` (default: the domain).
-
-        Gauss-Legendre quadrature (8 points) on every knot span, with the spans
-        halved uniformly until two successive estimates agree to ``tol``
-        (relative); at most 2**10 pieces per span.
-        """
-        tol = as_positive(tol, "tol")
-        a, b = self.domain
-        s = a if start is None else float(self._params(start, "start"))
-        e = b if end is None else float(self._params(end, "end"))
-        if e < s:
-            return -self.arc_length(e, s, tol)
-        if e == s:
-            return 0.0
-        k = self.bezier_breakpoints()
-        edges = np.unique(np.concatenate([[s], k[(k > s) & (k < e)], [e]]))
-        previous = None
-        for level in range(11):
-            pieces = 2**level
-            t = np.linspace(0.0, 1.0, pieces + 1)
-            lo = edges[:-1, None] + (edges[1:] - edges[:-1])[:, None] * t[None, :-1]
-            width = (edges[1:] - edges[:-1])[:, None] / pieces
-            mid = lo + 0.5 * width
-            x = (mid[..., None] + 0.5 * width[..., None] * _GL_X).ravel()
-            speed = np.linalg.norm(self.derivatives(x, 1)[1], axis=-1)
-            total = float((speed.reshape(mid.shape + (_GL_X.size,)) * _GL_W * 0.5 * width[..., None]).sum())
-            if previous is not None and abs(total - previous) <= tol * max(abs(total), 1e-300):
-                return total
-            previous = total
-        return total
-
-    def is_closed(self, tol: float | None = None) -> bool:
-        """True when the end point equals the start point within ``tol``
-        (default: 1e-9 times the control net's size)."""
-        tol = geometric_tolerance(tol, self.control_points)
-        a, b = self.domain
-        ends = self.evaluate(np.array([a, b]))
-        return bool(np.linalg.norm(ends[1] - ends[0]) <= tol)
 
     # -- constructors -----------------------------------------------------------------
     @classmethod
@@ -562,13 +370,127 @@ class NurbsCurve(BSplineCurve):
         return cls(p, clamped_uniform(p, P.shape[0], start, end), P, w)
 
 
+class BezierCurve:
+    """(Rational) Bézier curve on the parameter [0, 1].
 
-def _elevation_step(by, degree: int) -> int:
-    """``by`` checked so that ``degree + by`` stays within MAX_DEGREE."""
-    by = as_int(by, "by", minimum=0)
-    if degree + by > MAX_DEGREE:
-        raise DegreeError(f"elevating degree {degree} by {by} exceeds the largest supported degree {MAX_DEGREE}")
-    return by
+    A Bézier curve of degree ``p`` is the B-spline on the knot vector
+    ``[0]*(p+1) + [1]*(p+1)``; this class wraps that spline, so evaluation,
+    derivatives, splitting and elevation run through the same vectorized code as
+    every other spline (de Casteljau's triangle is the Cox-de Boor triangle on
+    those knots).
+
+    Parameters
+    ----------
+    control_points : array_like, shape (p + 1, dim)
+        At least two points; the degree is ``len(control_points) - 1``.
+    weights : array_like, shape (p + 1,), optional
+        Positive weights for a rational curve.
+    """
+
+    __slots__ = ("_spline",)
+
+    def __init__(self, control_points, weights=None):
+        P = as_points(control_points, min_count=(2,))
+        p = P.shape[0] - 1
+        if weights is None:
+            spline = BSplineCurve(p, bezier_knots(p), P)
+        else:
+            spline = NurbsCurve(p, bezier_knots(p), P, as_weights(weights, (p + 1,)))
+        object.__setattr__(self, "_spline", spline)
+
+    @classmethod
+    def _from_coefs(cls, coefs: np.ndarray, rational: bool):
+        obj = object.__new__(cls)
+        p = coefs.shape[0] - 1
+        object.__setattr__(obj, "_spline", BSplineCurve._trusted(p, bezier_knots(p), coefs, rational))
+        return obj
+
+    def __reduce__(self):
+        return (type(self)._from_coefs, (np.array(self._spline._coefs), self.is_rational))
+
+    def __setattr__(self, name, value):
+        raise AttributeError("BezierCurve is immutable; operations return new curves")
+
+    # attributes
+    degree = property(lambda self: self._spline.degree, doc="Degree ``p``.")
+    control_points = property(lambda self: self._spline.control_points, doc="``(p + 1, dim)`` (read-only).")
+    weights = property(lambda self: self._spline.weights, doc="``(p + 1,)`` or ``None``.")
+    dim = property(lambda self: self._spline.dim, doc="Number of coordinates.")
+    is_rational = property(lambda self: self._spline.is_rational)
+    domain = (0.0, 1.0)
+
+    def __len__(self):
+        return len(self._spline)
+
+    def __eq__(self, other):
+        if not isinstance(other, BezierCurve):
+            return NotImplemented
+        return self._spline == other._spline
+
+    def __hash__(self):
+        return hash(("bezier", hash(self._spline)))
+
+    def almost_equal(self, other, tol: float = 1e-12) -> bool:
+        return isinstance(other, BezierCurve) and self._spline.almost_equal(other._spline, tol)
+
+    def __repr__(self):
+        kind = "rational " if self.is_rational else ""
+        return f"BezierCurve({kind}degree={self.degree}, dim={self.dim})"
+
+    # evaluation
+    def evaluate(self, t) -> np.ndarray:
+        """Points ``t.shape + (dim,)`` for ``t`` in [0, 1]."""
+        return self._spline.evaluate(t)
+
+    __call__ = evaluate
+
+    def derivatives(self, t, order: int = 1) -> np.ndarray:
+        """``(order + 1,) + t.shape + (dim,)``: the curve and its derivatives."""
+        return self._spline.derivatives(t, order)
+
+    def tangent(self, t) -> np.ndarray:
+        return self._spline.tangent(t)
+
+    def arc_length(self, tol: float = 1e-12) -> float:
+        return self._spline.arc_length(tol=tol)
+
+    # operations
+    def split(self, t):
+        """Two Bézier curves on [0, t] and [t, 1], each reparametrized to [0, 1]."""
+        left, right = self._spline.split(t)
+        return (
+            BezierCurve._from_coefs(left._coefs, self.is_rational),
+            BezierCurve._from_coefs(right._coefs, self.is_rational),
+        )
+
+    def elevate(self, by: int = 1):
+        """The same curve with degree ``p + by``."""
+        by = _elevation_step(by, self.degree)
+        E = algebra.bezier_elevation_matrix(self.degree, by)
+        return BezierCurve._from_coefs(E @ self._spline._coefs, self.is_rational)
+
+    def transform(self, matrix):
+        return BezierCurve._from_coefs(self._spline.transform(matrix)._coefs, self.is_rational)
+
+    def reverse(self):
+        return BezierCurve._from_coefs(self._spline._coefs[::-1], self.is_rational)
+
+    @classmethod
+    def from_bspline(cls, curve: SplineCurve):
+        """The Bézier form of a single-span spline curve (use ``curve.to_bezier()``
+        for several spans); the parameter is mapped onto [0, 1]."""
+        if not isinstance(curve, SplineCurve):
+            raise ParameterError(f"expected a BSplineCurve or NurbsCurve, got {type(curve).__name__}")
+        if curve.bezier_breakpoints().size != 2:
+            raise ParameterError(
+                f"curve has {curve.bezier_breakpoints().size - 1} knot spans; a Bézier curve has one "
+                "(use curve.to_bezier() for the list of segments)"
+            )
+        return curve.to_bezier()[0]
+
+    def to_bspline(self):
+        """This curve as a :class:`BSplineCurve` / :class:`NurbsCurve` on [0, 1]."""
+        return self._spline
 
 
 def _rebuild_curve(cls, degree, knots, coefs, rational):

@@ -12,7 +12,8 @@ other representations satisfy it: :class:`ParametricSurface` (a numpy function
 ``x(u, v)``), :class:`ExplicitSurface` (``z = f(x, y)``) and
 :class:`SubdivisionPatch` (one face of a Catmull-Clark limit surface).
 :class:`ImplicitSurface` (``F(x, y, z) = 0``) is the point-based counterpart:
-callable on ``(n, 3)`` points, with ``gradient`` and ``hessian``.
+callable on ``(n, 3)`` points, with ``gradient`` and ``hessian``; it lives in
+:mod:`.implicit_surface`, the finite differences in :mod:`.differences`.
 
 Numeric derivatives
 -------------------
@@ -36,6 +37,8 @@ import numpy as np
 
 from .._validate import as_float_array, as_int, as_real
 from ..errors import DomainError, ParameterError, SplineKitError
+from .differences import _call_points, numeric_derivatives
+from .implicit_surface import ImplicitSurface, _nonzero_norm  # noqa: F401  (diffgeom.curvature and implicit.base import _nonzero_norm from here)
 
 __all__ = [
     "ExplicitSurface",
@@ -47,12 +50,6 @@ __all__ = [
 ]
 
 DEFAULT_STEP = 1e-3
-
-# fourth-order central first difference on offsets -2..2 (divide by h)
-_D1 = np.array([1.0, -8.0, 0.0, 8.0, -1.0]) / 12.0
-# fourth-order central second difference on offsets -2..2 (divide by h^2)
-_D2 = np.array([-1.0, 16.0, -30.0, 16.0, -1.0]) / 12.0
-_OFFSETS = np.arange(-2, 3, dtype=np.float64)
 
 
 @runtime_checkable
@@ -112,51 +109,6 @@ def _uv_arrays(u, v, domain):
             raise DomainError(f"{name} = {float(x[~ok].ravel()[0])!r} lies outside the domain [{lo!r}, {hi!r}]")
     return u, v
 
-
-def _call_points(f, u, v, what):
-    """``f(u, v)`` for flat arrays, checked to return finite ``(n, dim)``."""
-    try:
-        out = np.asarray(f(u, v), dtype=np.float64)
-    except SplineKitError:
-        raise
-    except Exception as exc:  # a user function failing is reported, not re-raised raw
-        raise ParameterError(f"{what} raised {type(exc).__name__}: {exc}") from exc
-    if out.ndim != 2 or out.shape[0] != u.size:
-        raise ParameterError(f"{what} must return an (n, dim) array for n = {u.size} parameter pairs, got shape {out.shape}")
-    if not np.isfinite(out).all():
-        bad = int(np.argwhere(~np.isfinite(out))[0, 0])
-        raise DomainError(f"{what} is not finite at (u, v) = ({u[bad]!r}, {v[bad]!r})")
-    return out
-
-
-def numeric_derivatives(f, u, v, order: int, hu: float, hv: float) -> np.ndarray:
-    """Partials of ``f`` up to ``order`` (at most 2) by fourth-order central
-    differences: ``(order + 1, order + 1, n, dim)`` for flat ``u``, ``v`` of
-    length ``n``. One vectorized call of ``f`` on all stencil points."""
-    n = u.size
-    if order > 2:
-        raise ParameterError(f"numeric derivatives go up to order 2, got order={order}; pass analytic derivatives")
-    # sample the 5 x 5 stencil (only the cross is needed for order <= 1)
-    iu, iv = np.meshgrid(np.arange(5), np.arange(5), indexing="ij")
-    if order < 2:
-        keep = (iu == 2) | (iv == 2)
-        iu, iv = iu[keep], iv[keep]
-    iu, iv = iu.ravel(), iv.ravel()
-    uu = u[:, None] + _OFFSETS[iu][None, :] * hu
-    vv = v[:, None] + _OFFSETS[iv][None, :] * hv
-    vals = _call_points(f, uu.ravel(), vv.ravel(), "the surface function").reshape(n, iu.size, -1)
-    grid = np.zeros((n, 5, 5, vals.shape[-1]))
-    grid[:, iu, iv] = vals
-    out = np.zeros((order + 1, order + 1, n, vals.shape[-1]))
-    out[0, 0] = grid[:, 2, 2]
-    if order >= 1:
-        out[1, 0] = np.einsum("k,nkd->nd", _D1, grid[:, :, 2]) / hu
-        out[0, 1] = np.einsum("k,nkd->nd", _D1, grid[:, 2, :]) / hv
-    if order >= 2:
-        out[2, 0] = np.einsum("k,nkd->nd", _D2, grid[:, :, 2]) / hu**2
-        out[0, 2] = np.einsum("k,nkd->nd", _D2, grid[:, 2, :]) / hv**2
-        out[1, 1] = np.einsum("k,l,nkld->nd", _D1, _D1, grid) / (hu * hv)
-    return out
 
 
 class ParametricSurface:
@@ -341,111 +293,6 @@ class ExplicitSurface:
                 return out
 
         return ImplicitSurface(F, gradient, hessian)
-
-
-class ImplicitSurface:
-    """The zero set of ``F(x, y, z)``.
-
-    Parameters
-    ----------
-    F : callable
-        ``F(points)`` with ``points`` ``(n, 3)`` returns ``(n,)``.
-    gradient : callable, optional
-        ``(n, 3)`` -> ``(n, 3)``; otherwise fourth-order central differences
-        with step ``step * scale`` (scale 1: coordinates are in model units).
-    hessian : callable, optional
-        ``(n, 3)`` -> ``(n, 3, 3)``; otherwise differences of the gradient.
-
-    The unit normal is ``grad F / |grad F|``: outward for a signed distance
-    function (negative inside).
-    """
-
-    def __init__(self, F, gradient=None, hessian=None, step: float = 1e-3):
-        for name, g in (("F", F), ("gradient", gradient), ("hessian", hessian)):
-            if g is not None and not callable(g):
-                raise ParameterError(f"{name} must be callable, got {type(g).__name__}")
-        if not callable(F):
-            raise ParameterError("F must be callable")
-        step = as_real(step, "step")
-        if not step > 0:
-            raise ParameterError(f"step must be positive, got {step!r}")
-        self._F, self._grad, self._hess, self.step = F, gradient, hessian, step
-
-    def __repr__(self):
-        return f"ImplicitSurface({getattr(self._F, '__name__', 'F')})"
-
-    @staticmethod
-    def _points(points) -> np.ndarray:
-        p = as_float_array(points, "points")
-        if p.ndim == 1 and p.shape[0] == 3:
-            p = p[None, :]
-        if p.ndim != 2 or p.shape[1] != 3:
-            raise ParameterError(f"points must be an (n, 3) array, got shape {p.shape}")
-        if not np.isfinite(p).all():
-            raise ParameterError(f"point {int(np.argwhere(~np.isfinite(p))[0, 0])} has non-finite coordinates")
-        return p
-
-    def _call(self, g, p, shape, name):
-        try:
-            out = np.asarray(g(p), dtype=np.float64)
-        except SplineKitError:
-            raise
-        except Exception as exc:
-            raise ParameterError(f"{name} raised {type(exc).__name__}: {exc}") from exc
-        if out.shape != (len(p),) + shape:
-            raise ParameterError(f"{name} must return shape {(len(p),) + shape}, got {out.shape}")
-        if not np.isfinite(out).all():
-            bad = int(np.argwhere(~np.isfinite(out.reshape(len(p), -1)))[0, 0])
-            raise DomainError(f"{name} is not finite at point {bad} {p[bad].tolist()}")
-        return out
-
-    def __call__(self, points) -> np.ndarray:
-        """``F`` at ``(n, 3)`` points: ``(n,)``."""
-        return self._call(self._F, self._points(points), (), "F")
-
-    def gradient(self, points) -> np.ndarray:
-        """``grad F`` at ``(n, 3)`` points: ``(n, 3)``."""
-        p = self._points(points)
-        if self._grad is not None:
-            return self._call(self._grad, p, (3,), "gradient")
-        return self._central(lambda q: self._call(self._F, q, (), "F")[:, None], p)[..., 0]
-
-    def hessian(self, points) -> np.ndarray:
-        """The Hessian of ``F`` at ``(n, 3)`` points: ``(n, 3, 3)`` (symmetrized)."""
-        p = self._points(points)
-        if self._hess is not None:
-            H = self._call(self._hess, p, (3, 3), "hessian")
-        else:
-            H = self._central(self.gradient, p)  # [n, axis j, component i] = d(grad_i)/dx_j
-        return 0.5 * (H + np.swapaxes(H, 1, 2))
-
-    def normal(self, points) -> np.ndarray:
-        """Unit normals ``grad F / |grad F|``: ``(n, 3)``; a vanishing gradient
-        raises :class:`~splinekit.errors.DomainError` naming the point."""
-        p = self._points(points)
-        g = self.gradient(p)
-        return g / _nonzero_norm(g, p, "gradient")[:, None]
-
-    def _central(self, g, p):
-        """Fourth-order central differences of ``g`` along x, y, z: ``(n, 3, k)``."""
-        h = self.step
-        n = len(p)
-        shifts = _OFFSETS[None, :, None] * h * np.eye(3)[:, None, :]  # (3 axes, 5 offsets, 3)
-        q = (p[:, None, None, :] + shifts[None]).reshape(-1, 3)
-        vals = np.asarray(g(q))
-        vals = vals.reshape(n, 3, 5, vals.shape[-1])  # [point, axis, offset, component]
-        return np.einsum("j,najk->nak", _D1, vals) / h
-
-
-def _nonzero_norm(g, p, what):
-    """``|g|`` per row, refusing zeros (they would make the normal undefined)."""
-    length = np.linalg.norm(g, axis=-1)
-    scale = max(1.0, float(np.max(np.abs(g)))) if g.size else 1.0
-    bad = ~(length > 1e-14 * scale)
-    if bad.any():
-        i = int(np.argmax(bad))
-        raise DomainError(f"the {what} vanishes at point {i} {p[i].tolist()}: the normal is undefined there")
-    return length
 
 
 class SubdivisionPatch:

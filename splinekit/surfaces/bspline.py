@@ -1,9 +1,13 @@
-"""Tensor-product B-spline and NURBS surfaces as immutable value types.
+"""Tensor-product B-spline, NURBS and Bézier surfaces as immutable value types.
 
 Control points are ``(nu, nv, dim)``; a rational surface keeps homogeneous
-coefficients ``(w * P, w)`` ``(nu, nv, dim + 1)`` internally. Knot operations in
-one direction reuse the curve algebra of :mod:`splinekit.basis.algebra` with the
-other direction carried along as a trailing axis.
+coefficients ``(w * P, w)`` ``(nu, nv, dim + 1)`` internally. Grid evaluation,
+normals and the knot algebra are mixins from :mod:`.grid`, :mod:`.normals` and
+:mod:`.knot_algebra`.
+
+:class:`BezierSurface` lives here too: it wraps a B-spline surface on Bézier
+knots, and :meth:`SplineSurface.to_bezier` returns Bézier patches; the two types
+convert into each other, so they share one module rather than import each other.
 """
 
 from __future__ import annotations
@@ -11,11 +15,8 @@ from __future__ import annotations
 import numpy as np
 
 from .._validate import (
-    as_affine,
     as_degree,
     as_direction,
-    as_float_array,
-    as_int,
     as_order,
     as_params,
     as_points,
@@ -26,17 +27,19 @@ from .._validate import (
     homogeneous,
     overflow_safe,
 )
-from .. import limits
 from ..basis import algebra
-from ..basis.bspline import basis_ders_t, basis_funs_t, combine, find_span, span_bounds
+from ..basis.bernstein import bezier_knots
+from ..basis.bspline import basis_ders_t, basis_funs_t, find_span, span_bounds
 from ..basis.jit import kernels
-from ..basis.knots import clamped_uniform, domain, is_clamped, reparametrized, validate_knots
+from ..basis.knots import clamped_uniform, domain, validate_knots
 from ..basis.rational import rational_surface_derivatives
-from ..errors import DomainError, KnotRemovalError, KnotVectorError, ParameterError
-from ..curves.bspline import _elevation_step
-from ..tolerances import DEFAULT, geometric_tolerance
+from ..curves.knot_algebra import _elevation_step
+from ..errors import KnotRemovalError, ParameterError
+from .grid import SurfaceGrids
+from .knot_algebra import SurfaceKnotAlgebra
+from .normals import SurfaceNormals
 
-__all__ = ["SplineSurface", "BSplineSurface", "NurbsSurface"]
+__all__ = ["SplineSurface", "BSplineSurface", "NurbsSurface", "BezierSurface"]
 
 
 def _tensor_combine(coefs, p, q, su, sv, Nu, Nv):
@@ -59,7 +62,7 @@ def _tensor_combine(coefs, p, q, su, sv, Nu, Nv):
     return out
 
 
-class SplineSurface:
+class SplineSurface(SurfaceGrids, SurfaceNormals, SurfaceKnotAlgebra):
     """Common implementation of :class:`BSplineSurface` and :class:`NurbsSurface`."""
 
     __slots__ = ("_pu", "_pv", "_ku", "_kv", "_coefs", "_rational", "_cache")
@@ -255,321 +258,10 @@ class SplineSurface:
             ders = rational_surface_derivatives(ders)
         return ders
 
-    def _grid_basis(self, us, vs, order=0):
-        """Per direction: ``(span (m,), values (order + 1, p + 1, m))``."""
-        (du, dv) = self.domain
-        try:  # sizes first: a broadcast view of a huge length costs nothing until it is converted
-            mu, mv = np.asarray(us).size, np.asarray(vs).size
-        except (ValueError, TypeError):
-            mu = mv = 0  # as_params names the problem
-        # the grid (and its per-order partials, and one temporary each) and the two basis
-        # tables with their parameters, spans and temporaries, before any of it exists
-        grid = 16.0 * mu * mv * (self._coefs.shape[-1] + 1) * (order + 1) ** 2
-        tables = 64.0 * (mu + mv) * (max(self._pu, self._pv) + 1) * (order + 1)
-        limits.check(grid + tables, f"a {mu} x {mv} surface grid")
-        us, vs = as_params(us, du, "us").ravel(), as_params(vs, dv, "vs").ravel()
-        out = []
-        for p, U, x in ((self._pu, self._ku, us), (self._pv, self._kv, vs)):
-            span = find_span(p, U, x)
-            out.append((span, basis_ders_t(p, U, span, x, order)))
-        return out
-
-    @staticmethod
-    def _dense(span, vals, n):
-        """Scatter local basis values ``(p + 1, m)`` into a dense ``(m, n)`` matrix."""
-        p1, m = vals.shape
-        dense = np.zeros((m, n))
-        rows = np.arange(m)
-        for r in range(p1):
-            dense[rows, span - p1 + 1 + r] = vals[r]
-        return dense
-
-    def _coefs4(self):
-        """Coefficients padded with zero columns to 4 (for the 4-lane kernels)."""
-        if "coefs4" not in self._cache:
-            k = self._coefs.shape[-1]
-            pad = np.zeros(self.shape + (max(0, 4 - k),))
-            self._cache["coefs4"] = np.ascontiguousarray(np.concatenate([self._coefs, pad], axis=-1))
-        return self._cache["coefs4"]
-
-    def _grid_contract(self, su, Nu_vals, sv, Nv_vals, divide):
-        """``Nu @ C @ Nv^T`` per coordinate -> ``(mu, mv, k)`` (or ``(mu, mv, dim)``
-        divided by the weight when ``divide``), from the banded basis values
-        ``Nu_vals`` ``(p + 1, mu)`` and ``Nv_vals`` ``(q + 1, mv)``.
-
-        Compiled path: both contractions in one kernel per grid row. numpy
-        path: the u contraction gathers p + 1 rows of the net per grid row
-        (small, ``(mu, nv, k)``) and the v contraction is one broadcast matmul.
-        The u step avoids BLAS on purpose: BLAS worker threads left spinning
-        after a call compete with the kernel's threads on a 2-core machine.
-        """
-        nu, nv, k = self._coefs.shape
-        mu, mv = su.size, sv.size
-        jit = kernels(mu * mv)
-        if jit is not None:
-            out = np.empty((mu, mv, k - 1 if divide else k))
-            Nv_vals = np.ascontiguousarray(Nv_vals)
-            if k == 4 or (k < 4 and not divide):
-                jit.grid_tensor4(self._coefs4(), su, np.ascontiguousarray(Nu_vals), self._pu, sv, Nv_vals, self._pv,
-                                 out.shape[-1], divide, out)
-            else:
-                R = combine(self._coefs, self._pu, su, Nu_vals)
-                jit.grid_rows(R, sv, Nv_vals, self._pv, divide, out)
-            return out
-        R = combine(self._coefs, self._pu, su, Nu_vals)  # (mu, nv, k)
-        out = np.matmul(self._dense(sv, Nv_vals, nv), R)  # broadcast over mu: (mu, mv, k)
-        if divide:
-            out = out[..., :-1] / out[..., -1:]
-        return out
-
-    def evaluate_grid(self, us, vs) -> np.ndarray:
-        """Points on the tensor grid ``us x vs``: ``(len(us), len(vs), dim)``.
-
-        Computed as ``Nu @ P @ Nv^T`` with the banded basis matrices of the
-        two parameter vectors, never point by point.
-        """
-        (su, Nu), (sv, Nv) = self._grid_basis(us, vs)
-        with np.errstate(over="ignore", invalid="ignore"):
-            out = self._grid_contract(su, Nu[0], sv, Nv[0], self._rational)
-        if not np.isfinite(out).all():
-            out = overflow_safe(self, lambda s: s._grid_contract(su, Nu[0], sv, Nv[0], s._rational), self.control_points, 0)
-        return out
-
-    def derivatives_grid(self, us, vs, order: int = 1) -> np.ndarray:
-        """Partial derivatives on a grid: ``(order + 1, order + 1, len(us), len(vs), dim)``."""
-        order = as_order(order)
-        (su, Nu), (sv, Nv) = self._grid_basis(us, vs, order)
-
-        def compute(s):
-            ders = np.stack(
-                [np.stack([s._grid_contract(su, Nu[a], sv, Nv[b], False) for b in range(order + 1)]) for a in range(order + 1)]
-            )
-            return rational_surface_derivatives(ders) if s._rational else ders
-
-        with np.errstate(over="ignore", invalid="ignore"):
-            ders = compute(self)
-        if not np.isfinite(ders).all():
-            ders = overflow_safe(self, compute, self.control_points, 2)
-        return ders
-
-    @staticmethod
-    def _cross(a, b):
-        """Row-wise cross product of ``(..., 3)`` arrays (cheaper than np.cross here)."""
-        out = np.empty(np.broadcast_shapes(a.shape, b.shape))
-        out[..., 0] = a[..., 1] * b[..., 2] - a[..., 2] * b[..., 1]
-        out[..., 1] = a[..., 2] * b[..., 0] - a[..., 0] * b[..., 2]
-        out[..., 2] = a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]
-        return out
-
-    def _normalize(self, n, Su, Sv, u, v, Suv=None):
-        """Unit normals from ``n = Su x Sv`` (any positive multiple of it).
-
-        Where ``Su x Sv`` (nearly) vanishes, at a collapsed edge such as the
-        pole of a revolved sphere, the limit direction ``Su x Suv + Suv x Sv``
-        is used, oriented like the normal at a point just inside the domain.
-        """
-        length = np.sqrt(np.einsum("...i,...i->...", n, n))
-        size = np.sqrt(np.einsum("...i,...i->...", Su, Su)) + np.sqrt(np.einsum("...i,...i->...", Sv, Sv))
-        weak = length <= 1e-10 * size**2
-        if weak.any():
-            n = n.copy()
-            n[weak] = self._limit_normals(u[weak], v[weak])
-            length = np.sqrt(np.einsum("...i,...i->...", n, n))
-        return np.divide(n, length[..., None], out=np.zeros_like(n), where=length[..., None] > 0)
-
-    def _limit_normals(self, u, v):
-        """Normals at degenerate points (``Su x Sv = 0``): see :meth:`_normalize`."""
-        d = self.derivatives(u, v, 1)
-        Su, Sv, Suv = d[1, 0], d[0, 1], d[1, 1]
-        alt = self._cross(Su, Suv) + self._cross(Suv, Sv)
-        (a, b), (c, e) = self.domain
-        du, dv = 1e-7 * (b - a), 1e-7 * (e - c)
-        un = np.where(u + du <= b, u + du, u - du)
-        vn = np.where(v + dv <= e, v + dv, v - dv)
-        near = self.derivatives(un, vn, 1)
-        ref = self._cross(near[1, 0], near[0, 1])
-        flip = np.einsum("...i,...i->...", alt, ref) < 0
-        alt[flip] *= -1.0
-        tiny = np.linalg.norm(alt, axis=-1) <= 1e-14 * (np.linalg.norm(ref, axis=-1) + 1e-300)
-        alt[tiny] = ref[tiny]
-        return alt
-
-    def _require_3d(self):
-        if self.dim != 3:
-            raise ParameterError(f"normals need a surface in 3-D space, this one has dim={self.dim}")
-
-    def normal(self, u, v) -> np.ndarray:
-        """Unit normals ``(Su x Sv) / |Su x Sv|`` at the pairs ``(u, v)``: ``u.shape + (3,)``."""
-        self._require_3d()
-        u, v = self._uv(u, v)
-        s = self._unit_sized()
-        d = s.derivatives(u, v, 1)
-        return s._normalize(s._cross(d[1, 0], d[0, 1]), d[1, 0], d[0, 1], u, v)
-
-    def _unit_sized(self):
-        """This surface, or for coordinates beyond ``2**300`` a copy scaled by a power of two
-        to size about 1: normals do not depend on the scale, and ``Su x Sv`` of a huge
-        surface would overflow."""
-        big = float(np.abs(self.control_points).max())
-        return self if big < 2.0**300 else self._scaled(-int(np.frexp(big)[1]))
-
-    def normal_grid(self, us, vs) -> np.ndarray:
-        """Unit normals on the grid ``us x vs``: ``(len(us), len(vs), 3)``.
-
-        Uses only the homogeneous value and first partials; for a rational
-        surface ``Su x Sv`` is a positive multiple of
-        ``(Au - wu C) x (Av - wv C)``, so no full quotient rule is needed.
-        """
-        self._require_3d()
-        if self._unit_sized() is not self:
-            return self._unit_sized().normal_grid(us, vs)
-        (su, Nu), (sv, Nv) = self._grid_basis(us, vs, 1)
-        jit = kernels(su.size * sv.size)
-        if jit is not None:
-            out = np.empty((su.size, sv.size, 3))
-            weak = np.empty((su.size, sv.size), dtype=np.bool_)
-            jit.grid_normals4(self._coefs4(), su, np.ascontiguousarray(Nu), self._pu, sv, np.ascontiguousarray(Nv),
-                              self._pv, self._rational, out, weak)
-            if weak.any():
-                (du, dv) = self.domain
-                U, V = np.meshgrid(as_params(us, du, "us").ravel(), as_params(vs, dv, "vs").ravel(), indexing="ij")
-                n = self._limit_normals(U[weak], V[weak])
-                out[weak] = n / np.maximum(np.linalg.norm(n, axis=-1, keepdims=True), 1e-300)
-            return out
-        Hu = self._grid_contract(su, Nu[1], sv, Nv[0], False)
-        Hv = self._grid_contract(su, Nu[0], sv, Nv[1], False)
-        if self._rational:
-            H = self._grid_contract(su, Nu[0], sv, Nv[0], False)
-            C = H[..., :3] / H[..., 3:]
-            Su = Hu[..., :3] - Hu[..., 3:] * C
-            Sv = Hv[..., :3] - Hv[..., 3:] * C
-        else:
-            Su, Sv = Hu, Hv
-        (du, dv) = self.domain
-        U, V = np.meshgrid(as_params(us, du, "us").ravel(), as_params(vs, dv, "vs").ravel(), indexing="ij", sparse=True)
-        U, V = np.broadcast_arrays(U, V)
-        return self._normalize(self._cross(Su, Sv), Su, Sv, U, V)
-
-    # -- knot algebra -----------------------------------------------------------------
-    def _dir(self, direction):
-        d = as_direction(direction)
-        if d == 0:
-            return d, self._pu, self._ku, self._coefs
-        return d, self._pv, self._kv, self._coefs.transpose(1, 0, 2)
-
-    def _rebuild(self, d, p, U, coefs):
-        if d == 0:
-            return self._like(p, self._pv, U, self._kv, coefs)
-        return self._like(self._pu, p, self._ku, U, np.ascontiguousarray(coefs.transpose(1, 0, 2)))
-
-    def _knot_value(self, d, u, name=None):
-        """A single parameter of direction ``d``, clamped and snapped like the curves'."""
-        name = name or "uv"[d]
-        a, b = self.domain[d]
-        value = as_params(u, (a, b), name)
-        if value.ndim != 0:
-            raise ParameterError(f"{name} must be a single number, got an array of shape {value.shape}")
-        u = float(value)
-        U = self._ku if d == 0 else self._kv
-        near = np.abs(U - u) <= DEFAULT.knot * (b - a)
-        return float(U[near][0]) if near.any() else u
-
-    def refine(self, knots, direction="u"):
-        """Insert every value of ``knots`` in the given direction."""
-        d, p, U, C = self._dir(direction)
-        extra = as_float_array(knots, "knots", KnotVectorError).ravel()
-        if extra.size == 0:
-            return self
-        extra = np.array([self._knot_value(d, x, "knots") for x in extra])
-        tau = np.sort(np.concatenate([U, extra]), kind="stable")
-        tau = validate_knots(tau, p, tau.size - p - 1, "refined knots")
-        return self._rebuild(d, p, tau, algebra.refine(p, U, C, tau))
-
-    def insert_knot(self, u, times: int = 1, direction="u"):
-        """Insert the knot ``u`` ``times`` times in the given direction."""
-        times = as_int(times, "times", minimum=0)
-        d, p, U, _ = self._dir(direction)
-        u = self._knot_value(d, u)
-        a, b = self.domain[d]
-        have = int(np.count_nonzero(U == u))
-        limit = p if a < u < b else p + 1
-        if have + times > limit:
-            raise KnotVectorError(
-                f"inserting knot {u!r} {times} times would give multiplicity {have + times}; at most {limit} allowed"
-            )
-        return self.refine(np.full(times, u), direction)
-
-    def remove_knot(self, u, times: int = 1, tol: float | None = None, direction="u"):
-        """Remove an interior knot, moving the surface at most ``tol``.
-
-        ``tol`` defaults to ``1e-9`` times the control net's size (its
-        largest coordinate, at least 1); see :meth:`SplineCurve.remove_knot`.
-        """
-        times = as_int(times, "times", minimum=1)
-        tol = geometric_tolerance(tol, self.control_points)
-        d, p, U, C = self._dir(direction)
-        u = self._knot_value(d, u)
-        a, b = self.domain[d]
-        have = int(np.count_nonzero(U == u))
-        if not a < u < b or have == 0:
-            raise KnotRemovalError(f"{u!r} is not an interior {'uv'[d]} knot of this surface")
-        if times > have:
-            raise KnotRemovalError(f"knot {u!r} has multiplicity {have}; cannot remove it {times} times")
-        tau, coefs, dev = algebra.remove_knots(p, U, C, u, times)
-        allowed = tol
-        if self._rational:
-            w = self._coefs[..., -1]
-            allowed = tol * w.min() / (1.0 + np.linalg.norm(self.control_points, axis=-1).max())
-        worst = float(np.max(dev))
-        if worst > allowed:
-            raise KnotRemovalError(
-                f"removing {'uv'[d]} knot {u!r} {times} time(s) would move the surface by up to {worst:.3g} "
-                f"(coefficient space), more than the tolerance {allowed:.3g}"
-            )
-        return self._rebuild(d, p, tau, coefs)
-
-    def elevate_degree(self, by: int = 1, direction="u"):
-        """Raise the degree in one direction by ``by``; the surface is unchanged."""
-        d, p, U, C = self._dir(direction)
-        by = _elevation_step(by, p)
-        if by == 0:
-            return self
-        U2, C2 = algebra.elevate(p, U, C, by)
-        return self._rebuild(d, p + by, U2, C2)
-
-    def clamp(self):
-        """The same surface on clamped knot vectors in both directions."""
-        s = self
-        for direction in ("u", "v"):
-            d, p, U, C = s._dir(direction)
-            if not is_clamped(p, U):
-                U2, C2 = algebra.clamp(p, U, C)
-                s = s._rebuild(d, p, U2, C2)
-        return s
-
-    def split(self, u, direction="u"):
-        """Two surfaces split at the interior parameter ``u`` of one direction."""
-        d, p, U, C = self._dir(direction)
-        u = self._knot_value(d, u)
-        a, b = self.domain[d]
-        if not a < u < b:
-            raise DomainError(f"split parameter {u!r} must lie strictly inside ({a!r}, {b!r})")
-        (kl, cl), (kr, cr) = algebra.split(p, U, C, u)
-        return self._rebuild(d, p, kl, cl), self._rebuild(d, p, kr, cr)
-
-    def bezier_breakpoints(self):
-        """``(bu, bv)``: distinct knots of each domain; patch ``[i][j]`` of :meth:`to_bezier`
-        covers ``[bu[i], bu[i+1]] x [bv[j], bv[j+1]]``."""
-        out = []
-        for p, U in ((self._pu, self._ku), (self._pv, self._kv)):
-            a, b = domain(p, U)
-            out.append(np.unique(U[(U >= a) & (U <= b)]))
-        return tuple(out)
-
+    # -- conversions ------------------------------------------------------------------
     def to_bezier(self):
         """Bézier decomposition: a list (over u spans) of lists (over v spans) of
         :class:`~splinekit.BezierSurface`, each on [0, 1] x [0, 1]."""
-        from .bezier import BezierSurface
 
         _, su = algebra.bezier_segments(self._pu, self._ku, self._coefs)  # (su, pu+1, nv, k)
         _, sv = algebra.bezier_segments(self._pv, self._kv, su.transpose(2, 0, 1, 3))  # (sv, pv+1, su, pu+1, k)
@@ -578,57 +270,6 @@ class SplineSurface:
             [BezierSurface._from_coefs(patches[i, :, j], self._rational) for j in range(patches.shape[2])]
             for i in range(patches.shape[0])
         ]
-
-    def isocurve(self, u=None, v=None):
-        """The curve ``v -> S(u, v)`` (give ``u``) or ``u -> S(u, v)`` (give ``v``)."""
-        from ..curves.bspline import BSplineCurve
-
-        if (u is None) == (v is None):
-            raise ParameterError("give exactly one of u or v")
-        d = 0 if u is not None else 1
-        (du, dv) = self.domain
-        value = as_params(u if d == 0 else v, du if d == 0 else dv, "u" if d == 0 else "v")
-        if value.ndim != 0:
-            raise ParameterError("isocurve takes a single parameter value")
-        _, p, U, C = self._dir(d)
-        flat = value.reshape(1)
-        span = find_span(p, U, flat)
-        N = basis_funs_t(p, U, span, flat)[:, 0]
-        coefs = np.tensordot(N, C[span[0] - p : span[0] + 1], axes=(0, 0))  # (n_other, k)
-        po, Uo = (self._pv, self._kv) if d == 0 else (self._pu, self._ku)
-        return BSplineCurve._trusted(po, Uo, coefs, self._rational)
-
-    def transpose(self):
-        """Swap the roles of u and v (the normal flips)."""
-        return self._like(self._pv, self._pu, self._kv, self._ku, np.ascontiguousarray(self._coefs.transpose(1, 0, 2)))
-
-    def reverse(self, direction="u"):
-        """Reverse the parameter direction (on the same domain)."""
-        d, p, U, C = self._dir(direction)
-        U2, C2 = algebra.reverse(p, U, C)
-        return self._rebuild(d, p, U2, C2)
-
-    def reparametrize(self, u_range=None, v_range=None):
-        """Map the domains affinely onto ``u_range`` / ``v_range`` (``(start, end)`` pairs)."""
-        knots = []
-        for p, U, rng in ((self._pu, self._ku, u_range), (self._pv, self._kv, v_range)):
-            if rng is None:
-                knots.append(U)
-                continue
-            pair = as_float_array(rng, "range", DomainError)
-            if pair.shape != (2,):
-                raise DomainError(f"a parameter range is a pair (start, end), got {rng!r}")
-            knots.append(reparametrized(p, U, pair[0], pair[1]))
-        return self._like(self._pu, self._pv, knots[0], knots[1], self._coefs)
-
-    def transform(self, matrix):
-        """Apply an affine map (``(dim, dim)`` or ``(dim + 1, dim + 1)``) to the control points."""
-        L, t = as_affine(matrix, self.dim)
-        with np.errstate(over="ignore", invalid="ignore"):
-            P = finite_points(self.control_points @ L.T + t, "the transform")
-        if self._rational:
-            P = homogeneous(P, self._coefs[..., -1])
-        return self._like(self._pu, self._pv, self._ku, self._kv, P)
 
     def to_nurbs(self):
         if self._rational:
@@ -685,6 +326,120 @@ class NurbsSurface(BSplineSurface):
         w = np.ones(P.shape[:2]) if weights is None else weights
         return cls(pu, pv, clamped_uniform(pu, P.shape[0]), clamped_uniform(pv, P.shape[1]), P, w)
 
+
+
+class BezierSurface:
+    """(Rational) tensor-product Bézier patch on [0, 1] x [0, 1].
+
+    A patch of degrees ``(m, n)`` is the B-spline surface on Bézier knot
+    vectors; this class wraps that surface, so every operation shares its code.
+
+    Parameters
+    ----------
+    control_points : array_like, shape (m + 1, n + 1, dim)
+        At least 2 x 2 points; degrees are ``(m, n)``.
+    weights : array_like, shape (m + 1, n + 1), optional
+    """
+
+    __slots__ = ("_spline",)
+
+    def __init__(self, control_points, weights=None):
+        P = as_points(control_points, leading=2, min_count=(2, 2))
+        m, n = P.shape[0] - 1, P.shape[1] - 1
+        if weights is None:
+            s = BSplineSurface(m, n, bezier_knots(m), bezier_knots(n), P)
+        else:
+            s = NurbsSurface(m, n, bezier_knots(m), bezier_knots(n), P, as_weights(weights, P.shape[:2]))
+        object.__setattr__(self, "_spline", s)
+
+    @classmethod
+    def _from_coefs(cls, coefs, rational):
+        obj = object.__new__(cls)
+        m, n = coefs.shape[0] - 1, coefs.shape[1] - 1
+        s = BSplineSurface._trusted(m, n, bezier_knots(m), bezier_knots(n), np.ascontiguousarray(coefs), rational)
+        object.__setattr__(obj, "_spline", s)
+        return obj
+
+    def __reduce__(self):
+        return (type(self)._from_coefs, (np.array(self._spline._coefs), self.is_rational))
+
+    def __setattr__(self, name, value):
+        raise AttributeError("BezierSurface is immutable; operations return new surfaces")
+
+    degree_u = property(lambda self: self._spline.degree_u)
+    degree_v = property(lambda self: self._spline.degree_v)
+    control_points = property(lambda self: self._spline.control_points, doc="``(m + 1, n + 1, dim)`` (read-only).")
+    weights = property(lambda self: self._spline.weights)
+    dim = property(lambda self: self._spline.dim)
+    is_rational = property(lambda self: self._spline.is_rational)
+    shape = property(lambda self: self._spline.shape)
+    domain = ((0.0, 1.0), (0.0, 1.0))
+
+    def __eq__(self, other):
+        if not isinstance(other, BezierSurface):
+            return NotImplemented
+        return self._spline == other._spline
+
+    def __hash__(self):
+        return hash(("bezier", hash(self._spline)))
+
+    def almost_equal(self, other, tol: float = 1e-12) -> bool:
+        return isinstance(other, BezierSurface) and self._spline.almost_equal(other._spline, tol)
+
+    def __repr__(self):
+        kind = "rational " if self.is_rational else ""
+        return f"BezierSurface({kind}degree=({self.degree_u}, {self.degree_v}), dim={self.dim})"
+
+    def evaluate(self, u, v):
+        """Points at pairs ``(u, v)``: ``u.shape + (dim,)``."""
+        return self._spline.evaluate(u, v)
+
+    __call__ = evaluate
+
+    def evaluate_grid(self, us, vs):
+        return self._spline.evaluate_grid(us, vs)
+
+    def derivatives(self, u, v, order: int = 1):
+        """``(order + 1, order + 1) + u.shape + (dim,)``; ``[k, l]`` is d^(k+l)S/du^k dv^l."""
+        return self._spline.derivatives(u, v, order)
+
+    def normal(self, u, v):
+        return self._spline.normal(u, v)
+
+    def split(self, t, direction="u"):
+        """Two patches split at ``t`` in one direction, each on [0, 1]^2."""
+        a, b = self._spline.split(t, direction)
+        return BezierSurface._from_coefs(a._coefs, self.is_rational), BezierSurface._from_coefs(b._coefs, self.is_rational)
+
+    def elevate(self, by: int = 1, direction="u"):
+        """The same patch with one degree raised by ``by``."""
+        d = as_direction(direction)
+        by = _elevation_step(by, self.degree_u if d == 0 else self.degree_v)
+        C = self._spline._coefs
+        if d == 0:
+            C = np.einsum("ij,jk...->ik...", algebra.bezier_elevation_matrix(self.degree_u, by), C)
+        else:
+            C = np.einsum("ij,kj...->ki...", algebra.bezier_elevation_matrix(self.degree_v, by), C)
+        return BezierSurface._from_coefs(C, self.is_rational)
+
+    def transform(self, matrix):
+        return BezierSurface._from_coefs(self._spline.transform(matrix)._coefs, self.is_rational)
+
+    @classmethod
+    def from_bspline(cls, surface: SplineSurface):
+        """The Bézier form of a single-patch spline surface (else use ``surface.to_bezier()``)."""
+        if not isinstance(surface, SplineSurface):
+            raise ParameterError(f"expected a BSplineSurface or NurbsSurface, got {type(surface).__name__}")
+        bu, bv = surface.bezier_breakpoints()
+        if bu.size != 2 or bv.size != 2:
+            raise ParameterError(
+                f"surface has {bu.size - 1} x {bv.size - 1} patches; use surface.to_bezier() for the list"
+            )
+        return surface.to_bezier()[0][0]
+
+    def to_bspline(self):
+        """This patch as a :class:`BSplineSurface` / :class:`NurbsSurface` on [0, 1]^2."""
+        return self._spline
 
 
 def _rebuild_surface(cls, pu, pv, ku, kv, coefs, rational):
