@@ -5,11 +5,11 @@
 from __future__ import annotations
 
 import numpy as np
+from _geometry import random_curve_data, random_surface_data
 from OCP.GeomAPI import GeomAPI_ProjectPointOnCurve, GeomAPI_ProjectPointOnSurf
 from OCP.gp import gp_Pnt
 from test_closest import make_curve, make_surface, points_around, smooth_surface
 
-from _geometry import random_curve_data, random_surface_data
 from splinekit.closest import project
 from splinekit.interop.occ import to_occ
 
