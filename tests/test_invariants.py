@@ -469,7 +469,7 @@ def test_vanishing_basis_function_surface_operations(op, data, rational, directi
 # ---------------------------------------------------------------------------------------
 def test_knot_operations_accept_domain_end_within_rounding():
     """``evaluate`` accepts parameters within 1e-10 of the domain (documented in
-    Tolerances.param, "so that values such as np.linspace(a, b) computed in
+    splinekit.tolerances.PARAMETRIC_SLACK, "np.linspace(a, b) computed in
     floating point never fail"); the knot operations should accept the same
     values rather than raise DomainError for an overshoot of one ulp."""
     a, b = 1.4473553561621724, 3.7973553561621727
