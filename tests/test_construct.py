@@ -2,8 +2,8 @@
 
 References are independent of the code under test: closed forms (radii of
 circles, spheres, tori, cones; the ellipse's implicit equation; the bilinear
-Coons formula), OpenCascade (in tests/occ/test_construct_occ.py), and invariants (interpolation of the input curves,
-reproduction of polynomial surfaces).
+Coons formula), OpenCascade (in tests/occ/test_construct_occ.py), and invariants
+(interpolation of the input curves, reproduction of polynomial surfaces).
 
 Tolerances: conics and surfaces of revolution 1e-14 relative to the radius
 (a few ulps of the rational evaluation); compatibility and Boolean sums 1e-12
