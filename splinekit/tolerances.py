@@ -1,50 +1,91 @@
-"""Explicit tolerances. There is no mutable global state: functions that need a
-tolerance take it as an argument whose default comes from :data:`DEFAULT`."""
+"""The shared named tolerances of splinekit, with their units.
+
+There is no mutable global state: a function that needs a tolerance takes it as an argument whose
+default is one of the constants below (or a figure derived from one, such as
+:func:`geometric_tolerance`). Relative tolerances are multiplied by a length the caller knows (a
+parameter domain, the size of a control net), so the same default means the same for a part in
+metres and one in microns.
+
+========================  =========  ==========================================================
+name                      value      meaning and unit
+========================  =========  ==========================================================
+``PARAMETRIC_SLACK``      1e-10      relative to a domain's length: a parameter this far outside
+                                     the domain is clamped onto it (``np.linspace(a, b)`` computed
+                                     in floating point never fails)
+``KNOT_CONFUSION``        1e-12      relative to a domain's length: two knot values closer than
+                                     this are the same knot when a knot is looked up by value
+``GEOMETRIC_CONFUSION``   1e-9       relative to the model's size (its largest absolute
+                                     coordinate, at least 1): two points closer than this are one
+                                     (knot removal, closedness checks)
+``ANGULAR_CONFUSION``     1e-12      radians: two directions closer than this are parallel
+``INTEGRAL_RTOL``         1e-10      relative error of adaptive integrals (lengths, areas,
+                                     volumes) when the caller gives none
+========================  =========  ==========================================================
+
+``DEFAULT`` carries the first three under their older short names (``DEFAULT.param``,
+``DEFAULT.knot``, ``DEFAULT.point``) for the modules that read them. The class ``Tolerances`` is
+deprecated: no function ever accepted an instance; pass the number to the function instead.
+"""
 
 from __future__ import annotations
 
 import math
+import warnings
 from dataclasses import dataclass
 
 import numpy as np
 
 from .errors import ParameterError
 
-__all__ = ["Tolerances", "DEFAULT", "geometric_tolerance"]
+__all__ = [
+    "PARAMETRIC_SLACK",
+    "KNOT_CONFUSION",
+    "GEOMETRIC_CONFUSION",
+    "ANGULAR_CONFUSION",
+    "INTEGRAL_RTOL",
+    "DEFAULT",
+    "geometric_tolerance",
+    "Tolerances",
+]
+
+PARAMETRIC_SLACK = 1e-10
+KNOT_CONFUSION = 1e-12
+GEOMETRIC_CONFUSION = 1e-9
+ANGULAR_CONFUSION = 1e-12
+INTEGRAL_RTOL = 1e-10
 
 
 @dataclass(frozen=True)
-class Tolerances:
-    """Tolerances used when a caller does not give one.
+class _Defaults:
+    """The defaults under their short names (see the module's table)."""
 
-    Attributes
-    ----------
-    param : float
-        Relative slack (times the domain length) within which a parameter just
-        outside the domain is accepted and clamped onto it, so that values such
-        as ``np.linspace(a, b)`` computed in floating point never fail.
-    knot : float
-        Relative distance (times the domain length) under which two knot values
-        count as the same knot when a knot is looked up by value.
-    point : float
-        Geometric tolerance for knot removal and closedness checks, relative to
-        the control net's size (see :func:`geometric_tolerance`).
-    """
-
-    param: float = 1e-10
-    knot: float = 1e-12
-    point: float = 1e-9
+    param: float = PARAMETRIC_SLACK
+    knot: float = KNOT_CONFUSION
+    point: float = GEOMETRIC_CONFUSION
 
 
-DEFAULT = Tolerances()
+DEFAULT = _Defaults()
+
+
+@dataclass(frozen=True)
+class Tolerances(_Defaults):
+    """Deprecated: no function accepts it. Its fields are the defaults ``DEFAULT.param``,
+    ``DEFAULT.knot`` and ``DEFAULT.point``; give a function its tolerance as a number."""
+
+    def __post_init__(self):
+        warnings.warn(
+            "splinekit.Tolerances is deprecated and no function accepts it: pass a tolerance to the "
+            "function as a number; the defaults are the named constants of splinekit.tolerances",
+            DeprecationWarning,
+            stacklevel=3,
+        )
 
 
 def geometric_tolerance(tol, points) -> float:
-    """``tol`` checked (finite, >= 0), or by default ``DEFAULT.point`` times the
-    size of the control net (its largest absolute coordinate, at least 1), so
-    that the default means the same for a part in metres and one in microns."""
+    """``tol`` checked (finite, >= 0), or by default ``GEOMETRIC_CONFUSION`` times the size of
+    the control net ``points`` (its largest absolute coordinate, at least 1), in the points' unit."""
     if tol is None:
-        return DEFAULT.point * max(1.0, float(np.abs(points).max()))
+        return GEOMETRIC_CONFUSION * max(1.0, float(np.abs(points).max()))
     try:
         tol = float(tol)
     except (TypeError, ValueError, OverflowError):

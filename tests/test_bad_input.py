@@ -453,38 +453,37 @@ def strict():
             yield
 
 
-def _clean_or_rejected(build, use):
-    with strict():
-        try:
-            obj = build()
-        except SplineKitError:
-            return
-        out = use(obj)
-    assert np.isfinite(out).all(), out
+def _rejected(build, match):
+    """``build()`` raises a SplineKitError whose message matches ``match``, with no
+    floating-point warning or error on the way (a rejection must not be an accident)."""
+    with strict(), pytest.raises(SplineKitError, match=match):
+        build()
 
 
 def test_extreme_weights_times_points_do_not_overflow():
-    """Weights 1e200 on points 1e200: the homogeneous coordinates w * P overflow."""
-    _clean_or_rejected(
-        lambda: NurbsCurve(1, [0, 0, 1, 1], [[1e200], [1.0]], [1e200, 1.0]),
-        lambda c: c.evaluate(np.linspace(0, 1, 5)),
-    )
+    """Weights 1e200 on points 1e200: the homogeneous coordinates w * P overflow, so the
+    curve is refused; at 1e150 the products fit and the values are the closed form."""
+    _rejected(lambda: NurbsCurve(1, [0, 0, 1, 1], [[1e200], [1.0]], [1e200, 1.0]), "overflow")
+    with strict():
+        c = NurbsCurve(1, [0, 0, 1, 1], [[1e150], [1.0]], [1e150, 1.0])
+        t = np.linspace(0, 1, 5)
+        out = c.evaluate(t)[:, 0]
+    # degree 1: C(t) = ((1 - t) w0 P0 + t w1 P1) / ((1 - t) w0 + t w1)
+    expected = ((1 - t) * 1e300 + t) / ((1 - t) * 1e150 + t)
+    np.testing.assert_allclose(out, expected, rtol=1e-14)
 
 
-def test_subnormal_domain_does_not_overflow():
-    """A domain [0, 5e-324] is non-empty and accepted, so evaluating on it must work."""
-    _clean_or_rejected(
-        lambda: BSplineCurve(1, [0, 0, 5e-324, 5e-324], [[0.0], [1.0]]),
-        lambda c: c.evaluate(np.array([0.0, 5e-324])),
-    )
+def test_subnormal_domain_is_refused():
+    """A domain [0, 5e-324] is non-empty, but basis functions divide by its knot gap."""
+    _rejected(lambda: BSplineCurve(1, [0, 0, 5e-324, 5e-324], [[0.0], [1.0]]), r"knots\[1\].*overflow")
 
 
-def test_huge_domain_does_not_overflow():
-    """Knots -1e308 and 1e308 are finite, but the domain length overflows."""
-    _clean_or_rejected(
-        lambda: BSplineCurve(1, [-1e308, -1e308, 1e308, 1e308], [[0.0], [1.0]]),
-        lambda c: c.evaluate(np.array([-1e308, 0.0, 1e308])),
-    )
+def test_huge_domain_is_refused():
+    """A domain [-1e308, 1e308] is wider than floating point represents (its length overflows)."""
+    _rejected(lambda: BSplineCurve(1, [-1e308, -1e308, 1e308, 1e308], [[0.0], [1.0]]), "wider than")
+    with strict():  # half as wide fits: the line from 0 to 1 is linear in u
+        c = BSplineCurve(1, [-1e307, -1e307, 1e307, 1e307], [[0.0], [1.0]])
+        np.testing.assert_allclose(c.evaluate(np.array([-1e307, 0.0, 1e307]))[:, 0], [0.0, 0.5, 1.0], rtol=0, atol=1e-15)
 
 
 # ---------------------------------------------------------------------------------------

@@ -531,12 +531,13 @@ def test_build_all_and_check_all(in_process, capsys, monkeypatch, tmp_path):
 # -- the real registry ------------------------------------------------------------------------
 
 def _real_registry():
-    try:
-        import models
-    except ImportError as exc:  # pragma: no cover
-        pytest.skip(f"models does not import: {exc}")
-    if not all(hasattr(models, a) for a in ("MODELS", "DEFAULT_MODEL", "get_model", "build_model")):
-        pytest.skip("models/__init__.py does not export the registry (MODELS, DEFAULT_MODEL, ...) yet")
+    """The project's models package: it must import and export the registry (a missing one is a
+    failure, not a reason to skip)."""
+    import models
+
+    missing = [a for a in ("MODELS", "DEFAULT_MODEL", "get_model", "build_model") if not hasattr(models, a)]
+    assert not missing, f"models does not export {missing}"
+    assert models.DEFAULT_MODEL in models.MODELS
     return models
 
 

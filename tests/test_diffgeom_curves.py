@@ -1,8 +1,9 @@
 """Differential geometry of curves (splinekit.diffgeom.curves).
 
-Checked against closed forms (helix, circle, twisted cubic), against
-OpenCascade's GeomLProp_CLProps on random NURBS curves, and against
-invariants (orthonormal frames, zero twist of rotation-minimizing frames).
+Checked against closed forms (helix, circle, twisted cubic) and against
+invariants (orthonormal frames, zero twist of rotation-minimizing frames);
+tests/occ/test_diffgeom_curves_occ.py checks random NURBS curves against
+OpenCascade's GeomLProp_CLProps.
 """
 
 from __future__ import annotations
@@ -438,41 +439,6 @@ def test_tangent_matches_spline_tangent():
         c = random_spline(rng, rational)
         u = np.linspace(*c.domain, 50)
         assert np.abs(tangent(c, u) - c.tangent(u)).max() < 1e-14
-
-
-# ------------------------------------------------------------------------------------------
-# OpenCascade cross-check
-# ------------------------------------------------------------------------------------------
-def test_against_occ_clprops():
-    from OCP.GeomLProp import GeomLProp_CLProps
-    from OCP.gp import gp_Dir
-
-    from splinekit.interop.occ import to_occ
-
-    rng = np.random.default_rng(5)
-    checked = 0
-    for case in range(12):
-        c = random_spline(rng, rational=case % 2 == 1, degree=int(rng.integers(2, 6)))
-        handle = to_occ(c)
-        u = np.concatenate([list(c.domain), rng.uniform(*c.domain, 23)])
-        k = curvature(c, u)
-        T, N, _ = frenet_frame(c, u)
-        size = np.abs(c.control_points).max()
-        props = GeomLProp_CLProps(handle, 2, 1e-12)
-        for i, ui in enumerate(u):
-            props.SetParameter(float(ui))
-            ko = props.Curvature()
-            assert abs(k[i] - ko) <= 1e-10 * max(ko, 1 / size), (case, ui)
-            if props.IsTangentDefined():
-                d = gp_Dir()
-                props.Tangent(d)
-                assert np.abs(T[i] - [d.X(), d.Y(), d.Z()]).max() < 1e-11
-            if ko * size > 1e-6:
-                d = gp_Dir()
-                props.Normal(d)
-                assert np.abs(N[i] - [d.X(), d.Y(), d.Z()]).max() < 1e-10
-                checked += 1
-    assert checked >= 290  # of 300: normals at (near) inflections are skipped
 
 
 # ------------------------------------------------------------------------------------------

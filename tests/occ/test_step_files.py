@@ -21,7 +21,7 @@ from splinekit.brep import Solid  # noqa: E402
 from splinekit.interop.occ import _sub_shapes  # noqa: E402
 from splinekit.interop.occ_brep import brep_list_to_shape  # noqa: E402
 
-DATA = pathlib.Path(__file__).resolve().parents[1] / ".." / "shared" / "data" / "step"
+DATA = pathlib.Path(__file__).resolve().parents[2] / ".." / "shared" / "data" / "step"
 FAST = ["sw2013_two_spheres.stp", "ug19_io1_analytic.stp", "euclid_screw.step", "catiav4_4solids_sphere_torus_cone.stp"]
 # relative volume tolerance per file: OCC's GProp at eps 1e-9 on rational B-spline faces moves by
 # about 2e-7 (measured on a sphere against 4/3 pi r^3), so 1e-6 by default; the MANIFEST's

@@ -27,7 +27,7 @@ import models
 
 pytestmark = pytest.mark.slow  # each build runs several OCC booleans and fillets
 
-ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 
 
 def splinekit(*args, cwd):

@@ -21,7 +21,7 @@ import splinekit as sk  # noqa: E402
 from splinekit.brep import Solid  # noqa: E402
 
 PI = np.pi
-STEP_DIR = Path(__file__).resolve().parents[1] / ".." / "shared" / "data" / "step"
+STEP_DIR = Path(__file__).resolve().parents[2] / ".." / "shared" / "data" / "step"
 
 
 def occ_props(part, precision=1e-10):

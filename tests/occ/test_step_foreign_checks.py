@@ -20,7 +20,7 @@ import splinekit as sk  # noqa: E402
 from exporters import import_step  # noqa: E402
 from splinekit.brep import Solid  # noqa: E402
 
-STEP_DIR = Path(__file__).resolve().parents[1] / ".." / "shared" / "data" / "step"
+STEP_DIR = Path(__file__).resolve().parents[2] / ".." / "shared" / "data" / "step"
 
 _QUICK = {"sw2013_two_spheres.stp", "ug19_io1_analytic.stp", "catiav4_4solids_sphere_torus_cone.stp",
           "euclid_screw.step"}
