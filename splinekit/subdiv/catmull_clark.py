@@ -11,11 +11,15 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
-from ..basis.jit import subdiv_kernels
 from ..mesh.topology import Topology
+from ._compiled import CATMULL_CLARK
 from .creases import child_sharpness
-from .split import child_topology
+from .level import Level, RefinementStep
 from .masks import csr, diag, edge_blend, midpoint_matrix, neighbor_matrix, vertex_point_matrix
+from .scheme import Scheme, refine_once
+from .split import child_topology
+
+NAME = "catmull-clark"
 
 
 def face_point_matrix(t: Topology) -> sp.csr_matrix:
@@ -23,21 +27,21 @@ def face_point_matrix(t: Topology) -> sp.csr_matrix:
     return csr(t.corner_face, t.face_indices, 1.0 / t.face_sizes[t.corner_face], (t.n_faces, t.n_vertices))
 
 
-def refine(t: Topology, edge_s: np.ndarray, vertex_s: np.ndarray):
-    """Returns ``(child topology, S (V + E + F, V) csr, child crease pairs (k, 2), their parent
-    sharpness (k,), child vertex sharpness)``; large meshes use the compiled kernels
-    (:mod:`splinekit.subdiv._compiled`), which give the same outputs as :func:`refine_numpy`."""
-    K = subdiv_kernels(t.n_halfedges)
-    if K is not None:
-        from . import _compiled
-
-        return _compiled.refine(K, "catmull-clark", t, edge_s, vertex_s)
-    return refine_numpy(t, edge_s, vertex_s)
+def refine(t: Topology, edge_s: np.ndarray, vertex_s: np.ndarray) -> RefinementStep:
+    """One step on ``t`` with sharpness ``edge_s`` ``(E,)``, ``vertex_s`` ``(V,)``; large meshes use the
+    compiled kernels, which give the same step as :func:`refine_numpy`. The result unpacks as the
+    former ``(child, S, crease pairs, their parent sharpness, child vertex sharpness)``."""
+    return refine_once(SCHEME, Level(t, edge_s, vertex_s, NAME))
 
 
-def refine_numpy(t: Topology, edge_s: np.ndarray, vertex_s: np.ndarray):
-    """Returns ``(child topology, S (V + E + F, V) csr, child crease pairs (k, 2), their parent
-    sharpness (k,), child vertex sharpness)``."""
+def refine_numpy(t: Topology, edge_s: np.ndarray, vertex_s: np.ndarray) -> RefinementStep:
+    """:func:`refine` by the numpy rules only."""
+    return refine_level(Level(t, edge_s, vertex_s, NAME))
+
+
+def refine_level(level: Level) -> RefinementStep:
+    """One step by the numpy rules: ``S`` ``(V + E + F, V)`` and the child quads."""
+    t, edge_s, vertex_s = level.topology, level.edge_sharpness, level.vertex_sharpness
     V, E, F = t.n_vertices, t.n_edges, t.n_faces
     Sf = face_point_matrix(t)
 
@@ -76,4 +80,9 @@ def refine_numpy(t: Topology, edge_s: np.ndarray, vertex_s: np.ndarray):
         [np.column_stack([t.edges[sharp, 0], V + sharp]), np.column_stack([V + sharp, t.edges[sharp, 1]])]
     )
     child_vertex_s = np.concatenate([child_sharpness(vertex_s), np.zeros(child.n_vertices - V)])
-    return child, S, pairs, np.tile(edge_s[sharp], 2), child_vertex_s
+    return RefinementStep.from_creases(NAME, child, S, pairs, np.tile(edge_s[sharp], 2), child_vertex_s)
+
+
+SCHEME = Scheme(NAME, refine_level, child_faces=lambda t: t.n_halfedges, input_face_size=None, output_face_size=4,
+                splits_edges=True, kernel=CATMULL_CLARK)
+"""Catmull-Clark as the generic machinery sees it (see :class:`~splinekit.subdiv.scheme.Scheme`)."""

@@ -12,11 +12,15 @@ import numpy as np
 import scipy.sparse as sp
 
 from ..errors import MeshTopologyError
-from ..basis.jit import subdiv_kernels
 from ..mesh.topology import Topology
+from ._compiled import LOOP
 from .creases import child_sharpness
-from .split import child_topology
+from .level import Level, RefinementStep
 from .masks import csr, diag, edge_blend, midpoint_matrix, neighbor_matrix, vertex_point_matrix
+from .scheme import Scheme, refine_once
+from .split import child_topology
+
+NAME = "loop"
 
 
 def loop_beta(n: np.ndarray) -> np.ndarray:
@@ -27,31 +31,30 @@ def loop_beta(n: np.ndarray) -> np.ndarray:
     return np.where(n > 0, beta, 0.0)
 
 
-def refine(t: Topology, edge_s: np.ndarray, vertex_s: np.ndarray):
-    """Returns ``(child topology, S (V + E, V) csr, child crease pairs (k, 2), their parent
-    sharpness (k,), child vertex sharpness)``; large meshes use the compiled kernels
-    (:mod:`splinekit.subdiv._compiled`), which give the same outputs as :func:`refine_numpy`."""
-    _require_triangles(t)
-    K = subdiv_kernels(4 * t.n_faces)
-    if K is not None:
-        from . import _compiled
-
-        return _compiled.refine(K, "loop", t, edge_s, vertex_s)
-    return refine_numpy(t, edge_s, vertex_s)
+def refine(t: Topology, edge_s: np.ndarray, vertex_s: np.ndarray) -> RefinementStep:
+    """One step on the triangles ``t`` with sharpness ``edge_s`` ``(E,)``, ``vertex_s`` ``(V,)``; large
+    meshes use the compiled kernels, which give the same step as :func:`refine_numpy`. The result
+    unpacks as the former ``(child, S, crease pairs, their parent sharpness, child vertex sharpness)``."""
+    require_triangles(t)
+    return refine_once(SCHEME, Level(t, edge_s, vertex_s, NAME))
 
 
-def _require_triangles(t: Topology):
+def require_triangles(t: Topology):
+    """MeshTopologyError naming the first face of ``t`` that is not a triangle."""
     if not (t.face_sizes == 3).all():
         f = int(np.flatnonzero(t.face_sizes != 3)[0])
         raise MeshTopologyError(f"Loop subdivision needs triangles; face {f} has {int(t.face_sizes[f])} vertices")
 
 
-def refine_numpy(t: Topology, edge_s: np.ndarray, vertex_s: np.ndarray):
-    """Returns ``(child topology, S (V + E, V) csr, child crease pairs (k, 2), their parent
-    sharpness (k,), child vertex sharpness)``."""
-    if not (t.face_sizes == 3).all():
-        f = int(np.flatnonzero(t.face_sizes != 3)[0])
-        raise MeshTopologyError(f"Loop subdivision needs triangles; face {f} has {int(t.face_sizes[f])} vertices")
+def refine_numpy(t: Topology, edge_s: np.ndarray, vertex_s: np.ndarray) -> RefinementStep:
+    """:func:`refine` by the numpy rules only."""
+    return refine_level(Level(t, edge_s, vertex_s, NAME))
+
+
+def refine_level(level: Level) -> RefinementStep:
+    """One step by the numpy rules: ``S`` ``(V + E, V)`` and four child triangles per triangle."""
+    t, edge_s, vertex_s = level.topology, level.edge_sharpness, level.vertex_sharpness
+    require_triangles(t)
     V, E = t.n_vertices, t.n_edges
 
     # edge points: 3/8 (v0 + v1) + 1/8 (opposite vertices) when smooth
@@ -101,4 +104,9 @@ def refine_numpy(t: Topology, edge_s: np.ndarray, vertex_s: np.ndarray):
         [np.column_stack([t.edges[sharp, 0], V + sharp]), np.column_stack([V + sharp, t.edges[sharp, 1]])]
     )
     child_vertex_s = np.concatenate([child_sharpness(vertex_s), np.zeros(child.n_vertices - V)])
-    return child, S, pairs, np.tile(edge_s[sharp], 2), child_vertex_s
+    return RefinementStep.from_creases(NAME, child, S, pairs, np.tile(edge_s[sharp], 2), child_vertex_s)
+
+
+SCHEME = Scheme(NAME, refine_level, child_faces=lambda t: 4 * t.n_faces, input_face_size=3, output_face_size=3,
+                splits_edges=True, kernel=LOOP, valence_weights=loop_beta)
+"""Loop as the generic machinery sees it (see :class:`~splinekit.subdiv.scheme.Scheme`)."""

@@ -52,7 +52,7 @@ from ..mesh.polymesh import PolyMesh
 from ..mesh.topology import Topology, ranges
 from .creases import SMOOTH, vertex_rules
 from .limit import crease_normals, limit_matrix, tangent_matrices
-from .refiner import BYTES_PER_CORNER, Refinement, _scheme
+from .refiner import BYTES_PER_CORNER, Refinement, scheme_named
 
 __all__ = ["SubdivisionSurface", "regular_faces", "patch_indices", "BSPLINE_TO_BEZIER"]
 
@@ -124,7 +124,7 @@ class SubdivisionSurface:
         if not isinstance(mesh, PolyMesh):
             raise ParameterError(f"SubdivisionSurface expects a PolyMesh, got {type(mesh).__name__}")
         self.mesh = mesh
-        self.scheme = _scheme(scheme)
+        self.scheme = scheme_named(scheme)
         self._options = dict(creases=creases, corners=corners, boundary=boundary, crease_method=crease_method)
         self._refinements: dict[int, Refinement] = {}
         self.refinement(0)  # validates creases, corners, boundary and the scheme's face type
