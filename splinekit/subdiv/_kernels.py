@@ -1,9 +1,9 @@
 """Compiled kernels of subdivision (numba, ``cache=True``): one level of Catmull-Clark and Loop
-refinement, and the product that composes stencils.
+refinement.
 
 This module gathers the kernels of :mod:`~splinekit.subdiv._kernel_rows` (stencil rows),
-:mod:`~splinekit.subdiv._kernel_children` (child connectivity), :mod:`~splinekit.subdiv._kernel_corners`
-(corner arithmetic) and :mod:`~splinekit.subdiv._kernel_compose` (sparse products). It imports numba
+:mod:`~splinekit.subdiv._kernel_children` (child connectivity) and :mod:`~splinekit.subdiv._kernel_corners`
+(corner arithmetic). It imports numba
 and is itself imported only through :func:`splinekit._kernels.load` on the first large refinement,
 never when splinekit is imported. The numpy/scipy construction in
 :mod:`~splinekit.subdiv.catmull_clark`, :mod:`~splinekit.subdiv.loop` and
@@ -46,10 +46,9 @@ arithmetic; other meshes pass ``cf`` (face of each corner).
 """
 
 from ._kernel_children import cc_child_edges, cc_child_faces, loop_child_edges, loop_child_faces
-from ._kernel_compose import product_counts, product_fill
 from ._kernel_corners import CATMULL_CLARK, CORNER, CREASE, DART, LOOP, SMOOTH, vertex_corners
 from ._kernel_rows import APPLY, BOUNDS, FILL, compact, rows
 
 __all__ = ["APPLY", "BOUNDS", "CATMULL_CLARK", "CORNER", "CREASE", "DART", "FILL", "LOOP", "SMOOTH", "cc_child_edges",
-           "cc_child_faces", "compact", "loop_child_edges", "loop_child_faces", "product_counts", "product_fill",
-           "rows", "vertex_corners"]
+           "cc_child_faces", "compact", "loop_child_edges", "loop_child_faces", "rows",
+           "vertex_corners"]
