@@ -27,7 +27,7 @@ from splinekit import _kernels
 from splinekit.errors import ParameterError
 from splinekit.mesh import Topology
 from splinekit.mesh.primitives import box, icosphere, torus
-from splinekit.subdiv import _compiled, catmull_clark, loop
+from splinekit.subdiv import catmull_clark, loop
 from splinekit.subdiv.creases import edge_sharpness, vertex_sharpness
 
 pytest.importorskip("numba")

@@ -1,4 +1,5 @@
-"""One level of Loop refinement (triangles): topology and stencil matrix.
+"""Loop (triangles): the rules of one refinement level (topology and stencil matrix) and the
+smooth limit masks.
 
 Child vertices: the V vertex points, then the E edge points. Each triangle
 ``(a, b, c)`` becomes four. The smooth vertex rule uses Loop's original weight
@@ -68,7 +69,7 @@ def refine_level(level: Level) -> RefinementStep:
     n = t.valence
     beta = loop_beta(n)
     smooth_v = diag(1.0 - n * beta) + neighbor_matrix(t, beta)
-    S_v = vertex_point_matrix(t, edge_s, vertex_s, smooth_v)
+    S_v = vertex_point_matrix(level, smooth_v)
     S = sp.vstack([S_v, S_e], format="csr")
 
     tri = t.face_indices.reshape(-1, 3)
@@ -107,6 +108,45 @@ def refine_level(level: Level) -> RefinementStep:
     return RefinementStep.from_creases(NAME, child, S, pairs, np.tile(edge_s[sharp], 2), child_vertex_s)
 
 
+# -- limit masks ---------------------------------------------------------------------------------
+def limit_mask(t: Topology) -> sp.spmatrix:
+    """``(V, V)`` limit positions of smooth vertices: ``(1 - n chi) v + chi sum e_j`` with
+    ``chi = 1 / (n + 3 / (8 beta(n)))``."""
+    V = t.n_vertices
+    n = t.valence.astype(np.float64)
+    beta = loop_beta(n)
+    with np.errstate(divide="ignore"):
+        chi = np.where(n > 0, 1.0 / (n + 3.0 / (8.0 * np.maximum(beta, 1e-300))), 0.0)
+    a, b = t.edges[:, 0], t.edges[:, 1]
+    ends, other = np.concatenate([a, b]), np.concatenate([b, a])
+    return diag(1.0 - n * chi) + csr(ends, other, chi[ends], (V, V))
+
+
+def tangent_terms(t: Topology, h: np.ndarray, v: np.ndarray, n: np.ndarray, j: int):
+    """Terms of the two tangent masks at the ``j``-th ring position of smooth vertices ``v`` (valence
+    ``n``, outgoing half-edges ``h``, counter-clockwise): ``(rows, cols, w1, w2)``, lists of arrays.
+    ``sum cos(2 pi j / n) e_j`` and ``sum sin(2 pi j / n) e_j``."""
+    th = 2 * np.pi * j / n
+    return [v], [t.halfedge_dst[h]], [np.cos(th)], [np.sin(th)]
+
+
+def sector_matrix(k: int) -> np.ndarray:
+    """Subdivision map ``(k + 2, k + 2)`` of a one-sided crease ring with ``k`` triangles, in the
+    order ``[v, e_0 .. e_k]``; ``v e_0`` and ``v e_k`` are the sharp edges (crease rule at v), the
+    edges between them smooth (``3/8, 3/8, 1/8, 1/8``)."""
+    size = k + 2
+    A = np.zeros((size, size))
+    A[0, 0], A[0, 1], A[0, k + 1] = 0.75, 0.125, 0.125
+    for j in range(k + 1):
+        if j in (0, k):
+            A[1 + j, [0, 1 + j]] = 0.5
+        else:
+            A[1 + j, [0, 1 + j]] = 0.375
+            A[1 + j, [j, 2 + j]] += 0.125
+    return A
+
+
 SCHEME = Scheme(NAME, refine_level, child_faces=lambda t: 4 * t.n_faces, input_face_size=3, output_face_size=3,
-                splits_edges=True, kernel=LOOP, valence_weights=loop_beta)
+                splits_edges=True, kernel=LOOP, valence_weights=loop_beta, limit_mask=limit_mask,
+                tangent_terms=tangent_terms, sector_matrix=sector_matrix)
 """Loop as the generic machinery sees it (see :class:`~splinekit.subdiv.scheme.Scheme`)."""

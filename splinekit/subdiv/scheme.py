@@ -41,6 +41,11 @@ class Scheme:
     kernel : the rule set's id in the compiled kernels (:mod:`splinekit.subdiv._kernels`), or None
     valence_weights : the per-valence weights table ``(n_max + 1,)`` the kernels read for the smooth
         vertex rule (Loop's beta), or None
+    limit_mask : ``Topology -> (V, V)`` limit positions of smooth vertices, or None (no limit masks)
+    tangent_terms : ``(topology, half-edges h, vertices v, valence n, ring position j) -> (rows, cols,
+        w1, w2)``: the terms of the two smooth tangent masks at ring position ``j``
+    sector_matrix : ``k -> (s, s)`` subdivision map of a one-sided crease ring of ``k`` faces
+        (see :mod:`splinekit.subdiv.limit`)
     """
 
     name: str
@@ -51,6 +56,9 @@ class Scheme:
     splits_edges: bool
     kernel: int | None = None
     valence_weights: Callable[[np.ndarray], np.ndarray] | None = None
+    limit_mask: Callable | None = None
+    tangent_terms: Callable | None = None
+    sector_matrix: Callable[[int], np.ndarray] | None = None
 
     def estimated_faces(self, topology: Topology, levels: int) -> int:
         """Faces after ``levels`` steps (exact for Catmull-Clark and Loop): every step after the
