@@ -55,9 +55,6 @@ def scheme_named(name) -> str:
     return key
 
 
-_scheme = scheme_named  # the former private name (subdiv.surface used it)
-
-
 class Refinement:
     """A mesh's topology refined ``levels`` times by one scheme.
 
@@ -117,10 +114,10 @@ class Refinement:
         expected = rules.estimated_faces(topo, levels)
         limits.check(expected * rules.output_face_size * BYTES_PER_CORNER,
                      f"{levels} levels of {self.scheme} subdivision ({expected:,} faces)")
-        k = rules.input_face_size
-        if k is not None and not (topo.face_sizes == k).all():
-            f = int(np.flatnonzero(topo.face_sizes != k)[0])
-            shape = {3: "triangles", 4: "quads"}.get(k, f"faces of {k} vertices")
+        size = rules.input_face_size
+        if size is not None and not (topo.face_sizes == size).all():
+            f = int(np.flatnonzero(topo.face_sizes != size)[0])
+            shape = {3: "triangles", 4: "quads"}.get(size, f"faces of {size} vertices")
             raise MeshTopologyError(f"{self.scheme.capitalize()} subdivision needs {shape}; face {f} has "
                                     f"{int(topo.face_sizes[f])} vertices")
         self.boundary = boundary
