@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 import splinekit as sk
+import splinekit.subdiv.fans as fans_module
 import splinekit.subdiv.surface as surface_module
 from splinekit.errors import SplineKitError
 from splinekit.mesh import primitives
@@ -54,6 +55,7 @@ def refined_sizes(monkeypatch):
             sizes.append(self.topology.n_faces)
 
     monkeypatch.setattr(surface_module, "Refinement", Recording)
+    monkeypatch.setattr(fans_module, "Refinement", Recording)  # the fans' local refinements
     return sizes
 
 
@@ -167,7 +169,7 @@ def _whole_mesh_limits(s, level, extra):
     from splinekit.subdiv.limit import limit_matrix
 
     fine = s.refinement(level + extra)
-    L = limit_matrix(fine.topology, fine.edge_sharpness[-1], fine.vertex_sharpness[-1], s.scheme)
+    L = limit_matrix(fine.finest)
     # the vertex points of a level keep their indices at every finer level
     return (L @ fine.apply(s.mesh.vertices))[: s.refinement(level).topology.n_vertices]
 
@@ -178,11 +180,10 @@ def _whole_mesh_normals(s, extra):
     from splinekit.subdiv.limit import crease_normals, tangent_matrices
 
     fine = s.refinement(extra)
-    t, es, vs = fine.topology, fine.edge_sharpness[-1], fine.vertex_sharpness[-1]
     X = fine.apply(s.mesh.vertices)
-    T1, T2, ok = tangent_matrices(t, es, vs, s.scheme)
+    T1, T2, ok = tangent_matrices(fine.finest)
     n = np.cross(T1 @ X, T2 @ X)
-    cn, covered = crease_normals(t, X, es, vs, s.scheme)
+    cn, covered = crease_normals(fine.finest, X)
     n[~ok] = cn[~ok]
     assert (ok | covered)[: s.mesh.n_vertices].all()
     n = n[: s.mesh.n_vertices]

@@ -1,7 +1,7 @@
 """The compiled Catmull-Clark and Loop kernels (splinekit.subdiv._kernels) against the numpy path.
 
 The numpy/scipy construction (``catmull_clark.refine_numpy``, ``loop.refine_numpy``) is the
-reference. With ``jit.MIN_FACES`` lowered to 0 every level goes through the kernels; with
+reference. With ``_kernels.MIN_WORK`` lowered to 0 every level goes through the kernels; with
 ``SPLINEKIT_NUMBA=0`` none does. Compared per level: the stencil matrix (same sparsity once
 explicit zeros are dropped, values within 1e-15), the child connectivity and edge tables (equal),
 the crease data (equal); and at the end the refined vertices.
@@ -23,11 +23,11 @@ import pytest
 import scipy.sparse as sp
 
 from splinekit import PolyMesh, Refinement, subdivide, subdivision_matrix
-from splinekit.basis import jit
+from splinekit import _kernels
 from splinekit.errors import ParameterError
 from splinekit.mesh import Topology
 from splinekit.mesh.primitives import box, icosphere, torus
-from splinekit.subdiv import _compiled, catmull_clark, loop
+from splinekit.subdiv import catmull_clark, loop
 from splinekit.subdiv.creases import edge_sharpness, vertex_sharpness
 
 pytest.importorskip("numba")
@@ -38,7 +38,7 @@ SHARPNESS = np.array([np.inf, 2.0, 1.5, 1.0, 0.5])
 @pytest.fixture
 def compiled(monkeypatch):
     """Every refinement level through the kernels."""
-    monkeypatch.setattr(jit, "MIN_FACES", 0)
+    monkeypatch.setattr(_kernels, "MIN_WORK", 0)
     monkeypatch.delenv("SPLINEKIT_NUMBA", raising=False)
 
 
@@ -248,7 +248,7 @@ def both_paths(monkeypatch, make_refinement):
     monkeypatch.setenv("SPLINEKIT_NUMBA", "0")
     ref = make_refinement()
     monkeypatch.delenv("SPLINEKIT_NUMBA")
-    monkeypatch.setattr(jit, "MIN_FACES", 0)
+    monkeypatch.setattr(_kernels, "MIN_WORK", 0)
     fast = make_refinement()
     return ref, fast
 
@@ -294,10 +294,10 @@ def test_subdivide_unchanged(scheme, name, opts, monkeypatch):
 
 
 def test_large_mesh_uses_kernels_by_default(monkeypatch):
-    """Above jit.MIN_FACES the kernels serve without any setting; results as the numpy path."""
+    """Above _kernels.MIN_WORK the kernels serve without any setting; results as the numpy path."""
     monkeypatch.delenv("SPLINEKIT_NUMBA", raising=False)
     mesh = PolyMesh(torus(60, 40, 2.0, 0.7).vertices + 0.01, torus(60, 40, 2.0, 0.7).faces)
-    assert _compiled.child_face_count("catmull-clark", mesh.topology) < jit.MIN_FACES
+    assert catmull_clark.SCHEME.child_faces(mesh.topology) < _kernels.MIN_WORK
     fast = subdivide(mesh, "catmull-clark", 2)  # level 2 has 38,400 faces: compiled
     t_fast, S_fast = subdivision_matrix(mesh, "catmull-clark", 2)
     monkeypatch.setenv("SPLINEKIT_NUMBA", "0")
@@ -315,7 +315,7 @@ def test_large_mesh_uses_kernels_by_default(monkeypatch):
 @pytest.mark.parametrize("kernels", [False, True])
 def test_keep_levels_false(kernels, monkeypatch):
     if kernels:
-        monkeypatch.setattr(jit, "MIN_FACES", 0)
+        monkeypatch.setattr(_kernels, "MIN_WORK", 0)
     else:
         monkeypatch.setenv("SPLINEKIT_NUMBA", "0")
     mesh = mixed_patch(4)
@@ -337,16 +337,17 @@ def test_keep_levels_false(kernels, monkeypatch):
 
 
 def test_numpy_switch(monkeypatch):
-    monkeypatch.setattr(jit, "MIN_FACES", 0)
+    monkeypatch.setattr(_kernels, "MIN_WORK", 0)
     monkeypatch.setenv("SPLINEKIT_NUMBA", "0")
-    assert jit.subdiv_kernels(10**9) is None
+    assert catmull_clark.SCHEME.kernels(box().topology) is None
     t = box().topology
     child = catmull_clark.refine(t, edge_sharpness(t, None), vertex_sharpness(t, None, "edge-and-corner"))[0]
     assert "_uniform_size" not in child.__dict__  # the numpy path built it
     monkeypatch.delenv("SPLINEKIT_NUMBA")
-    assert jit.subdiv_kernels(10) is not None
-    monkeypatch.setattr(jit, "MIN_FACES", 20_000)
-    assert jit.subdiv_kernels(19_999) is None
+    assert catmull_clark.SCHEME.kernels(t) is not None
+    monkeypatch.setattr(_kernels, "MIN_WORK", 25)
+    assert catmull_clark.SCHEME.kernels(t) is None  # 24 child faces
+
 
 
 def test_small_subdivision_does_not_import_numba():

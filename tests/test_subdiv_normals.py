@@ -15,7 +15,8 @@ from splinekit.mesh import primitives
 from splinekit.mesh.topology import Topology
 from splinekit.subdiv.limit import dart_masks, limit_matrix, tangent_matrices
 from splinekit.subdiv.refiner import Refinement
-from splinekit.subdiv.surface import _fan_normals
+from splinekit.subdiv.fans import fan_normals
+from splinekit.subdiv.level import Level
 
 
 def _bent_grid(triangles: bool):
@@ -30,8 +31,8 @@ def _bent_grid(triangles: bool):
 
 def _fan_reference(surface, level):
     r = surface.refinement(level)
-    L = limit_matrix(r.topology, r.edge_sharpness[-1], r.vertex_sharpness[-1], surface.scheme)
-    f = _fan_normals(r.topology, L @ r.apply(surface.mesh.vertices))[: surface.mesh.n_vertices]
+    L = limit_matrix(r.finest)
+    f = fan_normals(r.topology, L @ r.apply(surface.mesh.vertices))[: surface.mesh.n_vertices]
     return f / np.linalg.norm(f, axis=1, keepdims=True)
 
 
@@ -92,7 +93,7 @@ def _deep_fan(mesh, scheme, sharp_pairs, c, levels):
         t, X, Y, c = r.topology, r.apply(X), r.apply(Y), cc
         Y = (Y - Y[c]) / np.abs(Y - Y[c]).max()
         pairs = [tuple(map(int, e)) for e in t.edges[np.isinf(r.edge_sharpness[-1])]]
-    n = _fan_normals(t, Y)[c]
+    n = fan_normals(t, Y)[c]
     return X[c], n / np.linalg.norm(n)
 
 
@@ -131,7 +132,7 @@ def test_dart_limit_masks_give_the_same_point_at_every_level():
         reference = s.limit_points()[darts]
         for k in range(first, 6 if s.scheme == "catmull-clark" and s.mesh.is_quad_mesh else 5):
             r = s.refinement(k)
-            L = limit_matrix(r.topology, r.edge_sharpness[-1], r.vertex_sharpness[-1], s.scheme)
+            L = limit_matrix(r.finest)
             np.testing.assert_allclose((L @ r.apply(s.mesh.vertices))[darts], reference, rtol=0, atol=1e-12)
 
 
@@ -202,8 +203,8 @@ def test_dart_masks_leave_every_other_vertex_unchanged(scheme):
     plain = np.zeros(t.n_edges)
     creased = plain.copy()
     creased[5] = np.inf
-    before = [limit_matrix(t, plain, vs, scheme).toarray(), *[m.toarray() for m in tangent_matrices(t, plain, vs, scheme)[:2]]]
-    after = [limit_matrix(t, creased, vs, scheme).toarray(), *[m.toarray() for m in tangent_matrices(t, creased, vs, scheme)[:2]]]
+    before, after = ([limit_matrix(lv).toarray(), *[m.toarray() for m in tangent_matrices(lv)[:2]]]
+                     for lv in (Level(t, plain, vs, scheme), Level(t, creased, vs, scheme)))
     darts = np.zeros(t.n_vertices, dtype=bool)
     darts[t.edges[5]] = True
     for b, a in zip(before, after):

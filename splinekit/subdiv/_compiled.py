@@ -1,17 +1,18 @@
 """One level of Catmull-Clark or Loop refinement with the compiled kernels.
 
-:class:`Level` prepares a parent level for :mod:`splinekit.subdiv._kernels`
-(which it receives from :func:`splinekit.basis.jit.subdiv_kernels`, so numba
-is imported only for large meshes) and offers the three products of a level
-separately, so that a caller can keep only what it needs and drop the rest
-early: the stencil matrix ``S`` (:meth:`Level.stencil`), ``S @ X`` without
-``S`` (:meth:`Level.apply`) and the child :class:`Topology`
-(:meth:`Level.child`, whose edge tables can be deferred to first use).
+:class:`PreparedLevel` prepares a parent :class:`~splinekit.subdiv.level.Level` for
+:mod:`splinekit.subdiv._kernels` (the module the caller loaded through
+:func:`splinekit._kernels.load`, so numba is imported only for large meshes) and offers the
+three products of a step separately, so that a caller can keep only what it needs and drop the
+rest early: the stencil matrix ``S`` (:meth:`PreparedLevel.stencil`), ``S @ X`` without ``S``
+(:meth:`PreparedLevel.apply`) and the child level (:meth:`PreparedLevel.child_level`, whose edge
+tables can be deferred to first use).
 
-The per-vertex rule codes and blend weights come from the same functions of
-:mod:`splinekit.subdiv.creases` that :func:`~splinekit.subdiv.masks.vertex_point_matrix`
-uses; the numbering of child vertices, faces and edges is that of the numpy
-path (:func:`splinekit.subdiv.split.child_topology`).
+The scheme's rules reach the kernels as its :class:`~splinekit.subdiv.scheme.Scheme` fields
+(``kernel``: the rule set's id, ``valence_weights``: Loop's beta per valence); the per-vertex
+rule codes and blend weights come from the same functions of :mod:`splinekit.subdiv.creases`
+that :func:`~splinekit.subdiv.masks.vertex_point_matrix` uses; the numbering of child vertices,
+faces and edges is that of the numpy path (:func:`splinekit.subdiv.split.child_topology`).
 """
 
 from __future__ import annotations
@@ -23,9 +24,10 @@ from .. import limits
 from ..errors import ResourceLimitError
 from ..mesh.topology import Topology
 from .creases import child_sharpness, transition_weights, vertex_rules
+from .level import Level, RefinementStep
 
 CATMULL_CLARK, LOOP = 0, 1
-_SCHEME_ID = {"catmull-clark": CATMULL_CLARK, "loop": LOOP}
+"""Rule-set ids of the kernels (a scheme's ``Scheme.kernel``)."""
 _I32 = np.iinfo(np.int32).max
 _NONE = np.empty(0, np.int64)
 _NONE.setflags(write=False)  # every kernel call sees the same array types (one compiled version each)
@@ -33,10 +35,6 @@ _EMPTY_I64 = np.empty(0, np.int64)
 _EMPTY_I32 = np.empty(0, np.int32)
 _EMPTY_F64 = np.empty(0)
 _EMPTY_X = np.empty((0, 1))
-
-
-def child_face_count(scheme: str, t: Topology) -> int:
-    return t.n_halfedges if scheme == "catmull-clark" else 4 * t.n_faces
 
 
 def _uniform_size(t: Topology) -> int:
@@ -52,26 +50,20 @@ def _uniform_size(t: Topology) -> int:
     return k
 
 
-def _kernels():
-    from ..basis.jit import _load
-
-    return _load("splinekit.subdiv._kernels")
-
-
 class EdgeTables:
     """Builds a refined level's edge tables from its faces and three per-edge arrays of the
     parent (low end, first and second half-edge); called once, by :class:`Topology`, when the
     edges are first needed."""
 
-    def __init__(self, scheme_id, V, E, k, offsets, lo, h0, h1, compact=False):
-        self.scheme_id, self.V, self.E, self.k = scheme_id, V, E, k
+    def __init__(self, K, scheme_id, V, E, k, offsets, lo, h0, h1, compact=False):
+        self.K, self.scheme_id, self.V, self.E, self.k = K, scheme_id, V, E, k
         if compact and max(V + E, 4 * h0.size) < _I32:
             # kept until first use: half the memory (converted back when called)
             lo, h0, h1 = lo.astype(np.int32), h0.astype(np.int32), h1.astype(np.int32)
         self.offsets, self.lo, self.h0, self.h1 = offsets, lo, h0, h1
 
     def __call__(self, topology: Topology):
-        K = _kernels()
+        K = self.K
         lo, h0, h1 = (np.ascontiguousarray(a, dtype=np.int64) for a in (self.lo, self.h0, self.h1))
         offsets = self.offsets
         self.offsets = self.lo = self.h0 = self.h1 = None
@@ -82,13 +74,16 @@ class EdgeTables:
         return edges, che, (h0, h1)
 
 
-class Level:
-    """A parent level prepared for the kernels (see the module docstring)."""
+class PreparedLevel:
+    """A parent level prepared for the kernels ``K`` and the rules of ``scheme`` (see the module
+    docstring)."""
 
-    def __init__(self, K, scheme: str, t: Topology, edge_s: np.ndarray, vertex_s: np.ndarray):
+    def __init__(self, K, scheme, level: Level):
         self.K = K
-        self.scheme = scheme
-        self.sid = _SCHEME_ID[scheme]
+        self.scheme = scheme.name
+        self.sid = scheme.kernel
+        t, edge_s, vertex_s = level.topology, level.edge_sharpness, level.vertex_sharpness
+        self.parent_s = (edge_s, vertex_s)  # for the child's sharpness
         self.V, self.E, self.F, self.H = t.n_vertices, t.n_edges, t.n_faces, t.n_halfedges
         self.fi = t.face_indices
         self.off = t.face_offsets
@@ -102,10 +97,10 @@ class Level:
         self.h1 = np.ascontiguousarray(h1, dtype=np.int64)
         self.n_rows = self.V + self.E + (self.F if self.sid == CATMULL_CLARK else 0)
         edge_s = np.ascontiguousarray(edge_s, dtype=np.float64)
-        self._prepare_rows(t, edge_s, np.ascontiguousarray(vertex_s, dtype=np.float64))
+        self._prepare_rows(t, edge_s, np.ascontiguousarray(vertex_s, dtype=np.float64), scheme.valence_weights)
 
     # -- stencil rows -------------------------------------------------------------------------
-    def _prepare_rows(self, t, edge_s, vertex_s):
+    def _prepare_rows(self, t, edge_s, vertex_s, valence_weights):
         self.edge_s = edge_s
         self.vc_off, self.vc, self.valence = self.K.vertex_corners(self.fi, self.V, self.edges)
         if not edge_s.any() and not vertex_s.any():
@@ -121,11 +116,9 @@ class Level:
             self.cc = np.where(same, 0.0, 1.0 - w)
             self.rule_p = parent.astype(np.int8)
             self.rule_c = child.astype(np.int8)
-        if self.sid == LOOP:
-            from .loop import loop_beta
-
+        if valence_weights is not None:
             vmax = int(self.valence.max()) if self.V else 0
-            self.beta = np.ascontiguousarray(loop_beta(np.arange(vmax + 1)), dtype=np.float64)
+            self.beta = np.ascontiguousarray(valence_weights(np.arange(vmax + 1)), dtype=np.float64)
         else:
             self.beta = np.empty(0)
 
@@ -211,7 +204,7 @@ class Level:
             n_child, size = self.V + self.E, 3
         self.fi = self.he = self.cf = None
         offsets = np.arange(0, faces.size + 1, size, dtype=np.int64)
-        tables = EdgeTables(self.sid, self.V, self.E, self.k, self.off if self.k == 0 else _NONE, lo, self.h0, self.h1,
+        tables = EdgeTables(K, self.sid, self.V, self.E, self.k, self.off if self.k == 0 else _NONE, lo, self.h0, self.h1,
                             compact=lazy)
         self.h0 = self.h1 = self.off = None
         if lazy:
@@ -221,6 +214,15 @@ class Level:
             child._set_edge_table(*tables(child))
         child.__dict__["_uniform_size"] = size
         return child
+
+    def child_level(self, stencil=None, lazy: bool = False) -> Level:
+        """The child :class:`Level` (with ``stencil`` when given); see :meth:`child`. Its sharpness
+        is computed from the parent's without locating edges (:func:`child_edge_sharpness`)."""
+        edge_s, vertex_s = self.parent_s
+        self.parent_s = None
+        topology = self.child(lazy=lazy)
+        return Level(topology, child_edge_sharpness(edge_s, self.n_inner_edges),
+                     child_vertex_sharpness(vertex_s, topology.n_vertices), self.scheme, stencil)
 
 
 def child_edge_sharpness(edge_s: np.ndarray, n_inner: int) -> np.ndarray:
@@ -245,16 +247,16 @@ def child_vertex_sharpness(vertex_s: np.ndarray, n_child: int) -> np.ndarray:
     return out
 
 
-def refine(K, scheme: str, t: Topology, edge_s: np.ndarray, vertex_s: np.ndarray):
-    """The compiled counterpart of ``catmull_clark.refine`` / ``loop.refine`` (same outputs)."""
-    level = Level(K, scheme, t, edge_s, vertex_s)
-    S = level.stencil()
-    level.release_rows()
-    child = level.child()
+def refine(K, scheme, level: Level) -> RefinementStep:
+    """The compiled counterpart of the numpy rules ``scheme.refine`` (the same step)."""
+    t, edge_s = level.topology, level.edge_sharpness
+    prepared = PreparedLevel(K, scheme, level)
+    S = prepared.stencil()
+    prepared.release_rows()
+    child = prepared.child_level(S)
     V = t.n_vertices
     sharp = np.flatnonzero(edge_s > 0)
     pairs = np.concatenate(
         [np.column_stack([t.edges[sharp, 0], V + sharp]), np.column_stack([V + sharp, t.edges[sharp, 1]])]
     )
-    child_vertex_s = np.concatenate([child_sharpness(vertex_s), np.zeros(child.n_vertices - V)])
-    return child, S, pairs, np.tile(edge_s[sharp], 2), child_vertex_s
+    return RefinementStep(child, pairs, np.tile(edge_s[sharp], 2))

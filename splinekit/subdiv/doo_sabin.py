@@ -23,7 +23,11 @@ import numpy as np
 import scipy.sparse as sp
 
 from ..mesh.topology import Topology, ranges
+from .level import Level, RefinementStep
 from .masks import csr
+from .scheme import Scheme
+
+NAME = "doo-sabin"
 
 
 def _corner_ring(t: Topology, vertices: np.ndarray, boundary: np.ndarray):
@@ -58,9 +62,15 @@ def _corner_ring(t: Topology, vertices: np.ndarray, boundary: np.ndarray):
     return ring, lengths
 
 
-def refine(t: Topology, edge_s: np.ndarray, vertex_s: np.ndarray):
-    """Returns ``(child topology, S (H, V) csr, child crease pairs (k, 2), their parent
-    sharpness (k,), child vertex sharpness)``."""
+def refine(t: Topology, edge_s: np.ndarray, vertex_s: np.ndarray) -> RefinementStep:
+    """One step on ``t`` with sharpness ``edge_s`` ``(E,)``, ``vertex_s`` ``(V,)``. The result unpacks as
+    the former ``(child, S (H, V), crease pairs, their parent sharpness, child vertex sharpness)``."""
+    return refine_level(Level(t, edge_s, vertex_s, NAME))
+
+
+def refine_level(level: Level) -> RefinementStep:
+    """One step: ``S`` ``(H, V)`` (one child vertex per parent corner) and the F-, E- and V-faces."""
+    t, edge_s, vertex_s = level.topology, level.edge_sharpness, level.vertex_sharpness
     H, V = t.n_halfedges, t.n_vertices
     c = np.arange(H)
     k = t.face_sizes[t.corner_face]
@@ -123,4 +133,10 @@ def refine(t: Topology, edge_s: np.ndarray, vertex_s: np.ndarray):
     pairs = np.concatenate(
         [np.column_stack([sa, t.next_corner[sa]]), np.column_stack([sb, t.next_corner[sb]])]
     )
-    return child, S, pairs, np.tile(edge_s[sharp], 2), np.zeros(H)
+    return RefinementStep.from_creases(NAME, child, S, pairs, np.tile(edge_s[sharp], 2), np.zeros(H))
+
+
+SCHEME = Scheme(NAME, refine_level, child_faces=lambda t: t.n_faces + t.n_edges + t.n_vertices, input_face_size=None,
+                output_face_size=4, splits_edges=False)
+"""Doo-Sabin as the generic machinery sees it (see :class:`~splinekit.subdiv.scheme.Scheme`); numpy
+rules only."""

@@ -5,15 +5,9 @@ Catmull-Clark, triangles for Loop) and whose semi-sharp features have expired
 (every sharpness 0 or infinite); :class:`~splinekit.subdiv.surface.SubdivisionSurface`
 refines that far first and maps the result back to the control vertices.
 
-- Catmull-Clark, smooth vertex of valence n:
-  ``(n^2 v + 4 sum e_j + sum d_j) / (n (n + 5))`` with ``e_j`` the edge
-  neighbours and ``d_j`` the diagonal vertices of the incident quads; tangents
-  ``sum A cos(2 pi j / n) e_j + (cos(2 pi j / n) + cos(2 pi (j + 1) / n)) d_j`` and
-  the same with sines, ``A = 1 + cos(2 pi / n) + cos(pi / n) sqrt(2 (9 + cos(2 pi / n)))``
-  (Halstead, Kass, DeRose 1993).
-- Loop, smooth vertex: ``(1 - n chi) v + chi sum e_j`` with
-  ``chi = 1 / (n + 3 / (8 beta(n)))``; tangents ``sum cos(2 pi j / n) e_j`` and
-  ``sum sin(2 pi j / n) e_j``.
+- Smooth vertex: the scheme's own masks (``Scheme.limit_mask``, ``Scheme.tangent_terms``:
+  :func:`splinekit.subdiv.catmull_clark.limit_mask`, :func:`splinekit.subdiv.loop.limit_mask`
+  and their ``tangent_terms``).
 - Dart (one infinitely sharp edge, smooth vertex rule), both schemes: the
   smooth masks are not exact there (the crease edge rule breaks the rotational
   symmetry). The map from the dart's fan to its child's fan is a fixed matrix
@@ -21,7 +15,8 @@ refines that far first and maps the result back to the control vertices.
   (:func:`dart_fan_matrix`); the limit and tangent masks are its left
   eigenvectors (:func:`dart_masks`).
 - Crease (and boundary) vertex, both schemes: the cubic B-spline limit of the
-  crease polygon ``(a + 4 v + b) / 6``, tangent ``b - a``.
+  crease polygon ``(a + 4 v + b) / 6``, tangent ``b - a``; the normal from the
+  eigen-analysis of the scheme's crease-sector map (``Scheme.sector_matrix``).
 - Corner: the vertex itself.
 """
 
@@ -32,11 +27,25 @@ from functools import cache
 import numpy as np
 import scipy.sparse as sp
 
+from ..errors import ParameterError
 from ..mesh.topology import Topology
 from .creases import CORNER, CREASE, DART, vertex_rules
-from .loop import loop_beta
+from .level import Level
 from .masks import crease_matrix, csr, diag
-from .refiner import Refinement
+from .refiner import SCHEMES, Refinement
+
+
+def _rules(scheme: str):
+    """The scheme's :class:`~splinekit.subdiv.scheme.Scheme`; ParameterError when it has no limit masks."""
+    rules = SCHEMES[scheme]
+    if rules.limit_mask is None:
+        raise ParameterError(f"limit masks are implemented for catmull-clark and loop, not {scheme}")
+    return rules
+
+
+def _quads(scheme: str) -> bool:
+    """Whether the scheme's fans are quads, whose rings hold the far corners ``d_j`` too."""
+    return SCHEMES[scheme].output_face_size == 4
 
 
 def ordered_rings(t: Topology, vertices: np.ndarray):
@@ -56,67 +65,35 @@ def ordered_rings(t: Topology, vertices: np.ndarray):
     return ring, n
 
 
-def limit_matrix(t: Topology, edge_s: np.ndarray, vertex_s: np.ndarray, scheme: str) -> sp.csr_matrix:
-    """``(V, V)``: limit positions of all vertices from their neighbourhoods."""
-    V = t.n_vertices
+def limit_matrix(level: Level) -> sp.csr_matrix:
+    """``(V, V)``: limit positions of all vertices of ``level`` from their neighbourhoods."""
+    t, edge_s, vertex_s, scheme = level.topology, level.edge_sharpness, level.vertex_sharpness, level.scheme
     rule = vertex_rules(t, edge_s, vertex_s)
     rule[t.vertex_face_count == 0] = CORNER
     smooth_rows = rule <= DART
-    n = t.valence.astype(np.float64)
-    safe = np.maximum(n, 1)
-    a, b = t.edges[:, 0], t.edges[:, 1]
-    ends = np.concatenate([a, b])
-    other = np.concatenate([b, a])
-    if scheme == "catmull-clark":
-        denom = safe * (safe + 5)
-        centre = n * n / denom
-        w_edge = 4.0 / denom
-        corner_v = t.face_indices
-        diagonal = t.face_indices[t.next_corner[t.next_corner]]
-        smooth = diag(centre) + csr(ends, other, w_edge[ends], (V, V)) + csr(corner_v, diagonal, (1.0 / denom)[corner_v], (V, V))
-    elif scheme == "loop":
-        beta = loop_beta(n)
-        with np.errstate(divide="ignore"):
-            chi = np.where(n > 0, 1.0 / (n + 3.0 / (8.0 * np.maximum(beta, 1e-300))), 0.0)
-        smooth = diag(1.0 - n * chi) + csr(ends, other, chi[ends], (V, V))
-    else:
-        raise ValueError(f"limit masks exist for catmull-clark and loop, not {scheme}")
+    smooth = _rules(scheme).limit_mask(t)
     crease = crease_matrix(t, edge_s > 0, rule == CREASE, centre=2.0 / 3.0)
     L = sp.csr_matrix(diag(smooth_rows) @ smooth + crease + diag(rule == CORNER))
     darts, dart_part = _dart_rows(t, edge_s, rule, scheme, "limit")
     return _replace_rows(L, darts, dart_part[0]) if darts.any() else L
 
 
-def tangent_matrices(t: Topology, edge_s: np.ndarray, vertex_s: np.ndarray, scheme: str):
-    """``(T1, T2, ok)``: ``(V, V)`` tangent masks of smooth and dart vertices
+def tangent_matrices(level: Level):
+    """``(T1, T2, ok)``: ``(V, V)`` tangent masks of the smooth and dart vertices of ``level``
     (whose limit normal is ``T1 @ X`` x ``T2 @ X``), and the mask ``ok`` of the
     vertices they cover."""
+    t, edge_s, vertex_s, scheme = level.topology, level.edge_sharpness, level.vertex_sharpness, level.scheme
     V = t.n_vertices
     rule = vertex_rules(t, edge_s, vertex_s)
     ok = (rule <= DART) & (t.vertex_face_count > 0) & ~t.boundary_vertices
     verts = np.flatnonzero(ok)
     ring, n = ordered_rings(t, verts)
     rows, cols, w1, w2 = [], [], [], []
+    terms = _rules(scheme).tangent_terms
     for j in range(ring.shape[1]):
         live = j < n
-        h = ring[live, j]
-        v = verts[live]
-        nn = n[live].astype(np.float64)
-        th = 2 * np.pi * j / nn
-        th1 = 2 * np.pi * (j + 1) / nn
-        e = t.halfedge_dst[h]
-        if scheme == "catmull-clark":
-            A = 1 + np.cos(2 * np.pi / nn) + np.cos(np.pi / nn) * np.sqrt(2 * (9 + np.cos(2 * np.pi / nn)))
-            d = t.face_indices[t.next_corner[t.next_corner[h]]]
-            rows += [v, v]
-            cols += [e, d]
-            w1 += [A * np.cos(th), np.cos(th) + np.cos(th1)]
-            w2 += [A * np.sin(th), np.sin(th) + np.sin(th1)]
-        else:
-            rows.append(v)
-            cols.append(e)
-            w1.append(np.cos(th))
-            w2.append(np.sin(th))
+        for out, part in zip((rows, cols, w1, w2), terms(t, ring[live, j], verts[live], n[live].astype(np.float64), j)):
+            out += part
     if rows:
         r, c = np.concatenate(rows), np.concatenate(cols)
         T1 = csr(r, c, np.concatenate(w1), (V, V))
@@ -159,7 +136,7 @@ def fan_order(t: Topology, sharp: np.ndarray, vertices: np.ndarray, scheme: str)
     start = np.argmax(sharp[t.halfedge_edge[ring]], axis=1)
     ring = np.take_along_axis(ring, (start[:, None] + np.arange(nn)) % nn, axis=1)
     cols = [vertices[:, None], t.halfedge_dst[ring]]
-    if scheme == "catmull-clark":
+    if _quads(scheme):
         cols.append(t.face_indices[t.next_corner[t.next_corner[ring]]])
     return np.concatenate(cols, axis=1)
 
@@ -167,7 +144,7 @@ def fan_order(t: Topology, sharp: np.ndarray, vertices: np.ndarray, scheme: str)
 def _canonical_fan(scheme: str, n: int) -> Topology:
     """The fan of a valence-``n`` vertex 0 in the order of :func:`fan_order`."""
     j = np.arange(n)
-    if scheme == "catmull-clark":
+    if _quads(scheme):
         faces = np.stack([np.zeros(n, dtype=np.int64), 1 + j, 1 + n + j, 1 + (j + 1) % n], axis=1)
     else:
         faces = np.stack([np.zeros(n, dtype=np.int64), 1 + j, 1 + (j + 1) % n], axis=1)
@@ -201,7 +178,7 @@ def _fan_reflection(scheme: str, n: int) -> np.ndarray:
     edge: ``e_j <-> e_(-j)``, ``d_j <-> d_(-1-j)`` (indices mod ``n``)."""
     j = np.arange(n)
     perm = [np.array([0]), 1 + (-j) % n]
-    if scheme == "catmull-clark":
+    if _quads(scheme):
         perm.append(1 + n + (-1 - j) % n)
     return np.concatenate(perm)
 
@@ -252,7 +229,7 @@ def dart_masks(scheme: str, n: int):
     # orientation on a planar fan whose faces run counter-clockwise about +z
     th = 2 * np.pi * np.arange(n) / n
     e = np.stack([np.cos(th), np.sin(th)], axis=1)
-    pts = [np.zeros((1, 2)), e] + ([e + np.roll(e, -1, axis=0)] if scheme == "catmull-clark" else [])
+    pts = [np.zeros((1, 2)), e] + ([e + np.roll(e, -1, axis=0)] if _quads(scheme) else [])
     X = np.concatenate(pts)
     a, b = t1 @ X, t2 @ X
     z = a[0] * b[1] - a[1] * b[0]
@@ -271,14 +248,14 @@ def _dart_rows(t: Topology, edge_s: np.ndarray, rule: np.ndarray, scheme: str, k
     other darts keep the smooth masks."""
     V = t.n_vertices
     mask = np.zeros(V, dtype=bool)
-    if scheme not in ("catmull-clark", "loop"):
+    if _rules(scheme).limit_mask is None:
         return mask, None
     candidates = (rule == DART) & (t.vertex_face_count == t.valence) & ~t.boundary_vertices & (t.valence >= 3)
     if not candidates.any():
         return mask, None
     hard = np.isinf(edge_s)
     infinite = np.bincount(t.edges[hard].ravel(), minlength=V) == 1
-    wrong = t.face_sizes[t.corner_face] != (4 if scheme == "catmull-clark" else 3)
+    wrong = t.face_sizes[t.corner_face] != _rules(scheme).output_face_size
     bad_face = np.bincount(t.face_indices[wrong], minlength=V) > 0
     verts = np.flatnonzero(candidates & infinite & ~bad_face)
     rows, cols = [], []
@@ -300,55 +277,17 @@ def _dart_rows(t: Topology, edge_s: np.ndarray, rule: np.ndarray, scheme: str, k
     return mask, tuple(csr(r, c, np.concatenate(w), (V, V)) for w in vals)
 
 
-def _sector_ring_matrix(scheme: str, k: int) -> np.ndarray:
-    """Subdivision map of a one-sided crease ring with ``k`` faces.
-
-    Ring order: ``[v, e_0 .. e_k, d_0 .. d_(k-1)]`` for Catmull-Clark quads
-    (``d_j`` the far corner of face j, between ``e_j`` and ``e_(j+1)``) and
-    ``[v, e_0 .. e_k]`` for Loop; ``v e_0`` and ``v e_k`` are the sharp edges
-    (crease rule at v), the edges ``v e_j`` between them are smooth. The
-    child ring has the same layout (vertex point, edge points, face points).
-    """
-    if scheme == "catmull-clark":
-        size = 2 * k + 2
-        A = np.zeros((size, size))
-        e = lambda j: 1 + j  # noqa: E731
-        d = lambda j: k + 2 + j  # noqa: E731
-        A[0, 0], A[0, e(0)], A[0, e(k)] = 0.75, 0.125, 0.125
-        face = np.zeros((k, size))
-        for j in range(k):
-            face[j, [0, e(j), d(j), e(j + 1)]] = 0.25
-            A[d(j)] = face[j]
-        for j in range(k + 1):
-            if j in (0, k):
-                A[e(j), [0, e(j)]] = 0.5
-            else:
-                A[e(j), [0, e(j)]] = 0.25
-                A[e(j)] += 0.25 * (face[j - 1] + face[j])
-        return A
-    size = k + 2
-    A = np.zeros((size, size))
-    A[0, 0], A[0, 1], A[0, k + 1] = 0.75, 0.125, 0.125
-    for j in range(k + 1):
-        if j in (0, k):
-            A[1 + j, [0, 1 + j]] = 0.5
-        else:
-            A[1 + j, [0, 1 + j]] = 0.375
-            A[1 + j, [j, 2 + j]] += 0.125
-    return A
-
-
 def _across_mask(scheme: str, k: int) -> np.ndarray:
     """Left eigenvector of the sector map that is symmetric under the sector's
     reflection (``e_j <-> e_(k-j)``, ``d_j <-> d_(k-1-j)``) and has the largest
     eigenvalue below 1: the tangent mask across the crease (the crease tangent
     ``e_k - e_0`` is antisymmetric, eigenvalue 1/2). ``None`` when that
     eigenvalue is not above 1/4."""
-    A = _sector_ring_matrix(scheme, k)
+    A = _rules(scheme).sector_matrix(k)
     size = A.shape[0]
     perm = np.arange(size)
     perm[1 : k + 2] = np.arange(k + 1, 0, -1)
-    if scheme == "catmull-clark":
+    if _quads(scheme):
         perm[k + 2 :] = np.arange(2 * k + 1, k + 1, -1)
     values, vectors = np.linalg.eig(A.T)
     best, mask = 0.25 + 1e-9, None
@@ -364,8 +303,9 @@ def _across_mask(scheme: str, k: int) -> np.ndarray:
     return mask
 
 
-def crease_normals(t: Topology, X: np.ndarray, edge_s: np.ndarray, vertex_s: np.ndarray, scheme: str):
-    """Limit normals at crease, boundary and corner vertices: ``(normals (V, 3), covered (V,))``.
+def crease_normals(level: Level, X: np.ndarray):
+    """Limit normals at the crease, boundary and corner vertices of ``level`` (positions ``X``
+    ``(V, 3)``): ``(normals (V, 3), covered (V,))``.
 
     The fan around such a vertex splits at its sharp edges into sectors. In a
     sector of a crease (or boundary) vertex the limit tangent plane is spanned
@@ -377,8 +317,9 @@ def crease_normals(t: Topology, X: np.ndarray, edge_s: np.ndarray, vertex_s: np.
     is exact; where there are several sectors (an interior crease, a corner)
     the surface has several normals and their normalized sum is returned.
     """
+    t, edge_s, scheme = level.topology, level.edge_sharpness, level.scheme
     V = t.n_vertices
-    rule = vertex_rules(t, edge_s, vertex_s)
+    rule = vertex_rules(t, edge_s, level.vertex_sharpness)
     sharp = edge_s > 0
     target = ((rule == CREASE) | (rule == CORNER)) & (t.vertex_face_count > 0)
     # a sector starts at an outgoing half-edge on a sharp edge (CCW rotation h -> twin(prev(h)))
@@ -415,7 +356,7 @@ def crease_normals(t: Topology, X: np.ndarray, edge_s: np.ndarray, vertex_s: np.
         hs = ring[sel, :kk]
         ring_pts = [X[v[sel]], X[t.halfedge_dst[hs]].transpose(1, 0, 2), X[t.face_indices[t.prev_corner[hs[:, -1]]]][None]]
         pts = [ring_pts[0][None]] + [ring_pts[1], ring_pts[2]]
-        if scheme == "catmull-clark":
+        if _quads(scheme):
             pts.append(X[t.face_indices[t.next_corner[t.next_corner[hs]]]].transpose(1, 0, 2))
         stack = np.concatenate(pts, axis=0)  # (ring size, m, dim)
         across[sel] = np.einsum("r,rmd->md", mask, stack)

@@ -9,6 +9,7 @@ import scipy.sparse as sp
 
 from ..mesh.topology import Topology
 from .creases import CORNER, CREASE, DART, child_sharpness, sharp_edge_counts, transition_weights, vertex_rules
+from .level import Level
 
 
 def csr(rows, cols, vals, shape) -> sp.csr_matrix:
@@ -55,11 +56,12 @@ def crease_matrix(topology: Topology, sharp: np.ndarray, rows_mask: np.ndarray, 
     )
 
 
-def vertex_point_matrix(topology: Topology, edge_s: np.ndarray, vertex_s: np.ndarray, smooth: sp.spmatrix) -> sp.csr_matrix:
-    """``(V, V)`` vertex-point stencils: the scheme's ``smooth`` mask where the
+def vertex_point_matrix(level: Level, smooth: sp.spmatrix) -> sp.csr_matrix:
+    """``(V, V)`` vertex-point stencils of ``level``: the scheme's ``smooth`` mask where the
     vertex is smooth or a dart, the crease mask at creases, the vertex itself at
     corners; blended between the parent and the child rule where a semi-sharp
     feature fades (see :mod:`splinekit.subdiv.creases`)."""
+    topology, edge_s, vertex_s = level.topology, level.edge_sharpness, level.vertex_sharpness
     child_e, child_v = child_sharpness(edge_s), child_sharpness(vertex_s)
     parent = vertex_rules(topology, edge_s, vertex_s)
     child = vertex_rules(topology, child_e, child_v)

@@ -9,6 +9,7 @@ other per-vertex array are then refined by sparse products; the composed matrix
 
 from __future__ import annotations
 
+from dataclasses import replace
 from functools import cached_property
 
 import numpy as np
@@ -19,13 +20,17 @@ from .._validate import as_float_array, as_int
 from ..errors import MeshTopologyError, ParameterError
 from ..mesh.polymesh import PolyMesh
 from ..mesh.topology import Topology
-from ..basis.jit import subdiv_kernels
-from . import _compiled, catmull_clark, doo_sabin, loop
-from .creases import CREASE_METHODS, chaikin_half_sharpness, child_sharpness, edge_sharpness, vertex_sharpness
+from . import catmull_clark, doo_sabin, loop
+from ._compiled import PreparedLevel
+from .compose import compose
+from .creases import CREASE_METHODS, chaikin_half_sharpness, edge_sharpness, vertex_sharpness
+from .level import Level
+from .scheme import Scheme
 
-__all__ = ["SCHEMES", "Refinement", "subdivide", "subdivision_matrix"]
+__all__ = ["SCHEMES", "Refinement", "scheme_named", "subdivide", "subdivision_matrix"]
 
-SCHEMES = {"catmull-clark": catmull_clark, "loop": loop, "doo-sabin": doo_sabin}
+SCHEMES: dict[str, Scheme] = {s.name: s for s in (catmull_clark.SCHEME, loop.SCHEME, doo_sabin.SCHEME)}
+"""The schemes by name; each value is the scheme's :class:`~splinekit.subdiv.scheme.Scheme`."""
 MAX_LEVELS = 12
 BYTES_PER_CORNER = 200
 """Peak memory per face corner of the finest level (topology, sharpness, vertices,
@@ -36,17 +41,12 @@ Catmull-Clark, about 80 for Loop, 190 for Doo-Sabin; what the memory budget
 
 def estimated_faces(topology: Topology, scheme: str, levels: int) -> int:
     """Faces after ``levels`` refinements (exact for Catmull-Clark and Loop)."""
-    if levels == 0:
-        return topology.n_faces
-    if scheme == "catmull-clark":
-        return topology.n_halfedges * 4 ** (levels - 1)
-    if scheme == "loop":
-        return topology.n_faces * 4**levels
-    first = topology.n_faces + topology.n_edges + topology.n_vertices
-    return first * 4 ** (levels - 1)
+    return SCHEMES[scheme].estimated_faces(topology, levels)
 
 
-def _scheme(name):
+def scheme_named(name) -> str:
+    """The canonical name of scheme ``name`` (aliases ``catmark``, ``cc``, underscores and case
+    accepted); ParameterError for an unknown one."""
     key = str(name).lower().replace("_", "-") if isinstance(name, str) else name
     aliases = {"catmark": "catmull-clark", "cc": "catmull-clark", "catmull clark": "catmull-clark"}
     key = aliases.get(key, key)
@@ -81,12 +81,11 @@ class Refinement:
 
     Attributes
     ----------
-    topologies : list of Topology, ``levels + 1`` entries (the input first);
-        ``[input, finest]`` with ``keep_levels=False``
-    stencils : list of CSR matrices; ``stencils[k]`` maps level k to level k + 1
-        (empty with ``keep_levels=False``)
-    edge_sharpness : list of per-edge sharpness arrays, one per level (input and
-        finest with ``keep_levels=False``; likewise ``vertex_sharpness``)
+    hierarchy : tuple of :class:`~splinekit.subdiv.level.Level`, ``levels + 1`` entries (the input
+        first; ``hierarchy[k].stencil`` maps level k - 1 to level k); ``(input, finest)`` with
+        ``keep_levels=False``, the finest without its stencil
+    topologies, stencils, edge_sharpness, vertex_sharpness : lists read from ``hierarchy``
+        (``stencils[k]`` maps level k to level k + 1; empty with ``keep_levels=False``)
     vertices : refined vertices of a PolyMesh input with ``keep_levels=False``, else None
 
     Large Catmull-Clark and Loop levels are built by compiled kernels
@@ -97,10 +96,11 @@ class Refinement:
 
     def __init__(self, mesh, scheme: str, levels: int = 1, creases=None, corners=None, boundary: str = "edge-and-corner",
                  keep_levels: bool = True, crease_method: str = "uniform"):
-        self.scheme = _scheme(scheme)
+        self.scheme = scheme_named(scheme)
+        rules = SCHEMES[self.scheme]
         if crease_method not in CREASE_METHODS:
             raise ParameterError(f"crease_method must be one of {CREASE_METHODS}, got {crease_method!r}")
-        if crease_method == "chaikin" and self.scheme == "doo-sabin":
+        if crease_method == "chaikin" and not rules.splits_edges:
             raise ParameterError("crease_method='chaikin' applies to catmull-clark and loop (edges split in halves)")
         self.crease_method = crease_method
         levels = as_int(levels, "levels", minimum=0)
@@ -111,82 +111,83 @@ class Refinement:
             raise ParameterError(f"expected a PolyMesh or Topology, got {type(mesh).__name__}")
         if topo.n_faces == 0:
             raise MeshTopologyError("the mesh has no faces to subdivide")
-        expected = estimated_faces(topo, self.scheme, levels)
-        sides = 3 if self.scheme == "loop" else 4  # of every face after the first level
-        limits.check(expected * sides * BYTES_PER_CORNER,
+        expected = rules.estimated_faces(topo, levels)
+        limits.check(expected * rules.output_face_size * BYTES_PER_CORNER,
                      f"{levels} levels of {self.scheme} subdivision ({expected:,} faces)")
-        if self.scheme == "loop" and not (topo.face_sizes == 3).all():
-            f = int(np.flatnonzero(topo.face_sizes != 3)[0])
-            raise MeshTopologyError(f"Loop subdivision needs triangles; face {f} has {int(topo.face_sizes[f])} vertices")
-        module = SCHEMES[self.scheme]
-        edge_s = edge_sharpness(topo, creases)
-        vertex_s = vertex_sharpness(topo, corners, boundary)
+        size = rules.input_face_size
+        if size is not None and not (topo.face_sizes == size).all():
+            f = int(np.flatnonzero(topo.face_sizes != size)[0])
+            shape = {3: "triangles", 4: "quads"}.get(size, f"faces of {size} vertices")
+            raise MeshTopologyError(f"{self.scheme.capitalize()} subdivision needs {shape}; face {f} has "
+                                    f"{int(topo.face_sizes[f])} vertices")
         self.boundary = boundary
         self.keep_levels = keep = bool(keep_levels)
-        self.topologies = [topo]
-        self.stencils = []
-        self.edge_sharpness = [edge_s]
-        self.vertex_sharpness = [vertex_s]
         self._levels = levels
         self.vertices = None
+        level = Level(topo, edge_sharpness(topo, creases), vertex_sharpness(topo, corners, boundary), self.scheme)
+        del topo
+        hierarchy = [level]
         X = None
         if not keep and isinstance(mesh, PolyMesh):
-            X = mesh.vertices.reshape(topo.n_vertices, -1)
-        for level in range(levels):
+            X = mesh.vertices.reshape(mesh.topology.n_vertices, -1)
+        for k in range(levels):
             halves = None
             if crease_method == "chaikin":
-                semi = (edge_s > 0) & np.isfinite(edge_s)
+                semi = (level.edge_sharpness > 0) & np.isfinite(level.edge_sharpness)
                 if semi.any():
-                    halves = chaikin_half_sharpness(topo, edge_s)
-            K = None
-            if self.scheme in ("catmull-clark", "loop"):
-                K = subdiv_kernels(_compiled.child_face_count(self.scheme, topo))
+                    halves = chaikin_half_sharpness(level.topology, level.edge_sharpness)
+            K = rules.kernels(level.topology)
             if K is not None:
                 # compiled: S only when kept, S @ X without S, the finest level's edges on first use
-                step = _compiled.Level(K, self.scheme, topo, edge_s, vertex_s)
-                topo = None  # unless kept, the parent goes as soon as the step has what it needs
-                S = step.stencil() if keep else None
+                prepared = PreparedLevel(K, rules, level)
+                level = None  # unless kept, the parent goes as soon as the kernels hold what they need
+                S = prepared.stencil() if keep else None
                 if X is not None:
-                    X = step.apply(X)
-                step.release_rows()
-                topo = step.child(lazy=level == levels - 1)
-                n_inner = step.n_inner_edges
-                del step
-                # rebinding lets the parent's sharpness go (unless kept) before the next array
-                edge_s = child_edge_s = _compiled.child_edge_sharpness(edge_s, n_inner)
-                vertex_s = child_vertex_s = _compiled.child_vertex_sharpness(vertex_s, topo.n_vertices)
+                    X = prepared.apply(X)
+                prepared.release_rows()
+                level = prepared.child_level(S, lazy=k == levels - 1)
+                del prepared, S
             else:
-                refine = getattr(module, "refine_numpy", module.refine)
-                child, S, pairs, parent_s, child_vertex_s = refine(topo, edge_s, vertex_s)
-                child_edge_s = np.zeros(child.n_edges)
-                if len(pairs):
-                    child_edge_s[child.find_edges(pairs)] = child_sharpness(parent_s)
-                child_edge_s[child.boundary_edges] = np.inf
+                level = rules.refine(level).level
                 if X is not None:
-                    X = S @ X
-                topo = child
+                    X = level.stencil @ X
+                if not keep:
+                    level = replace(level, stencil=None)
             if halves is not None:
                 # both paths number the child halves of parent edge e as 2e, 2e + 1
-                child_edge_s = child_edge_s.copy()
-                child_edge_s[: halves.size] = halves
-            edge_s, vertex_s = child_edge_s, child_vertex_s
-            if keep:
-                self.topologies.append(topo)
-                self.stencils.append(S)
-                self.edge_sharpness.append(edge_s)
-                self.vertex_sharpness.append(vertex_s)
-            S = None
-        if not keep:
-            if levels:
-                self.topologies.append(topo)
-                self.edge_sharpness.append(edge_s)
-                self.vertex_sharpness.append(vertex_s)
-            if X is not None:
-                self.vertices = X.reshape((X.shape[0],) + mesh.vertices.shape[1:])
+                edge_s = level.edge_sharpness.copy()
+                edge_s[: halves.size] = halves
+                level = replace(level, edge_sharpness=edge_s)
+            if keep or k == levels - 1:
+                hierarchy.append(level)
+        self.hierarchy = tuple(hierarchy)
+        if X is not None:
+            self.vertices = X.reshape((X.shape[0],) + mesh.vertices.shape[1:])
 
     @property
     def levels(self) -> int:
         return self._levels
+
+    @property
+    def topologies(self) -> list:
+        return [lv.topology for lv in self.hierarchy]
+
+    @property
+    def stencils(self) -> list:
+        return [lv.stencil for lv in self.hierarchy[1:]] if self.keep_levels else []
+
+    @property
+    def edge_sharpness(self) -> list:
+        return [lv.edge_sharpness for lv in self.hierarchy]
+
+    @property
+    def vertex_sharpness(self) -> list:
+        return [lv.vertex_sharpness for lv in self.hierarchy]
+
+    @property
+    def finest(self) -> Level:
+        """The finest :class:`~splinekit.subdiv.level.Level`."""
+        return self.hierarchy[-1]
 
     def _require_stencils(self):
         if not self.keep_levels and self._levels:
@@ -195,16 +196,14 @@ class Refinement:
     @property
     def topology(self) -> Topology:
         """The finest level's connectivity."""
-        return self.topologies[-1]
+        return self.hierarchy[-1].topology
 
     @cached_property
     def matrix(self) -> sp.csr_matrix:
-        """Composed ``(V_L, V_0)`` stencil ``S_L @ ... @ S_1``."""
+        """Composed ``(V_L, V_0)`` stencil ``S_L @ ... @ S_1`` (see
+        :func:`splinekit.subdiv.compose.compose`: level by level, in time linear in its size)."""
         self._require_stencils()
-        M = sp.identity(self.topologies[0].n_vertices, format="csr")
-        for S in self.stencils:
-            M = S @ M
-        return sp.csr_matrix(M)
+        return compose(self.stencils, self.hierarchy[0].n_vertices)
 
     def apply(self, data, composed: bool = False) -> np.ndarray:
         """Refine per-vertex ``data`` ``(V_0, ...)`` to the finest level.

@@ -32,7 +32,7 @@ apply once every sharpness at the vertex is 0 or infinite: a semi-sharp crease
 of sharpness ``s`` changes the rules for ``ceil(s)`` levels. The limit of a
 vertex depends only on its fan (the faces around it), so only the fans of the
 vertices with semi-sharp features are refined, one level at a time, keeping
-each child's fan (:func:`settled_fans`): the cost grows linearly with the
+each child's fan (:func:`~splinekit.subdiv.fans.settled_fans`): the cost grows linearly with the
 sharpness, where refining the whole mesh would grow it fourfold per unit.
 """
 
@@ -42,69 +42,21 @@ import math
 from functools import cached_property
 
 import numpy as np
-import scipy.sparse as sp
 
 from .. import limits
 from .._validate import as_float_array, as_int
 from ..basis.bernstein import all_bernstein
 from ..errors import DomainError, MeshTopologyError, ParameterError
 from ..mesh.polymesh import PolyMesh
-from ..mesh.topology import Topology, ranges
-from .creases import SMOOTH, vertex_rules
-from .limit import crease_normals, limit_matrix, tangent_matrices
-from .refiner import BYTES_PER_CORNER, Refinement, _scheme
+from ..surfaces import BSplineSurface
+from .fans import exact_limit_rows, fan_normals, mask_normals, neighbourhoods, settled_fans, unsettled_vertices
+from .limit import limit_matrix
+from .patches import (BSPLINE_TO_BEZIER, QUAD_C, QUAD_J, bezier_nets, coons_nets, eval_coons, eval_patches, patch_indices,
+                      regular_faces)
+from .refiner import BYTES_PER_CORNER, Refinement, scheme_named
 
+# regular_faces, patch_indices and BSPLINE_TO_BEZIER live in splinekit.subdiv.patches; re-exported from here
 __all__ = ["SubdivisionSurface", "regular_faces", "patch_indices", "BSPLINE_TO_BEZIER"]
-
-# uniform cubic B-spline segment -> cubic Bézier control points
-BSPLINE_TO_BEZIER = np.array([[1, 4, 1, 0], [0, 4, 2, 0], [0, 2, 4, 0], [0, 1, 4, 1]], dtype=np.float64) / 6.0
-
-# parent (u, v) -> child (s, t) = J (u, v) + c for the quadrant at corner i
-_QUAD_J = np.array([[[2, 0], [0, 2]], [[0, 2], [-2, 0]], [[-2, 0], [0, -2]], [[0, -2], [2, 0]]], dtype=np.float64)
-_QUAD_C = np.array([[0, 0], [0, 2], [2, 2], [2, 0]], dtype=np.float64)
-
-
-def regular_faces(t: Topology, edge_s: np.ndarray, vertex_s: np.ndarray) -> np.ndarray:
-    """Mask ``(F,)`` of quads whose limit patch is a uniform bicubic B-spline:
-    four interior, smooth (no sharp incident edge or vertex) corners of valence 4."""
-    rule = vertex_rules(t, edge_s, vertex_s)
-    good_vertex = (t.valence == 4) & (t.vertex_face_count == 4) & ~t.boundary_vertices & (rule == SMOOTH)
-    good_corner = good_vertex[t.face_indices]
-    ok = np.add.reduceat(good_corner.astype(np.int64), t.face_offsets[:-1]) if t.n_faces else np.zeros(0, int)
-    return (t.face_sizes == 4) & (ok == 4)
-
-
-def patch_indices(t: Topology, faces: np.ndarray) -> np.ndarray:
-    """``(m, 4, 4)`` vertex indices of the B-spline control net of regular quads.
-
-    Entry ``[a, b]``: ``a`` runs along the face's first edge (u), ``b`` along
-    its last edge reversed (v); the face's corners sit at ``[1, 1], [2, 1],
-    [2, 2], [1, 2]``.
-    """
-    src, nxt, prv, tw = t.face_indices, t.next_corner, t.prev_corner, t.twin
-    base = t.face_offsets[faces]
-    X, Y, D, Vc = [], [], [], []
-    for k in range(4):
-        h = base + k
-        g = tw[h]
-        X.append(src[nxt[nxt[g]]])
-        Y.append(src[prv[g]])
-        D.append(src[prv[tw[nxt[g]]]])
-        Vc.append(src[h])
-    P = np.empty((len(faces), 4, 4), dtype=np.int64)
-    P[:, 0, 0], P[:, 1, 0], P[:, 2, 0], P[:, 3, 0] = D[0], X[0], Y[0], D[1]
-    P[:, 0, 1], P[:, 1, 1], P[:, 2, 1], P[:, 3, 1] = Y[3], Vc[0], Vc[1], X[1]
-    P[:, 0, 2], P[:, 1, 2], P[:, 2, 2], P[:, 3, 2] = X[3], Vc[3], Vc[2], Y[1]
-    P[:, 0, 3], P[:, 1, 3], P[:, 2, 3], P[:, 3, 3] = D[3], Y[2], X[2], D[2]
-    return P
-
-
-def _cubic_bspline_basis(x: np.ndarray):
-    """Uniform cubic B-spline basis on one span and its derivative: two ``(m, 4)`` arrays."""
-    x2, x3 = x * x, x * x * x
-    B = np.stack([(1 - x) ** 3, 3 * x3 - 6 * x2 + 4, -3 * x3 + 3 * x2 + 3 * x + 1, x3], axis=-1) / 6.0
-    dB = np.stack([-3 * (1 - x) ** 2, 9 * x2 - 12 * x, -9 * x2 + 6 * x + 3, 3 * x2], axis=-1) / 6.0
-    return B, dB
 
 
 class SubdivisionSurface:
@@ -124,7 +76,7 @@ class SubdivisionSurface:
         if not isinstance(mesh, PolyMesh):
             raise ParameterError(f"SubdivisionSurface expects a PolyMesh, got {type(mesh).__name__}")
         self.mesh = mesh
-        self.scheme = _scheme(scheme)
+        self.scheme = scheme_named(scheme)
         self._options = dict(creases=creases, corners=corners, boundary=boundary, crease_method=crease_method)
         self._refinements: dict[int, Refinement] = {}
         self.refinement(0)  # validates creases, corners, boundary and the scheme's face type
@@ -170,8 +122,7 @@ class SubdivisionSurface:
         """Sparse ``(V, V)`` map from control vertices to their limit positions."""
         self._check_masks()
         r = self.refinement(0)
-        return exact_limit_rows(r.topology, r.edge_sharpness[0], r.vertex_sharpness[0], self.scheme,
-                                self._options["crease_method"])
+        return exact_limit_rows(r.hierarchy[0], self._options["crease_method"])
 
     def limit_points(self) -> np.ndarray:
         """Limit positions of the control vertices ``(V, dim)``."""
@@ -196,23 +147,21 @@ class SubdivisionSurface:
         V0 = self.mesh.n_vertices
         r = self.refinement(0)
         X = self.mesh.vertices
-        t, es, vs = r.topology, r.edge_sharpness[0], r.vertex_sharpness[0]
-        n, ok = _mask_normals(t, X, es, vs, self.scheme)
-        pending = np.flatnonzero(unsettled_vertices(t, es, vs, self.scheme))
+        base = r.hierarchy[0]
+        n, ok = mask_normals(base, X)
+        pending = np.flatnonzero(unsettled_vertices(base))
         if pending.size:
             # semi-sharp features (and non-quads): the masks apply once the fans are refined past them
             ok[pending] = False
-            fans = settled_fans(t, es, vs, self.scheme, self._options["crease_method"], pending, X)
-            for topo, fes, fvs, Y, centre, ids in fans:
-                fn, fok = _mask_normals(topo, Y, fes, fvs, self.scheme)
+            fans = settled_fans(base, self._options["crease_method"], pending, X)
+            for fan, Y, centre, ids in fans:
+                fn, fok = mask_normals(fan, Y)
                 n[pending[ids]] = fn[centre]
                 ok[pending[ids]] = fok[centre]
         if not ok.all():
             fine = self.refinement(self._mask_level + levels)
-            t = fine.topology
-            L = limit_matrix(t, fine.edge_sharpness[-1], fine.vertex_sharpness[-1], self.scheme)
-            P = L @ fine.apply(self.mesh.vertices)
-            fan = _fan_normals(t, P)
+            P = limit_matrix(fine.finest) @ fine.apply(self.mesh.vertices)
+            fan = fan_normals(fine.topology, P)
             n[~ok] = fan[:V0][~ok]
         length = np.linalg.norm(n, axis=1, keepdims=True)
         return np.divide(n, length, out=np.zeros_like(n), where=length > 0)
@@ -244,8 +193,27 @@ class SubdivisionSurface:
         if level not in cache:
             r = self.refinement(level)
             t = r.topology
-            cache[level] = (t, r.apply(self.mesh.vertices), regular_faces(t, r.edge_sharpness[-1], r.vertex_sharpness[-1]), r)
+            cache[level] = (t, r.apply(self.mesh.vertices), regular_faces(r.finest), r)
         return cache[level]
+
+    def _limit_points(self, level: int, vertices: np.ndarray) -> np.ndarray:
+        """Limit positions ``(k, dim)`` of ``vertices`` of refinement level ``level``.
+
+        Computed for the vertices asked for only (and cached per level): a vertex on
+        a semi-sharp crease needs its fan refined until the sharpness expires, so
+        asking for the whole level would descend at every crease vertex of it.
+        """
+        cache = self.__dict__.setdefault("_limit_point_cache", {})
+        t, X, _regular, r = self._level_data(level)
+        if level not in cache:
+            cache[level] = (np.zeros((t.n_vertices, X.shape[1])), np.zeros(t.n_vertices, dtype=bool))
+        values, known = cache[level]
+        vertices = np.asarray(vertices, dtype=np.int64)
+        missing = np.unique(vertices[~known[vertices]])
+        if missing.size:
+            values[missing] = exact_limit_rows(r.finest, self._options["crease_method"], missing) @ X
+            known[missing] = True
+        return values[vertices]
 
     def evaluate(self, face, u, v, max_level: int = 8):
         """Limit points, first derivatives and unit normals at ``(face, u, v)``.
@@ -292,7 +260,7 @@ class SubdivisionSurface:
 
         With ``local``, the queries still irregular at a level are handed to a
         surface on the union of their faces' one-ring neighbourhoods (see
-        :func:`_neighbourhoods`) whenever that union is smaller than the level,
+        :func:`~splinekit.subdiv.fans.neighbourhoods`) whenever that union is smaller than the level,
         so the descent refines only around the queries: a point at an
         extraordinary vertex never stops being irregular, and refining the
         whole mesh ``max_level`` (+ 1 for the Coons limit points) times for it
@@ -312,7 +280,7 @@ class SubdivisionSurface:
             reg = regular[f]
             if reg.any():
                 idx = todo[reg]
-                p, ds, dt = _eval_patches(t, X, f[reg], s[reg], w[reg])
+                p, ds, dt = eval_patches(t, X, f[reg], s[reg], w[reg])
                 P[idx] = p
                 Jr = J[reg]
                 Du[idx] = ds * Jr[:, 0, 0, None] + dt * Jr[:, 1, 0, None]
@@ -323,7 +291,7 @@ class SubdivisionSurface:
                 break
             found = None
             if level == last:
-                found = _eval_coons(self, level, t, X, regular, f, s, w)
+                found = eval_coons(self._limit_points, level, t, X, regular, f, s, w)
             elif local:
                 # only with a level left below: the union's border faces are classified as
                 # irregular, which matters for the Coons edges at its level 0 alone
@@ -337,9 +305,9 @@ class SubdivisionSurface:
             # descend into the quadrant's child quad (child face = parent corner)
             q = np.where(s < 0.5, np.where(w < 0.5, 0, 3), np.where(w < 0.5, 1, 2))
             f = t.face_offsets[f] + q
-            st = np.einsum("mij,mj->mi", _QUAD_J[q], np.column_stack([s, w])) + _QUAD_C[q]
+            st = np.einsum("mij,mj->mi", QUAD_J[q], np.column_stack([s, w])) + QUAD_C[q]
             s, w = np.clip(st[:, 0], 0, 1), np.clip(st[:, 1], 0, 1)
-            J = np.einsum("mij,mjk->mik", _QUAD_J[q], J)
+            J = np.einsum("mij,mjk->mik", QUAD_J[q], J)
         return P, Du, Dv
 
     def _evaluate_in_neighbourhoods(self, t, X, r, face, u, v, levels):
@@ -348,7 +316,7 @@ class SubdivisionSurface:
         union of the faces' one-ring neighbourhoods; None when that union is not
         smaller than ``t`` (refining the level itself is then no dearer)."""
         faces, where_face = np.unique(face, return_inverse=True)
-        union = _neighbourhoods(t, X, r, faces, max_faces=t.n_faces - 1)
+        union = neighbourhoods(r.finest, X, faces, max_faces=t.n_faces - 1)
         if union is None:
             return None
         mesh, creases, corners, where = union
@@ -378,8 +346,6 @@ class SubdivisionSurface:
         the patch's parameters to the root face's, and ``max_deviation``: the
         largest distance of the approximate patches from :meth:`evaluate`.
         """
-        from ..surfaces import BSplineSurface
-
         self._check_cc()
         levels = min(as_int(levels, "levels", minimum=0), self._level_budget() - 1)
         base = self._eval_base_level
@@ -395,9 +361,9 @@ class SubdivisionSurface:
             last = level == base + levels
             take = np.ones_like(reg) if last else reg
             if reg.any():
-                nets.append(_bezier_nets(t, X, active[reg]))
+                nets.append(bezier_nets(t, X, active[reg]))
             if last and (~reg).any():
-                nets.append(_coons_nets(self, level, t, X, regular, active[~reg]))
+                nets.append(coons_nets(self._limit_points, level, t, X, regular, active[~reg]))
             order = np.concatenate([np.flatnonzero(reg), np.flatnonzero(take & ~reg)])
             kinds += ["exact"] * int(reg.sum()) + ["coons"] * int((take & ~reg).sum())
             level_of += [level] * order.size
@@ -410,9 +376,9 @@ class SubdivisionSurface:
             q = np.tile(np.arange(4), rest.size)
             parent = np.repeat(rest, 4)
             active = t.face_offsets[active[parent]] + q
-            Jinv = np.linalg.inv(_QUAD_J[q])
+            Jinv = np.linalg.inv(QUAD_J[q])
             A_parent = A[parent]
-            b = b[parent] - np.einsum("mij,mjk,mk->mi", A_parent, Jinv, _QUAD_C[q])
+            b = b[parent] - np.einsum("mij,mjk,mk->mi", A_parent, Jinv, QUAD_C[q])
             A = np.einsum("mij,mjk->mik", A_parent, Jinv)
             root = root[parent]
         nets = np.concatenate(nets) if nets else np.zeros((0, 4, 4, self.mesh.vertices.shape[1]))
@@ -446,299 +412,3 @@ class SubdivisionSurface:
         face = np.repeat(info["face"][approx], st.shape[0])
         exact = self.evaluate(face, uv[..., 0].ravel(), uv[..., 1].ravel())[0]
         return float(np.linalg.norm(pts.reshape(exact.shape) - exact, axis=1).max())
-
-
-def _neighbourhoods(t: Topology, X: np.ndarray, r: Refinement, faces: np.ndarray, max_faces: int | None = None):
-    """The disjoint union of the one-ring neighbourhoods (all faces sharing a
-    vertex) of the distinct ``faces``, as ``(mesh, edge sharpness, vertex
-    sharpness, face_in_union)``; None when it would have more than
-    ``max_faces`` faces.
-
-    Under Catmull-Clark refinement the limit surface over a face depends only
-    on this neighbourhood, at every level: so refining the (small) union
-    instead of the whole mesh evaluates those faces exactly, to depths the
-    whole mesh could not afford. The union's own borders are outside every
-    queried face's neighbourhood, so their (boundary) rules do not matter.
-    """
-    offsets, vface = t.vertex_faces
-    sizes = t.face_sizes[faces]
-    owner = np.repeat(np.arange(faces.size), sizes)
-    corners = ranges(t.face_offsets[faces], sizes)
-    verts = t.face_indices[corners]
-    counts = offsets[verts + 1] - offsets[verts]
-    own = np.repeat(owner, counts)
-    pos = ranges(offsets[verts], counts)
-    pair = np.unique(own * t.n_faces + vface[pos])
-    if max_faces is not None and pair.size > max_faces:
-        return None
-    own, g = pair // t.n_faces, pair % t.n_faces
-    gs = t.face_sizes[g]
-    cown = np.repeat(own, gs)
-    cpos = ranges(t.face_offsets[g], gs)
-    keys, new_index = np.unique(cown * t.n_vertices + t.face_indices[cpos], return_inverse=True)
-    vertex = keys % t.n_vertices
-    union_offsets = np.concatenate([[0], np.cumsum(gs)])
-    topo = Topology(keys.size, new_index.ravel(), union_offsets, check=False)
-    mesh = PolyMesh.from_topology(X[vertex], topo)
-    base_edges = t.find_edges(vertex[topo.edges])
-    creases = np.where(base_edges >= 0, r.edge_sharpness[-1][np.maximum(base_edges, 0)], 0.0)
-    corners = r.vertex_sharpness[-1][vertex]
-    where = np.flatnonzero(g == faces[own])
-    return mesh, creases, corners, where
-
-
-def _mask_normals(t: Topology, X: np.ndarray, edge_s: np.ndarray, vertex_s: np.ndarray, scheme: str):
-    """Limit normals ``(V, 3)`` (not unit) where the tangent masks (smooth and dart
-    vertices) or the crease sectors (see :func:`~splinekit.subdiv.limit.crease_normals`)
-    give them, and the mask ``(V,)`` of those vertices; valid where every sharpness
-    at the vertex is 0 or infinite."""
-    T1, T2, ok = tangent_matrices(t, edge_s, vertex_s, scheme)
-    n = np.cross(T1 @ X, T2 @ X)
-    if not ok.all():
-        cn, covered = crease_normals(t, X, edge_s, vertex_s, scheme)
-        use = ~ok & covered
-        n[use] = cn[use]
-        ok = ok | covered
-    return n, ok
-
-
-def _fan_normals(t: Topology, P: np.ndarray) -> np.ndarray:
-    """Sum over the faces at each vertex of the face's vector area (Newell), ``(V, 3)``."""
-    a = P[t.face_indices]
-    b = P[t.halfedge_dst]
-    cross = np.cross(a, b)
-    face_area = np.zeros((t.n_faces, 3))
-    np.add.at(face_area, t.corner_face, cross)
-    out = np.zeros((t.n_vertices, 3))
-    np.add.at(out, t.face_indices, face_area[t.corner_face])
-    return out
-
-
-def _eval_patches(t, X, faces, u, v):
-    """Points and (u, v) partials of regular patches at local parameters."""
-    idx = patch_indices(t, faces)  # (m, 4, 4)
-    net = X[idx]  # (m, 4, 4, dim)
-    Bu, dBu = _cubic_bspline_basis(u)
-    Bv, dBv = _cubic_bspline_basis(v)
-    p = np.einsum("ma,mb,mabd->md", Bu, Bv, net)
-    du = np.einsum("ma,mb,mabd->md", dBu, Bv, net)
-    dv = np.einsum("ma,mb,mabd->md", Bu, dBv, net)
-    return p, du, dv
-
-
-def _limit_points(surface, level, vertices):
-    """Limit positions ``(k, dim)`` of ``vertices`` of refinement level ``level``.
-
-    Computed for the vertices asked for only (and cached per level): a vertex on
-    a semi-sharp crease needs its fan refined until the sharpness expires, so
-    asking for the whole level would descend at every crease vertex of it.
-    """
-    cache = surface.__dict__.setdefault("_limit_point_cache", {})
-    t, X, _regular, r = surface._level_data(level)
-    if level not in cache:
-        cache[level] = (np.zeros((t.n_vertices, X.shape[1])), np.zeros(t.n_vertices, dtype=bool))
-    values, known = cache[level]
-    vertices = np.asarray(vertices, dtype=np.int64)
-    missing = np.unique(vertices[~known[vertices]])
-    if missing.size:
-        L = exact_limit_rows(t, r.edge_sharpness[-1], r.vertex_sharpness[-1], surface.scheme,
-                             surface._options["crease_method"], missing)
-        values[missing] = L @ X
-        known[missing] = True
-    return values[vertices]
-
-
-MAX_DESCENT = 128
-"""Most levels a vertex's fan is refined for its semi-sharp features to expire. Past
-that the fan has shrunk by at least ``0.7**128 < 1e-19`` of its size (the
-subdominant eigenvalues of the Catmull-Clark and Loop smooth and crease-sector
-maps are at most about 0.66), so the remaining finite sharpness is treated as
-infinite: the difference is below rounding."""
-
-
-def unsettled_vertices(t: Topology, edge_s: np.ndarray, vertex_s: np.ndarray, scheme: str) -> np.ndarray:
-    """Mask ``(V,)`` of the vertices whose limit masks do not apply yet: a finite
-    positive sharpness on the vertex or an incident edge (its rule will change),
-    or, for Catmull-Clark, an incident face that is not a quad."""
-    semi = (edge_s > 0) & np.isfinite(edge_s)
-    out = np.bincount(t.edges[semi].ravel(), minlength=t.n_vertices) > 0
-    out |= (vertex_s > 0) & np.isfinite(vertex_s)
-    if scheme == "catmull-clark":
-        odd = t.face_sizes[t.corner_face] != 4
-        out[t.face_indices[odd]] = True
-    return out & (t.vertex_face_count > 0)
-
-
-def exact_limit_rows(t: Topology, edge_s: np.ndarray, vertex_s: np.ndarray, scheme: str,
-                     crease_method: str = "uniform", vertices: np.ndarray | None = None):
-    """Sparse ``(k, V)`` limit stencils of ``vertices`` (distinct; default all) of a
-    mesh, semi-sharp features included.
-
-    :func:`~splinekit.subdiv.limit.limit_matrix` rows where the masks apply
-    (every sharpness at the vertex 0 or infinite); the rows of the other
-    vertices come from :func:`descended_limit_rows`, which refines only their
-    fans, so the cost grows linearly with the sharpness, not fourfold per unit.
-    """
-    vertices = np.arange(t.n_vertices) if vertices is None else np.asarray(vertices, dtype=np.int64)
-    L = limit_matrix(t, edge_s, vertex_s, scheme)[vertices]
-    pending = unsettled_vertices(t, edge_s, vertex_s, scheme)[vertices]
-    if not pending.any():
-        return L
-    rows = descended_limit_rows(t, edge_s, vertex_s, scheme, crease_method, vertices[pending]).tocoo()
-    keep = sp.diags((~pending).astype(np.float64)) @ L
-    moved = sp.csr_matrix((rows.data, (np.flatnonzero(pending)[rows.row], rows.col)), shape=L.shape)
-    return sp.csr_matrix(keep + moved)
-
-
-def descended_limit_rows(t: Topology, edge_s: np.ndarray, vertex_s: np.ndarray, scheme: str, crease_method: str,
-                         centres: np.ndarray):
-    """Sparse ``(k, V)`` limit stencils of the vertices ``centres`` (distinct) of ``t``,
-    from their fans refined until the masks apply (see :func:`settled_fans`)."""
-    blocks, owners = [], []
-    for topo, es, vs, W, centre, ids in settled_fans(t, edge_s, vertex_s, scheme, crease_method, centres):
-        blocks.append(limit_matrix(topo, es, vs, scheme)[centre] @ W)
-        owners.append(ids)
-    order = np.argsort(np.concatenate(owners), kind="stable")
-    return sp.csr_matrix(sp.vstack(blocks, format="csr")[order])
-
-
-def settled_fans(t: Topology, edge_s: np.ndarray, vertex_s: np.ndarray, scheme: str, crease_method: str,
-                 centres: np.ndarray, X: np.ndarray | None = None):
-    """Refine the fans of the vertices ``centres`` (distinct, with faces) of ``t``
-    until the limit masks apply at them.
-
-    The limit position and tangents of a vertex depend only on its fan (the
-    faces around it): the fan of its child is made of the child faces at it,
-    whose corners (its vertex point, the edge points of its edges, the face
-    points of its faces) come from the parent fan, and whose sharpness comes
-    from its own edges (and, for Chaikin creases, the other edges at it). So
-    each level refines the disjoint union of the fans still unsettled (see
-    :func:`unsettled_vertices`) by one level and keeps only their child fans:
-    ``ceil(s)`` levels of a few faces per vertex for sharpness ``s`` (at most
-    :data:`MAX_DESCENT`), where refining the whole mesh would cost ``4**s``
-    times the mesh. The union's outer border is in no centre's child fan, so
-    the (boundary) rules there do not matter.
-
-    Yields, level by level, ``(topology, edge sharpness, vertex sharpness, data,
-    centre, ids)`` for the fans settled at that level: the union's topology and
-    sharpness, ``data`` (see below) on the union's vertices, the settled
-    centres' vertices in the union and their positions in ``centres``.
-    Without ``X``, ``data`` is the sparse map from the vertices of ``t`` to the
-    union's vertices. With positions ``X`` ``(V, dim)`` of ``t``, it is the
-    union's positions relative to the centre of their fan: the fans shrink by
-    half per level, and the tangents (differences of ring points) would drown
-    in the rounding of absolute positions after a few dozen levels.
-    """
-    topo, vertex, centre, edge, fan = _vertex_fans(t, centres)
-    es, vs = edge_s[edge], vertex_s[vertex]
-    if X is None:
-        data = sp.csr_matrix((np.ones(vertex.size), (np.arange(vertex.size), vertex)), shape=(vertex.size, t.n_vertices))
-    else:
-        data = X[vertex] - X[centres[fan]]
-    ids = np.arange(centres.size)
-    for depth in range(MAX_DESCENT):
-        r = Refinement(topo, scheme, 1, creases=es, corners=vs, boundary="edge-only", crease_method=crease_method)
-        topo, es, vs = r.topology, r.edge_sharpness[-1], r.vertex_sharpness[-1]
-        data = sp.csr_matrix(r.stencils[0] @ data) if X is None else r.stencils[0] @ data
-        # vertex points keep their parent's index: the centres are where they were
-        done = ~unsettled_vertices(topo, es, vs, scheme)[centre]
-        if depth == MAX_DESCENT - 1:
-            done[:] = True
-        if done.any():
-            yield topo, es, vs, data, centre[done], ids[done]
-        if done.all():
-            return
-        ids = ids[~done]
-        topo, sub, centre, edge, fan = _vertex_fans(topo, centre[~done])
-        es, vs, data = es[edge], vs[sub], data[sub]
-        if X is not None:
-            data = data - data[centre[fan]]
-
-
-def _vertex_fans(t: Topology, centres: np.ndarray):
-    """The disjoint union of the fans (the faces at a vertex) of the distinct
-    ``centres``: ``(topology, vertex of t per union vertex, the centres in the
-    union, edge of t per union edge, fan (position in centres) per union vertex)``."""
-    offsets, vface = t.vertex_faces
-    counts = offsets[centres + 1] - offsets[centres]
-    owner = np.repeat(np.arange(centres.size), counts)
-    g = vface[ranges(offsets[centres], counts)]
-    gs = t.face_sizes[g]
-    corner_owner = np.repeat(owner, gs)
-    corners = ranges(t.face_offsets[g], gs)
-    keys, new_index = np.unique(corner_owner * t.n_vertices + t.face_indices[corners], return_inverse=True)
-    vertex = keys % t.n_vertices
-    topo = Topology(keys.size, new_index.ravel(), np.concatenate([[0], np.cumsum(gs)]), check=False)
-    centre = np.searchsorted(keys, np.arange(centres.size) * t.n_vertices + centres)
-    edge = t.find_edges(vertex[topo.edges])
-    return topo, vertex, centre, edge, keys // t.n_vertices
-
-
-def _eval_coons(surface, level, t, X, regular, faces, u, v):
-    """Points and partials of the Coons patches of irregular quads (the fallback
-    of :meth:`SubdivisionSurface.evaluate`, the same patches as ``to_bsplines``)."""
-    nets = _coons_nets(surface, level, t, X, regular, faces)  # (m, 4, 4, dim)
-    Bu = all_bernstein(3, u, order=1)  # (2, 4, m)
-    Bv = all_bernstein(3, v, order=1)
-    p = np.einsum("am,bm,mabd->md", Bu[0], Bv[0], nets)
-    du = np.einsum("am,bm,mabd->md", Bu[1], Bv[0], nets)
-    dv = np.einsum("am,bm,mabd->md", Bu[0], Bv[1], nets)
-    return p, du, dv
-
-
-def _bezier_nets(t, X, faces):
-    """Bicubic Bézier control nets ``(m, 4, 4, dim)`` of regular quads."""
-    net = X[patch_indices(t, faces)]
-    return np.einsum("ia,mabd,jb->mijd", BSPLINE_TO_BEZIER, net, BSPLINE_TO_BEZIER)
-
-
-def _side_curve(net, side):
-    """Bézier control points ``(m, 4, dim)`` of side ``side`` (in face order) of nets ``(m, 4, 4, dim)``."""
-    if side == 0:
-        return net[:, :, 0]
-    if side == 1:
-        return net[:, 3, :]
-    if side == 2:
-        return net[:, ::-1, 3]
-    return net[:, 0, ::-1]
-
-
-def _coons_nets(surface, level, t, X, regular, faces):
-    """Bicubic Coons nets ``(m, 4, 4, dim)`` for irregular quads (see ``to_bsplines``)."""
-    m = faces.size
-    dim = X.shape[1]
-    # limit positions of the corners, and of the edge points of the next level for the midpoints
-    h = t.face_offsets[faces][:, None] + np.arange(4)  # (m, 4) half-edges in face order
-    ends = _limit_points(surface, level, np.stack([t.face_indices[h], t.halfedge_dst[h]]).ravel())
-    ends = ends.reshape(2, m, 4, dim)
-    mids = _limit_points(surface, level + 1, t.n_vertices + t.halfedge_edge[h].ravel()).reshape(m, 4, dim)
-    curves = np.empty((4, m, 4, dim))
-    for k in range(4):
-        h = t.face_offsets[faces] + k
-        a, b, mid = ends[0, :, k], ends[1, :, k], mids[:, k]
-        # cubic through a, mid (at 1/2), b: the quadratic with those values, raised to degree 3
-        q1 = 2 * mid - 0.5 * (a + b)
-        curves[k] = np.stack([a, (a + 2 * q1) / 3, (2 * q1 + b) / 3, b], axis=1)
-        g = t.twin[h]
-        shared = (g >= 0) & regular[t.corner_face[np.maximum(g, 0)]]
-        if shared.any():
-            gf = t.corner_face[g[shared]]
-            gside = g[shared] - t.face_offsets[gf]
-            nets = _bezier_nets(t, X, gf)
-            exact = np.empty((shared.sum(), 4, dim))
-            for sd in range(4):
-                sel = gside == sd
-                if sel.any():
-                    exact[sel] = _side_curve(nets[sel], sd)[:, ::-1]
-            curves[k][shared] = exact
-    # sides in face order: 0 bottom (u), 1 right (v), 2 top (reversed u), 3 left (reversed v)
-    bottom, right, top, left = curves[0], curves[1], curves[2][:, ::-1], curves[3][:, ::-1]
-    i = np.arange(4)[:, None, None] / 3.0
-    j = np.arange(4)[None, :, None] / 3.0
-    P00, P30, P33, P03 = bottom[:, 0], bottom[:, 3], top[:, 3], top[:, 0]
-    return (
-        (1 - i) * left[:, None, :, :] + i * right[:, None, :, :]
-        + (1 - j) * bottom[:, :, None, :] + j * top[:, :, None, :]
-        - ((1 - i) * (1 - j) * P00[:, None, None] + i * (1 - j) * P30[:, None, None]
-           + (1 - i) * j * P03[:, None, None] + i * j * P33[:, None, None])
-    )
