@@ -23,8 +23,6 @@ from functools import cached_property
 
 import numpy as np
 from scipy.sparse import coo_matrix
-from scipy.sparse.csgraph import connected_components
-from scipy.spatial import cKDTree
 
 __all__ = ["EdgeGroup", "ShellTopology", "TopologyQueries", "edge_points", "shell_topology", "surface_points"]
 
@@ -52,6 +50,14 @@ def edge_points(face, edge, t) -> np.ndarray:
     if edge.curve is not None:
         return edge.curve.evaluate(t)
     return surface_points(face, edge.pcurve.evaluate(t))
+
+
+def _components(graph) -> np.ndarray:
+    """Connected-component labels ``(n,)`` of the undirected sparse ``(n, n)`` graph."""
+    # on use: scipy.sparse.csgraph loads scipy.sparse.linalg and scipy.linalg, about 0.3 s of `import splinekit`
+    from scipy.sparse.csgraph import connected_components
+
+    return connected_components(graph, directed=False)[1]
 
 
 @dataclass(frozen=True)
@@ -158,7 +164,7 @@ class ShellTopology:
         # face -> edge-group incidence; faces sharing a group are connected
         n = self.n_faces + len(self.edges)
         graph = coo_matrix((np.ones(len(f)), (f, self.n_faces + g)), shape=(n, n))
-        _, labels = connected_components(graph, directed=False)
+        labels = _components(graph)
         return len(np.unique(labels[: self.n_faces]))
 
     @cached_property
@@ -168,8 +174,8 @@ class ShellTopology:
         if not free:
             return 0
         ends = np.array([g.vertices for g in free])
-        _, labels = connected_components(coo_matrix((np.ones(len(ends)), (ends[:, 0], ends[:, 1])),
-                                                    shape=(len(self.vertices),) * 2), directed=False)
+        labels = _components(coo_matrix((np.ones(len(ends)), (ends[:, 0], ends[:, 1])),
+                                        shape=(len(self.vertices),) * 2))
         return len(np.unique(labels[ends[:, 0]]))
 
     @cached_property
@@ -253,6 +259,7 @@ def shell_topology(faces, tolerance: float | None = None) -> ShellTopology:
     keyless = np.flatnonzero(np.array([k is None for k in keys], dtype=bool) & ~degenerate)
     solid = np.flatnonzero(~degenerate)
     if keyless.size and solid.size:
+        from scipy.spatial import cKDTree  # on use: scipy.spatial costs about 0.3 s of `import splinekit`
         target = cKDTree(np.concatenate([starts[solid], ends[solid]], axis=1))
         for query in (np.concatenate([starts[keyless], ends[keyless]], axis=1),
                       np.concatenate([ends[keyless], starts[keyless]], axis=1)):
@@ -266,7 +273,7 @@ def shell_topology(faces, tolerance: float | None = None) -> ShellTopology:
             cols += j[keep].tolist()
     if m:
         graph = coo_matrix((np.ones(len(rows)), (rows, cols)), shape=(m, m))
-        _, parent = connected_components(graph, directed=False)
+        parent = _components(graph)
     # degenerate uses stay single edges (each its own group)
     groups = {}
     for i in range(m):
@@ -287,12 +294,13 @@ def _clusters(points: np.ndarray, tol: np.ndarray) -> np.ndarray:
     n = len(points)
     if n == 0:
         return np.zeros(0, dtype=np.intp)
+    from scipy.spatial import cKDTree  # on use: scipy.spatial costs about 0.3 s of `import splinekit`
     pairs = cKDTree(points).query_pairs(2.0 * float(tol.max()), output_type="ndarray")
     if len(pairs):
         d = np.linalg.norm(points[pairs[:, 0]] - points[pairs[:, 1]], axis=1)
         pairs = pairs[d <= tol[pairs[:, 0]] + tol[pairs[:, 1]]]
     graph = coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(n, n))
-    _, labels = connected_components(graph, directed=False)
+    labels = _components(graph)
     return labels
 
 
