@@ -11,7 +11,10 @@ from __future__ import annotations
 import warnings
 from typing import Any, NamedTuple
 
-from splinekit.errors import FileFormatError
+from splinekit.brep import Shell, Solid, TrimmedFace
+from splinekit.errors import BackendError, FileFormatError
+from splinekit.interop.occ import _check_valid, _ocp, _sub_shapes, to_shape
+from splinekit.interop.occ_brep import brep_from_shape, brep_to_shape, is_brep
 
 __all__ = ["BrepItem", "ReadResult", "items_from_shapes"]
 
@@ -38,10 +41,6 @@ class ReadResult(list):
 
 def _face_problems(obj) -> tuple[list[int], str | None]:
     """``(bad face numbers, message)`` from OCC's check of ``obj`` rebuilt, or ``([], None)`` if valid."""
-    from splinekit.errors import BackendError
-    from splinekit.interop.occ import _check_valid, _ocp, _sub_shapes
-    from splinekit.interop.occ_brep import brep_to_shape
-
     try:
         shape = brep_to_shape(obj)
         _check_valid(shape, type(obj).__name__)
@@ -68,9 +67,6 @@ def items_from_shapes(named_shapes, *, strict: bool, path: str, kind: str) -> Re
     ``strict=False``: those faces are left out (a solid that lost faces comes back as its remaining
     faces in a Shell), each problem is listed in ``.problems`` of the result and warned about.
     """
-    from splinekit.brep import Shell, Solid, TrimmedFace
-    from splinekit.interop.occ_brep import brep_from_shape
-
     items, problems = [], []
     for name, shape in named_shapes:
         where = f"{kind} file {path!r}, " + (f"object {name!r}" if name else "an unnamed object")
@@ -102,15 +98,11 @@ def items_from_shapes(named_shapes, *, strict: bool, path: str, kind: str) -> Re
 def shapes_for_export(objects, tolerance: float) -> list:
     """One OCC shape per object (B-rep objects rebuilt and checked valid: an invalid one raises
     BackendError naming the failing faces); other objects as :func:`splinekit.occ.to_shape` makes them."""
-    from splinekit.interop.occ import to_shape
-
     return [to_shape(obj, tolerance=tolerance) for obj in objects]
 
 
 def default_names(objects, names):
     """``names``, or each B-rep object's own ``.name`` when ``names`` is None and some object has one."""
-    from splinekit.interop.occ_brep import is_brep
-
     if names is not None:
         return names
     own = [o.name if is_brep(o) else None for o in objects]

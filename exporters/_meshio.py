@@ -6,7 +6,8 @@
   target untouched), :func:`write_part` (every byte a writer produces goes through it) and the
   vectorized text formatting (:func:`format_rows`, :func:`format_polygons`);
 - reading: :func:`read_bytes`, :func:`merge_vertices`, :func:`build_mesh`;
-- :func:`export_mesh` / :func:`import_mesh`, which dispatch on the file suffix.
+- :func:`export_mesh` / :func:`import_mesh`, which dispatch on the file suffix to the writer and
+  reader each format module registers (:func:`register`).
 
 Floats written as text use Python's shortest round-trip ``repr``, so a float64 coordinate read back
 with ``float()`` is bit-for-bit the value that was written.
@@ -44,6 +45,7 @@ __all__ = [
     "import_mesh",
     "merge_vertices",
     "read_bytes",
+    "register",
     "save",
     "triangles",
     "write_part",
@@ -382,6 +384,26 @@ def build_mesh(vertices: np.ndarray, face_indices: np.ndarray, face_offsets: np.
 
 
 # -- dispatch ---------------------------------------------------------------------------------
+_FORMATS: dict = {}
+"""Format name -> ``(writer, reader)``; each format module registers itself when it is imported
+(:func:`register`), so this module needs none of them and they all import it."""
+
+
+def register(format: str, writer, reader) -> None:
+    """Make ``writer(path, mesh, **options)`` and ``reader(path)`` the ones :func:`export_mesh` and
+    :func:`import_mesh` use for ``format`` (a name of :data:`SUFFIXES`)."""
+    if format not in SUFFIXES.values():
+        raise ParameterError(f"unknown mesh format {format!r}; SUFFIXES names {sorted(set(SUFFIXES.values()))}")
+    _FORMATS[format] = (writer, reader)
+
+
+def _registered(format: str):
+    try:
+        return _FORMATS[format]
+    except KeyError:  # only when exporters/__init__.py stops importing a format module
+        raise FileFormatError(f"the {format} reader and writer are not loaded (import exporters)") from None
+
+
 def export_mesh(path, mesh, format=None, **options) -> str:
     """Write ``mesh`` in the format named by ``path``'s suffix (or by ``format``); returns the path.
 
@@ -390,21 +412,15 @@ def export_mesh(path, mesh, format=None, **options) -> str:
     ``unit=``). An unsupported format raises :class:`~splinekit.errors.FileFormatError` naming it and
     listing the supported ones.
     """
-    from . import gltf, obj, ply, stl, threemf
-
-    writers = {"stl": stl.export_stl, "obj": obj.export_obj, "ply": ply.export_ply,
-               "3mf": threemf.export_3mf, "glb": gltf.export_glb}
-    return writers[format_of(path, format)](path, mesh, **options)
+    writer, _ = _registered(format_of(path, format))
+    return writer(path, mesh, **options)
 
 
 def import_mesh(path, format=None):
     """Read a mesh file (``.stl``, ``.obj``, ``.ply``, ``.3mf``, ``.glb``, by suffix unless
     ``format`` is given) into a :class:`~splinekit.PolyMesh`."""
-    from . import gltf, obj, ply, stl, threemf
-
-    readers = {"stl": stl.import_stl, "obj": obj.import_obj, "ply": ply.import_ply,
-               "3mf": threemf.import_3mf, "glb": gltf.import_glb}
-    return readers[format_of(path, format)](path)
+    _, reader = _registered(format_of(path, format))
+    return reader(path)
 
 
 def is_float(token: bytes) -> bool:

@@ -384,3 +384,6 @@ def import_glb(path):
     T = np.concatenate(parts_t) if parts_t else np.zeros(0, dtype=np.int64)
     _meshio.finite_or_raise(V, what)
     return _meshio.build_mesh(V, T, np.arange(T.size // 3 + 1, dtype=np.int64) * 3, what)
+
+
+_meshio.register("glb", export_glb, import_glb)

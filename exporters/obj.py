@@ -193,3 +193,4 @@ def _partition(tokens: np.ndarray):
     return parts[:, 0], parts[:, 1], parts[:, 2]
 
 
+_meshio.register("obj", export_obj, import_obj)

@@ -324,3 +324,4 @@ def import_ply(path):
     return _meshio.build_mesh(V, idx, offsets, what)
 
 
+_meshio.register("ply", export_ply, import_ply)

@@ -24,7 +24,7 @@ from contextlib import contextmanager
 from splinekit._atomic import atomic_write, write_target
 from splinekit._signals import reraise_interrupt
 from splinekit.errors import ExportError, FileFormatError, ParameterError
-from splinekit.interop.occ import from_occ, require_ocp, to_shape
+from splinekit.interop.occ import _compound, from_occ, require_ocp, to_shape
 
 from ._brep_io import BrepItem, ReadResult, default_names, items_from_shapes
 from ._meshio import _fspath
@@ -228,8 +228,6 @@ def _products(shapes, names):
     """``(shape, name)`` per STEP product: each named object alone, and each run of
     consecutive unnamed objects as one compound (a STEP product costs OCC about half a
     millisecond to translate, and unnamed objects need no product of their own)."""
-    from splinekit.interop.occ import _compound
-
     out, run = [], []
     for shape, name in zip(shapes, names):
         if name is None:

@@ -226,3 +226,6 @@ def import_stl(path):
             new = np.cumsum(used) - 1
             V, F = V[used], new[F]
     return _meshio.build_mesh(V, F.ravel(), np.arange(len(F) + 1, dtype=np.int64) * 3, what)
+
+
+_meshio.register("stl", export_stl, import_stl)

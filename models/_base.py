@@ -12,6 +12,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from splinekit.brep import Shell, TrimmedFace
+from splinekit.brep.mass import area_and_volume
 from splinekit.errors import ParameterError
 
 __all__ = ["INTEGRAL_TOLERANCE", "Model", "Parameter", "gauss_nodes", "resolve_params", "surface_integrals"]
@@ -187,8 +189,5 @@ def surface_integrals(patches, tol: float = 1e-10) -> tuple[float, float]:
     8-point Gauss rule is 0.3 % off on the lid knob. Independent of OCC, hence a cross-check of
     its ``BRepGProp`` values.
     """
-    from splinekit.brep import Shell, TrimmedFace
-    from splinekit.brep.mass import area_and_volume
-
     area, _, volume, _ = area_and_volume(Shell([TrimmedFace(p) for p in patches]), tol)
     return area, volume

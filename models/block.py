@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import math
 
+from splinekit import brep
 from splinekit.errors import ParameterError
 
 from ._base import Model, Parameter, resolve_params
@@ -104,8 +105,6 @@ def exact_area(v: dict) -> float:
 
 def solid(v: dict):
     """The block as one exact :class:`~splinekit.brep.Solid` for checked parameters ``v``."""
-    from splinekit import brep
-
     L, W, H = v["length"], v["width"], v["height"]
     a, b, d = v["pocket_length"], v["pocket_width"], v["depth"]
     x0, y0 = 0.5 * (L - a), 0.5 * (W - b)

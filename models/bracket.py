@@ -23,6 +23,7 @@ import math
 
 import numpy as np
 
+from splinekit import brep
 from splinekit.errors import ParameterError
 
 from ._base import Model, Parameter, resolve_params
@@ -122,8 +123,6 @@ def exact_area(v: dict) -> float:
 
 def solid(v: dict):
     """The bracket as one exact :class:`~splinekit.brep.Solid` for checked parameters ``v``."""
-    from splinekit import brep
-
     t, w, l, h = v["thickness"], v["width"], v["length"], v["height"]
     r, hb = 0.5 * v["hole"], v["boss_height"]
     r_boss = r + v["boss_wall"]

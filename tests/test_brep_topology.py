@@ -18,6 +18,7 @@ from hypothesis import strategies as st
 
 from splinekit.brep import (Shell, Solid, TrimmedFace, box, box_with_hole, cone, cylinder, plate_with_holes,
                             sphere, torus)
+from splinekit.brep.topology import pair_by_samples
 from splinekit.construct import arc, line
 from splinekit.surfaces import BSplineSurface
 
@@ -108,3 +109,46 @@ def test_topology_is_cached_and_pairing_scales():
     assert p.genus == 100
     assert time.perf_counter() - t < max(first / 10, 1e-3)
     assert first < 10.0
+
+
+# -- pairing keyless uses by their samples (splinekit.brep.topology.pair_by_samples) ------------------
+def _partition(labels) -> set:
+    """The groups of a labelling as a set of frozensets of indices (label numbers do not matter)."""
+    groups: dict = {}
+    for i, label in enumerate(np.asarray(labels).tolist()):
+        groups.setdefault(label, set()).add(i)
+    return {frozenset(g) for g in groups.values()}
+
+
+@settings(max_examples=40, deadline=None)
+@given(st.integers(0, 2**32 - 1), st.integers(1, 30))
+def test_pair_by_samples_finds_the_edges_it_was_built_from(seed, n_edges):
+    """Edges are random polylines far apart; each is used once or twice (the second use reversed
+    or not, moved by less than the tolerance): the groups are exactly the edges, whatever the
+    order of the uses. The truth is the construction, not the function."""
+    rng = np.random.default_rng(seed)
+    tol = 1e-3
+    starts = np.arange(n_edges)[:, None] * np.array([10.0, 0.0, 0.0])  # edges 10 apart
+    uses, truth = [], []
+    for e in range(n_edges):
+        pts = starts[e] + np.cumsum(rng.uniform(-1.0, 1.0, (5, 3)), axis=0)
+        uses.append(pts)
+        truth.append(e)
+        if rng.random() < 0.7:  # a second use of the same edge
+            other = pts + rng.uniform(-0.4, 0.4, (5, 3)) * tol
+            uses.append(other[::-1] if rng.random() < 0.5 else other)
+            truth.append(e)
+    order = rng.permutation(len(uses))
+    labels = pair_by_samples(np.array(uses)[order], tol)
+    assert _partition(labels) == _partition(np.array(truth)[order])
+
+
+def test_pair_by_samples_needs_every_sample_within_the_larger_tolerance():
+    a = np.array([[0.0, 0, 0], [1, 0, 0], [2, 0, 0], [3, 0, 0], [4, 0, 0]])
+    same_ends = a.copy()
+    same_ends[1, 1] = 0.5  # same ends and mid point, another quarter point: a different edge
+    assert _partition(pair_by_samples(np.stack([a, same_ends]), 0.1)) == {frozenset({0}), frozenset({1})}
+    near = a + [0.0, 0.15, 0.0]  # 0.15 apart everywhere: one edge only with a tolerance of 0.15 on one side
+    assert _partition(pair_by_samples(np.stack([a, near]), [0.1, 0.1])) == {frozenset({0}), frozenset({1})}
+    assert _partition(pair_by_samples(np.stack([a, near]), [0.1, 0.15])) == {frozenset({0, 1})}
+    assert pair_by_samples(np.zeros((0, 5, 3)), 0.1).shape == (0,)

@@ -30,8 +30,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.spatial import cKDTree
 
+from ..closest import project
 from ..errors import BRepError, TrimError
 from .coarse_mesh import face_mesh
 from .trims import OUTSIDE, classify_uv, sample_trims, segment_distance, trim_pieces, uv_tolerance
@@ -214,6 +214,7 @@ def check_face(face) -> list:
     edge_of = np.concatenate([o for _, o in kept])
     mid = 0.5 * (P0 + P1)
     half = 0.5 * np.linalg.norm(P1 - P0, axis=1)
+    from scipy.spatial import cKDTree  # on use: scipy.spatial costs about 0.3 s of `import splinekit`
     pairs = cKDTree(mid).query_pairs(2.0 * float(half.max()) + tol_uv, output_type="ndarray")
     if len(pairs):
         i, j = pairs[:, 0], pairs[:, 1]
@@ -271,8 +272,6 @@ def check_face(face) -> list:
             dev = float(np.linalg.norm(on_surface - e.curve.evaluate(t), axis=1).max())
             limit = max(e.tolerance, tol)
             if dev > limit:
-                from ..closest import project
-
                 apart = float(project(e.curve, on_surface).distances.max())
                 how = (f"; as point sets they are {apart:.3g} apart (only the parameters differ)" if apart <= limit
                        else f"; {apart:.3g} apart as point sets")

@@ -19,10 +19,10 @@ Solids (:func:`contains`)
 from __future__ import annotations
 
 import numpy as np
-from scipy.spatial import cKDTree
 
 from .. import limits
 from .._validate import as_float_array
+from ..closest import project
 from ..errors import ParameterError
 from .coarse_mesh import face_cap, face_mesh, point_triangle_distance, winding_numbers
 from .trims import INSIDE, ON, OUTSIDE, Location, classify_uv, trim_pieces, uv_tolerance
@@ -57,6 +57,8 @@ def contains_uv(face, uv, tolerance: float | None = None) -> np.ndarray:
 def _near_mesh(solid, Q, tol):
     """Boolean mask ``(n,)``: points within ``3 deviation + 2 tol`` of a face's mesh (where the
     mesh's winding number may differ from the exact one, or the point may be ON)."""
+    from scipy.spatial import cKDTree  # on use: scipy.spatial costs about 0.3 s of `import splinekit`
+
     near = np.zeros(len(Q), dtype=bool)
     for f in solid.faces:
         P, T, dev = face_mesh(f)
@@ -127,8 +129,6 @@ def contains(solid, points, tolerance: float | None = None) -> np.ndarray:
         Distance (model units) within which a point is ON the boundary; default the largest face
         tolerance.
     """
-    from ..closest import project
-
     arr = as_float_array(points, "points")
     single = arr.ndim == 1
     P = arr.reshape(1, -1) if single else arr
@@ -164,6 +164,7 @@ def _closest_feature_side(solid, Q, tol, fallback, project):
     # the mesh's vertices lie on the boundary: their nearest one bounds the closest distance, so
     # faces and edges whose box is further away are skipped
     V, _ = _solid_mesh(solid)
+    from scipy.spatial import cKDTree  # on use: scipy.spatial costs about 0.3 s of `import splinekit`
     bound = cKDTree(V).query(Q)[0] * (1.0 + 1e-9) + tol
     for f in faces:
         sel = np.flatnonzero(_box_distance(Q, f.surface.control_points.reshape(-1, 3)) < np.minimum(best, bound))

@@ -8,8 +8,10 @@ from ..construct.curves import line
 from ..errors import ParameterError
 from ..surfaces import BezierSurface, SplineSurface
 from .._validate import as_positive
-from .edge import DEFAULT_TOLERANCE, Edge
+from . import mass
 from .check import Checkable, check_face
+from .classify import contains_uv
+from .edge import DEFAULT_TOLERANCE, Edge
 from .topology import TopologyQueries, shell_topology
 
 __all__ = ["TrimmedFace", "as_surface"]
@@ -149,8 +151,6 @@ class TrimmedFace(TopologyQueries, Checkable):
         """Classify ``(n, 2)`` parameter points against the trims: ``int8`` codes ``1`` inside,
         ``0`` on a trim (within ``tolerance``, 3-D units), ``-1`` outside
         (:func:`splinekit.brep.classify.contains_uv`)."""
-        from .classify import contains_uv
-
         return contains_uv(self, uv, tolerance)
 
     def _problems(self):
@@ -178,24 +178,20 @@ class TrimmedFace(TopologyQueries, Checkable):
     # -- mass properties (splinekit.brep.mass) ------------------------------------------------
     def area(self, tol: float = 1e-10) -> float:
         """Area of the trimmed face to relative tolerance ``tol`` (adaptive quadrature)."""
-        from .mass import area
-        return area(self, tol)
+        return mass.area(self, tol)
 
     def centroid(self, tol: float = 1e-10) -> np.ndarray:
         """``(3,)`` centroid of the face's area."""
-        from .mass import centroid
-        return centroid(self, tol)
+        return mass.centroid(self, tol)
 
     def inertia(self, tol: float = 1e-10) -> np.ndarray:
         """``(3, 3)`` inertia tensor of the face (unit areal density) about its centroid."""
-        from .mass import inertia
-        return inertia(self, tol)
+        return mass.inertia(self, tol)
 
     def mass_properties(self, tol: float = 1e-10):
         """Area, centroid, inertia, principal moments and axes with error estimates
         (:class:`splinekit.brep.mass.MassProperties`)."""
-        from .mass import mass_properties
-        return mass_properties(self, tol)
+        return mass.mass_properties(self, tol)
 
     def __repr__(self):
         holes = len(self._loops) - 1 if self._loops else 0

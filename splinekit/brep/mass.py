@@ -84,12 +84,14 @@ class MassProperties:
         return self.volume if self.of == "volume" else self.area
 
 
-def _faces_of(obj) -> list:
-    from .face import TrimmedFace
+def _is_face(obj) -> bool:
+    """Whether ``obj`` is one face: shells and solids list ``.faces``, a face has none. (Told apart
+    by that attribute, so this module needs nothing from :mod:`.face`, whose methods call it.)"""
+    return not hasattr(obj, "faces")
 
-    if isinstance(obj, TrimmedFace):
-        return [obj]
-    return list(obj.faces)
+
+def _faces_of(obj) -> list:
+    return [obj] if _is_face(obj) else list(obj.faces)
 
 
 def _reference_point(faces) -> tuple[np.ndarray, float]:
@@ -224,10 +226,8 @@ def _moments_to_properties(mass, m1, m2, errs, center):
 def mass_properties(obj, tol: float = DEFAULT_TOLERANCE) -> MassProperties:
     """Area, volume (shells and solids), centroid, inertia about the centroid, principal moments
     and axes of a face, shell or solid, with error estimates, to relative tolerance ``tol``."""
-    from .face import TrimmedFace
-
     tol = as_positive(tol, "tol")
-    is_face = isinstance(obj, TrimmedFace)
+    is_face = _is_face(obj)
 
     def compute():
         parts = ("area", "area moments") if is_face else ("area", "area moments", "volume", "volume moments")

@@ -4,7 +4,9 @@ from __future__ import annotations
 
 from ..errors import ParameterError
 from .face import TrimmedFace
+from . import mass
 from .check import Checkable, check_shell, check_solid
+from .classify import contains
 from .topology import TopologyQueries, shell_topology
 
 __all__ = ["Shell", "Solid"]
@@ -67,29 +69,24 @@ class Shell(TopologyQueries, Checkable):
     # -- mass properties (splinekit.brep.mass) ------------------------------------------------
     def area(self, tol: float = 1e-10) -> float:
         """Total area of the faces to relative tolerance ``tol``."""
-        from .mass import area
-        return area(self, tol)
+        return mass.area(self, tol)
 
     def volume(self, tol: float = 1e-10) -> float:
         """Enclosed volume by the divergence theorem over the oriented faces (meaningful when the shell is closed)."""
-        from .mass import volume
-        return volume(self, tol)
+        return mass.volume(self, tol)
 
     def centroid(self, tol: float = 1e-10):
         """``(3,)`` centroid of the enclosed solid (unit density)."""
-        from .mass import centroid
-        return centroid(self, tol)
+        return mass.centroid(self, tol)
 
     def inertia(self, tol: float = 1e-10):
         """``(3, 3)`` inertia tensor of the enclosed solid (unit density) about its centroid."""
-        from .mass import inertia
-        return inertia(self, tol)
+        return mass.inertia(self, tol)
 
     def mass_properties(self, tol: float = 1e-10):
         """Area, volume, centroid, inertia, principal moments and axes with error estimates
         (:class:`splinekit.brep.mass.MassProperties`)."""
-        from .mass import mass_properties
-        return mass_properties(self, tol)
+        return mass.mass_properties(self, tol)
 
     def __repr__(self):
         return f"Shell({len(self._faces)} faces{f', name={self._name!r}' if self._name else ''})"
@@ -145,8 +142,6 @@ class Solid(TopologyQueries, Checkable):
     def contains(self, points, tolerance: float | None = None):
         """Classify ``(n, 3)`` points: ``int8`` codes ``1`` inside, ``0`` on the boundary (within
         ``tolerance``), ``-1`` outside (:func:`splinekit.brep.classify.contains`)."""
-        from .classify import contains
-
         return contains(self, points, tolerance)
 
     @property
@@ -157,29 +152,24 @@ class Solid(TopologyQueries, Checkable):
     # -- mass properties (splinekit.brep.mass) ------------------------------------------------
     def area(self, tol: float = 1e-10) -> float:
         """Total area of the faces to relative tolerance ``tol``."""
-        from .mass import area
-        return area(self, tol)
+        return mass.area(self, tol)
 
     def volume(self, tol: float = 1e-10) -> float:
         """Enclosed volume by the divergence theorem over the oriented faces (void shells, pointing into their voids, count negative)."""
-        from .mass import volume
-        return volume(self, tol)
+        return mass.volume(self, tol)
 
     def centroid(self, tol: float = 1e-10):
         """``(3,)`` centroid of the enclosed solid (unit density)."""
-        from .mass import centroid
-        return centroid(self, tol)
+        return mass.centroid(self, tol)
 
     def inertia(self, tol: float = 1e-10):
         """``(3, 3)`` inertia tensor of the enclosed solid (unit density) about its centroid."""
-        from .mass import inertia
-        return inertia(self, tol)
+        return mass.inertia(self, tol)
 
     def mass_properties(self, tol: float = 1e-10):
         """Area, volume, centroid, inertia, principal moments and axes with error estimates
         (:class:`splinekit.brep.mass.MassProperties`)."""
-        from .mass import mass_properties
-        return mass_properties(self, tol)
+        return mass.mass_properties(self, tol)
 
     def __repr__(self):
         return f"Solid({len(self._shells)} shell(s), {len(self.faces)} faces{f', name={self._name!r}' if self._name else ''})"

@@ -23,10 +23,10 @@ from functools import cached_property
 
 import numpy as np
 from scipy.sparse import coo_matrix
-from scipy.sparse.csgraph import connected_components
-from scipy.spatial import cKDTree
 
-__all__ = ["EdgeGroup", "ShellTopology", "TopologyQueries", "edge_points", "shell_topology", "surface_points"]
+__all__ = [
+    "EdgeGroup", "ShellTopology", "TopologyQueries", "edge_points", "pair_by_samples", "shell_topology", "surface_points",
+]
 
 _SAMPLES = 33
 """Points per edge use for its mid point and direction (the mid point only tells edges apart)."""
@@ -52,6 +52,14 @@ def edge_points(face, edge, t) -> np.ndarray:
     if edge.curve is not None:
         return edge.curve.evaluate(t)
     return surface_points(face, edge.pcurve.evaluate(t))
+
+
+def _components(graph) -> np.ndarray:
+    """Connected-component labels ``(n,)`` of the undirected sparse ``(n, n)`` graph."""
+    # on use: scipy.sparse.csgraph loads scipy.sparse.linalg and scipy.linalg, about 0.3 s of `import splinekit`
+    from scipy.sparse.csgraph import connected_components
+
+    return connected_components(graph, directed=False)[1]
 
 
 @dataclass(frozen=True)
@@ -158,7 +166,7 @@ class ShellTopology:
         # face -> edge-group incidence; faces sharing a group are connected
         n = self.n_faces + len(self.edges)
         graph = coo_matrix((np.ones(len(f)), (f, self.n_faces + g)), shape=(n, n))
-        _, labels = connected_components(graph, directed=False)
+        labels = _components(graph)
         return len(np.unique(labels[: self.n_faces]))
 
     @cached_property
@@ -168,8 +176,8 @@ class ShellTopology:
         if not free:
             return 0
         ends = np.array([g.vertices for g in free])
-        _, labels = connected_components(coo_matrix((np.ones(len(ends)), (ends[:, 0], ends[:, 1])),
-                                                    shape=(len(self.vertices),) * 2), directed=False)
+        labels = _components(coo_matrix((np.ones(len(ends)), (ends[:, 0], ends[:, 1])),
+                                        shape=(len(self.vertices),) * 2))
         return len(np.unique(labels[ends[:, 0]]))
 
     @cached_property
@@ -253,6 +261,7 @@ def shell_topology(faces, tolerance: float | None = None) -> ShellTopology:
     keyless = np.flatnonzero(np.array([k is None for k in keys], dtype=bool) & ~degenerate)
     solid = np.flatnonzero(~degenerate)
     if keyless.size and solid.size:
+        from scipy.spatial import cKDTree  # on use: scipy.spatial costs about 0.3 s of `import splinekit`
         target = cKDTree(np.concatenate([starts[solid], ends[solid]], axis=1))
         for query in (np.concatenate([starts[keyless], ends[keyless]], axis=1),
                       np.concatenate([ends[keyless], starts[keyless]], axis=1)):
@@ -266,7 +275,7 @@ def shell_topology(faces, tolerance: float | None = None) -> ShellTopology:
             cols += j[keep].tolist()
     if m:
         graph = coo_matrix((np.ones(len(rows)), (rows, cols)), shape=(m, m))
-        _, parent = connected_components(graph, directed=False)
+        parent = _components(graph)
     # degenerate uses stay single edges (each its own group)
     groups = {}
     for i in range(m):
@@ -282,17 +291,47 @@ def shell_topology(faces, tolerance: float | None = None) -> ShellTopology:
                          float(tolerance))
 
 
+def pair_by_samples(points, tol) -> np.ndarray:
+    """Group edge uses that are one edge by their sampled 3-D points: labels ``(n,)``.
+
+    ``points`` ``(n, k, 3)``: each use's 3-D points at the same ``k`` parameter fractions of its
+    own domain, ``k`` odd (e.g. 0, 1/4, 1/2, 3/4, 1); ``tol`` ``(n,)`` or a float (model units).
+    Two uses are one edge when every sample agrees within the larger of their two tolerances, in
+    the same order or reversed (the uses run the edge in opposite directions); the labels are the
+    connected components of those pairs, numbered in order of their first use. The candidates
+    are the pairs whose middle samples lie within that distance (a k-d tree), so this costs
+    ``O(n log n)``. For keyless uses: uses that carry a ``key`` are paired by it.
+    """
+    P = np.asarray(points, dtype=np.float64)
+    n = len(P)
+    if n == 0:
+        return np.zeros(0, dtype=np.intp)
+    tol = np.broadcast_to(np.asarray(tol, dtype=np.float64), (n,))
+    from scipy.spatial import cKDTree  # on use: scipy.spatial costs about 0.3 s of `import splinekit`
+
+    pairs = cKDTree(P[:, P.shape[1] // 2]).query_pairs(float(tol.max()), output_type="ndarray")
+    if len(pairs):
+        a, b = pairs[:, 0], pairs[:, 1]
+        limit = np.maximum(tol[a], tol[b])[:, None]
+        same = (np.linalg.norm(P[a] - P[b], axis=-1) <= limit).all(axis=1)
+        flip = (np.linalg.norm(P[a] - P[b][:, ::-1], axis=-1) <= limit).all(axis=1)
+        pairs = pairs[same | flip]
+    graph = coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(n, n))
+    return _components(graph)
+
+
 def _clusters(points: np.ndarray, tol: np.ndarray) -> np.ndarray:
     """Labels ``(n,)``: points ``a``, ``b`` closer than ``tol[a] + tol[b]`` (transitively) share one."""
     n = len(points)
     if n == 0:
         return np.zeros(0, dtype=np.intp)
+    from scipy.spatial import cKDTree  # on use: scipy.spatial costs about 0.3 s of `import splinekit`
     pairs = cKDTree(points).query_pairs(2.0 * float(tol.max()), output_type="ndarray")
     if len(pairs):
         d = np.linalg.norm(points[pairs[:, 0]] - points[pairs[:, 1]], axis=1)
         pairs = pairs[d <= tol[pairs[:, 0]] + tol[pairs[:, 1]]]
     graph = coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(n, n))
-    _, labels = connected_components(graph, directed=False)
+    labels = _components(graph)
     return labels
 
 

@@ -26,6 +26,7 @@ from __future__ import annotations
 import numpy as np
 
 from .._validate import as_positive
+from ..brep import Edge
 from ..errors import BackendError, ParameterError
 from .exact_booleans import _result_solids, occ_solid
 from .occ import _check_valid, _ocp, _sub_shapes
@@ -61,8 +62,6 @@ def _use_midpoint(use) -> np.ndarray:
 
 def _points(edges) -> np.ndarray | None:
     """``(n, 3)`` query points for ``edges``, or None for ``"all"``."""
-    from ..brep import Edge
-
     if isinstance(edges, str):
         if edges == "all":
             return None

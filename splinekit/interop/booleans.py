@@ -58,6 +58,10 @@ from ..errors import (
     NotManifoldError,
     ParameterError,
 )
+from ..mesh.geometry import triangulate
+from ..mesh.polymesh import PolyMesh
+from ..mesh.topology import Topology
+from ..tessellation import tessellate
 
 __all__ = ["union", "difference", "intersection", "union_all", "to_manifold", "from_manifold"]
 
@@ -150,8 +154,6 @@ def _checked_triangles(mesh, name: str) -> tuple[np.ndarray, np.ndarray]:
     if topology.is_uniform and int(topology.face_sizes[0]) == 3:
         T = np.array(topology.face_indices.reshape(-1, 3))
     else:
-        from ..mesh.geometry import triangulate
-
         T = np.ascontiguousarray(triangulate(topology)[0])
     return Vw, T.view(np.uint64)
 
@@ -189,17 +191,8 @@ def _check_tolerance(tolerance):
 
 def _as_mesh(obj, tolerance, name: str):
     """A PolyMesh for ``obj``: itself, or its tessellation."""
-    from ..mesh.polymesh import PolyMesh
-
     if isinstance(obj, PolyMesh):
         return obj
-    try:
-        from ..tessellation import tessellate
-    except ImportError as exc:
-        raise ParameterError(
-            f"{name} is a {type(obj).__name__}; a boolean operand must be a PolyMesh, a manifold3d.Manifold "
-            f"or something splinekit.tessellate accepts (splinekit.tessellation is unavailable: {exc})"
-        ) from None
     mesh = tessellate(obj, tolerance)
     if not isinstance(mesh, PolyMesh):
         raise BackendError(f"splinekit.tessellate returned a {type(mesh).__name__} for {name}, not a PolyMesh")
@@ -257,9 +250,6 @@ def from_manifold(manifold):
 
     Raises BackendError naming the status if the manifold is in an error state.
     """
-    from ..mesh.polymesh import PolyMesh
-    from ..mesh.topology import Topology
-
     if not _is_manifold(manifold):
         raise ParameterError(f"expected a manifold3d.Manifold, got {type(manifold).__name__}")
     _checked_manifold(manifold, "the manifold")
@@ -329,8 +319,6 @@ def union_all(bodies, *, tolerance=None):
     tol = _check_tolerance(tolerance)
     if isinstance(bodies, (str, bytes)) or _is_manifold(bodies) or not hasattr(bodies, "__iter__"):
         raise ParameterError(f"bodies must be an iterable of bodies, got {type(bodies).__name__}")
-    from ..mesh.polymesh import PolyMesh
-
     if isinstance(bodies, PolyMesh):
         raise ParameterError("bodies must be an iterable of bodies, got a single PolyMesh")
     parts = [_operand(body, tol, f"bodies[{i}]") for i, body in enumerate(bodies)]

@@ -29,8 +29,10 @@ from __future__ import annotations
 
 import numpy as np
 
+from .._validate import as_positive
+from ..brep import Solid
 from ..errors import BackendError, ParameterError
-from .occ import _check_valid, _ocp, _sub_shapes, _unwrap
+from .occ import _check_valid, _ocp, _sub_shapes, _unwrap, from_occ, to_occ
 
 __all__ = ["fuse", "cut", "common", "occ_solid", "solid_from_occ"]
 
@@ -43,11 +45,8 @@ def occ_solid(obj, name: str = "the operand"):
 
     Raises ParameterError for anything else, naming ``name``.
     """
-    from ..brep import Solid
-    from . import occ
-
     if isinstance(obj, Solid):
-        return occ.to_occ(obj)
+        return to_occ(obj)
     shape = _unwrap(obj) if not isinstance(obj, (list, tuple, np.ndarray)) else None
     if shape is None:
         raise ParameterError(
@@ -60,10 +59,7 @@ def occ_solid(obj, name: str = "the operand"):
 
 def solid_from_occ(shape, what: str):
     """The splinekit Solid of an OCC solid (one ``TopoDS_Solid``), via ``from_occ``."""
-    from ..brep import Solid
-    from . import occ
-
-    out = occ.from_occ(shape)
+    out = from_occ(shape)
     if isinstance(out, (list, tuple)) and len(out) == 1:
         out = out[0]
     if not isinstance(out, Solid):
@@ -182,8 +178,6 @@ def _exact(a, b, operation: str, fuzzy, simplify, pieces):
     if not isinstance(simplify, (bool, np.bool_)):
         raise ParameterError(f"simplify must be True or False, got {simplify!r}")
     if fuzzy is not None:
-        from .._validate import as_positive
-
         fuzzy = as_positive(fuzzy, "fuzzy")
     sa = occ_solid(a, f"the first operand of the exact {operation}")
     if not _solids(sa):

@@ -1,0 +1,271 @@
+"""splinekit B-rep -> OpenCascade topology: a :class:`~splinekit.brep.TrimmedFace`,
+:class:`~splinekit.brep.Shell` or :class:`~splinekit.brep.Solid` built as the exact TopoDS face,
+shell or solid.
+
+Faces are built with ``BRep_Builder`` from their surfaces and pcurves; each edge is built ONCE per
+key (both faces' pcurves on one ``TopoDS_Edge``; a seam gets its two pcurves on one face), vertices
+are shared through the loops' adjacency, 3-D curves are built where missing
+(``BRepLib.BuildCurve3d``), and edges without keys are paired geometrically first. Sewing
+(``BRepBuilderAPI_Sewing``) is not used: it may merge or split edges, and the direct build keeps
+the counts exactly.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..brep import Shell, Solid, TrimmedFace
+from ..brep.topology import pair_by_samples
+from ..errors import BackendError, ParameterError
+from .occ_backend import _ocp
+from .occ_geometry import _curve2d_to_occ, _same_domain, geom_to_occ
+from .occ_shapes import _compound
+
+__all__ = ["brep_to_shape", "brep_list_to_shape"]
+
+
+def _use_points(face, use) -> np.ndarray:
+    """``(5, 3)`` points of an edge use at parameter fractions 0, 0.25, 0.5, 0.75, 1 (3-D curve if
+    there is one, else the surface at the pcurve)."""
+    a, b = use.domain
+    t = a + (b - a) * np.array([0.0, 0.25, 0.5, 0.75, 1.0])
+    if use.curve is not None:
+        return use.curve.evaluate(t)
+    uv = use.pcurve.evaluate(t)
+    (u0, u1), (v0, v1) = face.surface.domain  # a file's pcurves may overshoot by a rounding
+    return face.surface.evaluate(np.clip(uv[:, 0], u0, u1), np.clip(uv[:, 1], v0, v1))
+
+
+class _UnionFind:
+    def __init__(self):
+        self.parent: dict = {}
+
+    def find(self, x):
+        parent = self.parent
+        parent.setdefault(x, x)
+        root = x
+        while parent[root] != root:
+            root = parent[root]
+        while parent[x] != root:
+            parent[x], x = root, parent[x]
+        return root
+
+    def union(self, a, b):
+        ra, rb = self.find(a), self.find(b)
+        if ra != rb:
+            self.parent[rb] = ra
+
+
+def _pair_keyless(faces, uses) -> None:
+    """Give keys to the uses that have none: keyless uses whose 3-D points (ends and quarter
+    points, either direction) agree within ten times their tolerance (plus a rounding of 1e-9 of
+    their size) become one edge (:func:`splinekit.brep.topology.pair_by_samples`); the others,
+    and degenerate ones, are edges of their own. ``uses`` rows are
+    ``[face index, loop, position, Edge, key, points]``."""
+    loose = [r for r in uses if r[4] is None]
+    for r in loose:
+        r[4] = ("free", r[0], r[1], r[2])
+    solid = [r for r in loose if not r[3].degenerate]
+    if len(solid) < 2:
+        return
+    P = np.array([r[5] for r in solid])
+    sizes = np.maximum(np.linalg.norm(P[:, -1] - P[:, 0], axis=1), np.linalg.norm(P[:, 2] - P[:, 0], axis=1))
+    tol = 10.0 * np.array([r[3].tolerance for r in solid]) + 1e-9 * sizes
+    first: dict = {}  # label -> the key of its first use
+    for r, label in zip(solid, pair_by_samples(P, tol).tolist()):
+        r[4] = first.setdefault(label, r[4])
+
+
+def _same_direction(ref_points, points) -> bool:
+    """Whether a use runs the same way as the edge's reference use (compares quarter points,
+    which also tells the two directions of a closed edge apart)."""
+    same = np.linalg.norm(points[[0, 1, 3]] - ref_points[[0, 1, 3]], axis=1).sum()
+    other = np.linalg.norm(points[[0, 1, 3]] - ref_points[[4, 3, 1]], axis=1).sum()
+    return bool(same <= other)
+
+
+def _in_ref_parameter(use, same: bool, ref_domain):
+    """The use's pcurve (and 3-D curve) run in the reference direction on the reference domain,
+    and whether that took a reparametrization (then SameParameter must be recomputed)."""
+    e = use if same else use.reversed()
+    pc, cv = e.pcurve, e.curve
+    if _same_domain(pc.domain, ref_domain):
+        return pc, cv, False
+    pc = pc.reparametrize(*ref_domain)
+    cv = None if cv is None else cv.reparametrize(*ref_domain)
+    return pc, cv, True
+
+
+def _faces_of(obj):
+    if isinstance(obj, TrimmedFace):
+        return [obj]
+    if isinstance(obj, Shell):
+        return list(obj.faces)
+    if isinstance(obj, Solid):
+        return list(obj.faces)
+    raise ParameterError(f"expected a TrimmedFace, Shell or Solid, got {type(obj).__name__}")
+
+
+def brep_to_shape(obj, *, tolerance: float = 1e-7):
+    """An OCC ``TopoDS_Face`` / ``TopoDS_Shell`` / ``TopoDS_Solid`` for a splinekit TrimmedFace,
+    Shell or Solid, with every edge shared by its faces built once. No validity check here:
+    callers that need one use ``occ._check_valid``."""
+    BRep, BRepLib, TopAbs, TopoDS, gp = _ocp("BRep", "BRepLib", "TopAbs", "TopoDS", "gp")
+    builder = BRep.BRep_Builder()
+    FORWARD, REVERSED = TopAbs.TopAbs_Orientation.TopAbs_FORWARD, TopAbs.TopAbs_Orientation.TopAbs_REVERSED
+    faces = _faces_of(obj)
+
+    # every edge use: [face, loop, position, Edge, key, (5, 3) points]
+    uses = []
+    for i, f in enumerate(faces):
+        for j, loop in enumerate(f.boundary_loops()):
+            for k, e in enumerate(loop):
+                uses.append([i, j, k, e, e.key, _use_points(f, e)])
+    _pair_keyless(faces, uses)
+
+    # group uses by key; the first use fixes the edge's direction and parameter
+    groups: dict = {}
+    for r in uses:
+        groups.setdefault(r[4], []).append(r)
+    same = {}
+    for key, rows in groups.items():
+        ref = rows[0][5]
+        for r in rows:
+            same[id(r)] = True if r is rows[0] else _same_direction(ref, r[5])
+
+    # vertices: the end of one use and the start of the next in a loop are one vertex
+    def end_node(r, at_end: bool):
+        forward = same[id(r)]
+        return (r[4], 1 if at_end == forward else 0)
+
+    uf = _UnionFind()
+    by_loop: dict = {}
+    for r in uses:
+        by_loop.setdefault((r[0], r[1]), []).append(r)
+    for loop in by_loop.values():
+        for a, b in zip(loop, loop[1:] + loop[:1]):
+            uf.union(end_node(a, True), end_node(b, False))
+    for r in uses:
+        if r[3].degenerate:
+            uf.union((r[4], 0), (r[4], 1))
+    points: dict = {}
+    for r in uses:
+        forward = same[id(r)]
+        for node, p in (((r[4], 0 if forward else 1), r[5][0]), ((r[4], 1 if forward else 0), r[5][-1])):
+            points.setdefault(uf.find(node), []).append((p, r[3].tolerance))
+    # loops that touch only at a point (no edge between them) share that vertex too: merge the classes
+    # whose points coincide within both classes' tolerances
+    roots = list(points)
+    if len(roots) > 1:
+        from scipy.spatial import cKDTree
+
+        centers = np.array([np.mean([p for p, _ in points[r]], axis=0) for r in roots])
+        tols = np.array([max(t for _, t in points[r]) for r in roots])
+        for a, b in cKDTree(centers).query_pairs(float(tols.max())):
+            if np.linalg.norm(centers[a] - centers[b]) <= min(tols[a], tols[b]):
+                uf.union(roots[a], roots[b])
+        merged: dict = {}
+        for r, items in points.items():
+            merged.setdefault(uf.find(r), []).extend(items)
+        points = merged
+    vertices = {}
+    for root, items in points.items():
+        P = np.array([p for p, _ in items])
+        c = P.mean(axis=0)
+        tol = max(max(t for _, t in items), float(np.max(np.linalg.norm(P - c, axis=1))) * 1.001)
+        v = TopoDS.TopoDS_Vertex()
+        builder.MakeVertex(v, gp.gp_Pnt(*c.tolist()), max(tol, tolerance))
+        vertices[root] = v
+
+    # faces (unoriented, FORWARD) first: the pcurves are attached to them
+    occ_faces = []
+    for f in faces:
+        F = TopoDS.TopoDS_Face()
+        builder.MakeFace(F, geom_to_occ(f.surface), max(f.tolerance, tolerance))
+        occ_faces.append(F)
+
+    # edges, one per key
+    occ_edges = {}
+    redo_same_parameter, no_curve = [], []
+    for key, rows in groups.items():
+        ref = rows[0][3]
+        dom = ref.domain
+        E = TopoDS.TopoDS_Edge()
+        tol_e = max(max(r[3].tolerance for r in rows), tolerance)
+        curve3d, reparam = None, False
+        per_face: dict = {}
+        for r in rows:
+            pc, cv, moved = _in_ref_parameter(r[3], same[id(r)], dom)
+            reparam |= moved
+            if curve3d is None and cv is not None:
+                curve3d = cv
+            per_face.setdefault(r[0], []).append((pc, same[id(r)]))
+        degenerate = any(r[3].degenerate for r in rows)
+        if curve3d is not None and not degenerate:
+            builder.MakeEdge(E, geom_to_occ(curve3d), tol_e)
+        else:
+            builder.MakeEdge(E)
+            builder.UpdateEdge(E, tol_e)
+        for i, pcs in per_face.items():
+            if len(pcs) == 2 and pcs[0][1] != pcs[1][1]:  # a seam: the FORWARD use's pcurve first
+                first, second = (pcs[0][0], pcs[1][0]) if pcs[0][1] else (pcs[1][0], pcs[0][0])
+                builder.UpdateEdge(E, _curve2d_to_occ(first), _curve2d_to_occ(second), occ_faces[i], tol_e)
+            else:
+                builder.UpdateEdge(E, _curve2d_to_occ(pcs[0][0]), occ_faces[i], tol_e)
+        builder.Range(E, dom[0], dom[1])
+        builder.Add(E, vertices[uf.find((key, 0))].Oriented(FORWARD))
+        builder.Add(E, vertices[uf.find((key, 1))].Oriented(REVERSED))
+        if degenerate:
+            builder.Degenerated(E, True)
+        elif curve3d is None:
+            no_curve.append(E)
+        if reparam:
+            builder.SameParameter(E, False)
+            redo_same_parameter.append(E)
+        occ_edges[key] = E
+
+    # wires and oriented faces
+    oriented = []
+    for i, f in enumerate(faces):
+        F = occ_faces[i]
+        for j in range(len(f.boundary_loops())):
+            W = TopoDS.TopoDS_Wire()
+            builder.MakeWire(W)
+            for r in by_loop[(i, j)]:
+                builder.Add(W, occ_edges[r[4]].Oriented(FORWARD if same[id(r)] else REVERSED))
+            W.Closed(True)
+            builder.Add(F, W)
+        oriented.append(F.Oriented(REVERSED) if f.reversed else F)
+    for E in no_curve:
+        if not BRepLib.BRepLib.BuildCurve3d_s(E, max(tolerance, 1e-7)):
+            raise BackendError("OpenCascade could not build the 3-D curve of an edge from its pcurve")
+    for E in redo_same_parameter:
+        BRepLib.BRepLib.SameParameter_s(E, max(tolerance, 1e-7))
+
+    def make_shell(face_list):
+        S = TopoDS.TopoDS_Shell()
+        builder.MakeShell(S)
+        for F in face_list:
+            builder.Add(S, F)
+        S.Closed(BRep.BRep_Tool.IsClosed_s(S))
+        return S
+
+    if isinstance(obj, TrimmedFace):
+        result = oriented[0]
+    elif isinstance(obj, Shell):
+        result = make_shell(oriented)
+    else:
+        solid = TopoDS.TopoDS_Solid()
+        builder.MakeSolid(solid)
+        start = 0
+        for shell in obj.shells:
+            builder.Add(solid, make_shell(oriented[start:start + len(shell.faces)]))
+            start += len(shell.faces)
+        result = solid
+    BRepLib.BRepLib.UpdateTolerances_s(result, False)
+    return result
+
+
+def brep_list_to_shape(objects, *, tolerance: float = 1e-7):
+    """A compound of :func:`brep_to_shape` of each object."""
+    return _compound([brep_to_shape(o, tolerance=tolerance) for o in objects])
