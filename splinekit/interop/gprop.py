@@ -62,8 +62,9 @@ SHAPE_KINDS = ("SOLID", "SHELL", "FACE", "EDGE", "VERTEX")
 
 
 def occ_bbox(shape) -> tuple[np.ndarray, np.ndarray]:
-    """``(lo (3,), hi (3,))``: the tight bounding box of ``shape`` from its exact geometry (no
-    triangulation, no enlargement by the shape's tolerances); zeros for an empty shape."""
+    """``(lo (3,), hi (3,))``: the bounding box of ``shape`` from its exact geometry (no
+    triangulation), tight up to the tolerance of its vertices and edges (OCC widens it by that:
+    1e-7 for shapes :func:`splinekit.occ.to_shape` sews); zeros for an empty shape."""
     Bnd, BRepBndLib = _ocp("Bnd", "BRepBndLib")
     box = Bnd.Bnd_Box()
     BRepBndLib.BRepBndLib.AddOptimal_s(shape, box, False, False)
