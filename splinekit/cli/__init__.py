@@ -30,11 +30,11 @@ from __future__ import annotations
 
 import warnings
 
-from exporters.step import read_step_shape
+from exporters import step as _step
 
-from ..brep import TrimmedFace
-from ..interop.gprop import occ_area, occ_bbox, occ_volume, point_deviation
-from ..mesh.components import face_components, genus
+from ..brep import TrimmedFace as _TrimmedFace
+from ..interop import gprop as _gprop
+from ..mesh import components as _components
 from .app import COMMANDS, build_parser, main
 from .build import DEFAULT_FORMATS, FORMATS, MESH_FORMATS
 from .demo import demo_surface
@@ -45,27 +45,27 @@ __all__ = ["main", "COMMANDS", "build_parser", "demo_surface", "model_mesh", "re
            "FORMATS", "MESH_FORMATS", "DEFAULT_FORMATS", "MESH_SUFFIXES", "STEP_SUFFIXES", "EXACT_SUFFIXES"]
 
 
-def _mesh_genus(mesh):
+def _former_mesh_genus(mesh):
     """``(components, genus or None)``, as the former ``splinekit.cli.mesh_genus`` returned."""
-    return face_components(mesh)[0], genus(mesh)
+    return _components.face_components(mesh)[0], _components.genus(mesh)
 
 
-def _area(surface, per_span: int = 6) -> float:
+def _former_area(surface, per_span: int = 6) -> float:
     """Area of a surface, as the former ``splinekit.cli._area`` (``per_span`` is ignored: the
     adaptive quadrature of :mod:`splinekit.brep` chooses its own nodes)."""
-    return TrimmedFace(surface).area()
+    return _TrimmedFace(surface).area()
 
 
 # Library functions that lived here before the command line became a package: name -> (new
 # home, function). They still resolve, with a DeprecationWarning naming the new home.
 _MOVED = {
-    "occ_area": ("splinekit.interop.gprop.occ_area", occ_area),
-    "occ_volume": ("splinekit.interop.gprop.occ_volume", occ_volume),
-    "occ_bbox": ("splinekit.interop.gprop.occ_bbox", occ_bbox),
-    "point_deviation": ("splinekit.interop.gprop.point_deviation", point_deviation),
-    "read_step_shape": ("exporters.step.read_step_shape", read_step_shape),
-    "mesh_genus": ("splinekit.mesh.components.face_components and .genus", _mesh_genus),
-    "_area": ("splinekit.brep.TrimmedFace(surface).area()", _area),
+    "occ_area": ("splinekit.interop.gprop.occ_area", _gprop.occ_area),
+    "occ_volume": ("splinekit.interop.gprop.occ_volume", _gprop.occ_volume),
+    "occ_bbox": ("splinekit.interop.gprop.occ_bbox", _gprop.occ_bbox),
+    "point_deviation": ("splinekit.interop.gprop.point_deviation", _gprop.point_deviation),
+    "read_step_shape": ("exporters.step.read_step_shape", _step.read_step_shape),
+    "mesh_genus": ("splinekit.mesh.components.face_components and .genus", _former_mesh_genus),
+    "_area": ("splinekit.brep.TrimmedFace(surface).area()", _former_area),
 }
 
 
