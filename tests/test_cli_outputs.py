@@ -226,3 +226,12 @@ def test_the_former_library_names_of_the_cli_still_resolve_with_a_deprecation_wa
     with pytest.raises(AttributeError):
         cli.no_such_name  # noqa: B018
     assert set(cli.COMMANDS) == {"list", "build", "info", "render", "check", "demo"}
+
+
+def test_render_creates_a_missing_folder_but_not_below_a_file(in_process, capsys, tmp_path):
+    assert in_process(["-q", "render", "ball", "--size", "200x160", "-o", "new/folder/p.jpg"]) == 0
+    assert (tmp_path / "new" / "folder" / "p.jpg").read_bytes().startswith(JPEG_MAGIC)
+    (tmp_path / "a-file").write_text("x")
+    assert in_process(["render", "ball", "-o", "a-file/below/p.png"]) == 1
+    err = capsys.readouterr().err
+    assert err.startswith("splinekit: error: ") and "a-file" in err and "not a folder" in err

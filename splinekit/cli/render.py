@@ -29,11 +29,11 @@ DEFAULT_FOLDER = "out"
 
 
 def picture_path(output, stem: str) -> str:
-    """The picture file to write: ``output``, or ``out/STEM.png`` without it (the folder is
-    created by :func:`write_picture`, once there is something to write).
+    """The picture file to write: ``output``, or ``out/STEM.png`` without it (a missing folder
+    is created by :func:`write_picture`, once there is something to write).
 
     Raises FileFormatError for a suffix that is not a picture format the commands write, or when
-    the folder of an explicit ``output`` does not exist.
+    a part of the folder of ``output`` exists and is not a folder.
     """
     if output is None:
         return os.path.join(DEFAULT_FOLDER, f"{stem}.png")
@@ -42,8 +42,10 @@ def picture_path(output, stem: str) -> str:
         raise FileFormatError(f"cannot write {output!r}: pictures are written as "
                               f"{', '.join(PICTURE_SUFFIXES)} (named by the file's suffix), got {suffix or 'no suffix'!r}")
     folder = os.path.dirname(os.path.abspath(output))
+    while not os.path.exists(folder):  # the nearest existing ancestor must be a folder
+        folder = os.path.dirname(folder)
     if not os.path.isdir(folder):
-        raise FileFormatError(f"cannot write {output!r}: the folder {folder!r} does not exist")
+        raise FileFormatError(f"cannot write {output!r}: {folder!r} is not a folder")
     return output
 
 
