@@ -1,7 +1,7 @@
 """Polygon meshes: connectivity (Topology) and PolyMesh."""
 
-from . import components, geometry, primitives
+from . import geometry, primitives
 from .polymesh import PolyMesh
 from .topology import Topology
 
-__all__ = ["PolyMesh", "Topology", "components", "geometry", "primitives"]
+__all__ = ["PolyMesh", "Topology", "geometry", "primitives"]
