@@ -401,6 +401,29 @@ def import_step(path, *, unit: str = "mm", strict: bool = True, surfaces: bool =
     return items
 
 
+def read_step_shape(path):
+    """The OCC shape of all roots of the STEP file ``path``, as OCC reads it (coordinates in
+    millimetres), for measuring the file with OCC (:mod:`splinekit.interop.gprop`).
+
+    Raises FileFormatError if ``path`` is missing, unreadable, not STEP, holds no shapes or
+    nests parentheses deeper than OCC's parser survives (see :mod:`exporters._stepscan`).
+    """
+    path = _fspath(path)
+    IFSelect, _, _, _, STEPControl, _, _, _, _, _ = _ocp_step()
+    if not os.path.isfile(path):
+        raise FileFormatError(f"STEP file {path!r} does not exist or is not a file")
+    scan_step(path)  # OCC's parser crashes the process on some inputs: refuse them first
+    with _occ_settings():
+        reader = STEPControl.STEPControl_Reader()
+        status = reader.ReadFile(path)
+        if status != IFSelect.IFSelect_ReturnStatus.IFSelect_RetDone:
+            raise FileFormatError(f"{path!r} is not a readable STEP file (OpenCascade: {status.name})")
+        syntax_errors(reader, f"STEP file {path!r}")
+        if reader.TransferRoots() == 0:
+            raise FileFormatError(f"the STEP file {path!r} holds no shapes")
+    return reader.OneShape()
+
+
 def _read_named_shapes(path: str, metres: float) -> list:
     """``(product name, TopoDS_Shape)`` for every part of the STEP file, assemblies walked."""
     IFSelect, _, _, STEPCAFControl, _, _, TDataStd, TDF, _, XCAFDoc = _ocp_step()
