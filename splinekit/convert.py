@@ -19,7 +19,7 @@ centre where the chordal error peaks).
 function                  result                                     error
 ========================  =========================================  =======================================
 nurbs_to_mesh             Tessellation (splinekit.tessellate)        two-sided surface <-> mesh
-mesh_to_sdf               sampled SDF grid (implicit.grid.from_mesh) two-sided mesh <-> zero set of the grid
+mesh_to_sdf               sampled SDF grid (implicit.from_mesh)      two-sided mesh <-> zero set of the grid
 sdf_to_mesh               mesh of the zero set (Implicit.to_mesh)    two-sided zero set <-> mesh
 mesh_to_points            (n, 3) samples uniform by area             covering radius: mesh -> nearest sample
 points_to_surface         BSplineSurface (fit_height_field)          max point -> surface distance
@@ -36,7 +36,17 @@ from dataclasses import dataclass
 import numpy as np
 
 from ._validate import as_degree, as_float_array, as_int, as_real
+from .closest import project
+from .diffgeom import ExplicitSurface
 from .errors import ParameterError
+from .fit import interpolate_surface
+from .implicit.frommesh import from_mesh
+from .mesh.geometry import triangulate
+from .pointcloud._cloud import as_cloud, as_rng, kd_tree
+from .pointcloud.meshdistance import MeshDistance
+from .pointcloud.reconstruct import fit_height_field, reconstruct_implicit
+from .pointcloud.sampling import sample_mesh, sample_surface
+from .tessellation import tessellate
 
 __all__ = [
     "Conversion",
@@ -85,23 +95,16 @@ def _samples(value) -> int:
 
 
 def _rng(rng):
-    from .pointcloud._cloud import as_rng
-
     return as_rng(rng)
 
 
 def _mesh_distance(mesh):
-    from .pointcloud.meshdistance import MeshDistance
-
     return MeshDistance.of_mesh(mesh)
 
 
 def _mesh_points(mesh, n, rng, *, centres: bool = True):
     """Random points on ``mesh`` (by area), with every triangle centre when ``centres``
     (where a flat triangle is farthest from a curved surface), at most ``n`` of them."""
-    from .mesh.geometry import triangulate
-    from .pointcloud.sampling import sample_mesh
-
     pts, faces = sample_mesh(mesh, n, rng, return_faces=True)
     if not centres:
         return pts, faces
@@ -139,10 +142,6 @@ def nurbs_to_mesh(surface, tolerance=None, *, samples: int = DEFAULT_SAMPLES, rn
         (:func:`splinekit.project`), and the max over random points of the
         surface (uniform by area) of the exact distance to the mesh.
     """
-    from .closest import project
-    from .pointcloud.sampling import sample_surface
-    from .tessellation import tessellate
-
     patches = _patch_list(surface)
     n = _samples(samples)
     rng = _rng(rng)
@@ -172,8 +171,6 @@ def _implicit_vs_mesh(implicit, mesh, n, rng, spread):
     moved randomly by up to ``spread`` and projected onto ``F = 0``, then
     measured exactly against the mesh.
     """
-    from .closest import project
-
     pts, _ = _mesh_points(mesh, n, rng)
     to_zero = float(project(implicit, pts).distances.max())
     jitter = pts[:n] + rng.uniform(-spread, spread, (min(n, len(pts)), 3))
@@ -183,7 +180,7 @@ def _implicit_vs_mesh(implicit, mesh, n, rng, spread):
 
 
 def mesh_to_sdf(mesh, resolution, *, samples: int = DEFAULT_SAMPLES, rng=0) -> Conversion:
-    """Sample the signed distance of a closed mesh on a grid (:func:`splinekit.implicit.grid.from_mesh`).
+    """Sample the signed distance of a closed mesh on a grid (:func:`splinekit.implicit.from_mesh`).
 
     Returns
     -------
@@ -192,8 +189,6 @@ def mesh_to_sdf(mesh, resolution, *, samples: int = DEFAULT_SAMPLES, rng=0) -> C
         distance between the mesh and the zero set of the interpolated grid
         (see :func:`sdf_to_mesh` for how it is measured).
     """
-    from .implicit.grid import from_mesh
-
     n = _samples(samples)
     rng = _rng(rng)
     sdf = from_mesh(mesh, resolution)
@@ -252,9 +247,6 @@ def mesh_to_points(mesh, n: int, *, rng=0, check_samples=None) -> Conversion:
         vertex) of the distance to the nearest returned point -- how far the
         cloud leaves parts of the surface unrepresented.
     """
-    from .pointcloud._cloud import kd_tree
-    from .pointcloud.sampling import sample_mesh
-
     n = as_int(n, "n", minimum=1)
     rng = _rng(rng)
     pts = sample_mesh(mesh, n, rng)
@@ -281,10 +273,6 @@ def points_to_surface(points, tolerance=None, **options) -> Conversion:
         ``result`` a BSplineSurface; ``error`` the max over the input points of
         the exact distance to the surface (:func:`splinekit.project`).
     """
-    from .closest import project
-    from .pointcloud._cloud import as_cloud
-    from .pointcloud.reconstruct import fit_height_field
-
     P = as_cloud(points, min_count=3)
     surface = fit_height_field(P, tolerance, **options)
     error = float(project(surface, P).distances.max())
@@ -318,9 +306,6 @@ def points_to_mesh(points, normals=None, edge_length=None, *, k: int = 16, sampl
         mesh points to the nearest input point (which includes the cloud's own
         sampling gaps).
     """
-    from .pointcloud._cloud import as_cloud, kd_tree
-    from .pointcloud.reconstruct import reconstruct_implicit
-
     P = as_cloud(points, min_count=3)
     rng = _rng(rng)
     n = _samples(samples)
@@ -396,8 +381,6 @@ def explicit_to_bspline(f, domain, n=32, *, degree: int = 3, check: int = 4) -> 
         ``|S_z(x, y) - f(x, y)|`` on a grid ``check`` times finer -- at those
         points an upper bound of the distance between the two graphs.
     """
-    from .fit import interpolate_surface
-
     d = _explicit_domain(domain)
     p = as_degree(degree)
     if isinstance(n, (tuple, list, np.ndarray)):
@@ -434,8 +417,6 @@ def explicit_to_implicit(f, domain=((-1.0, 1.0), (-1.0, 1.0)), *, gradient=None,
         ``|F|`` at ``n x n`` points of the graph over ``domain`` (a vertical
         distance; 0 up to rounding, the conversion being exact).
     """
-    from .diffgeom import ExplicitSurface
-
     d = _explicit_domain(domain)
     n = as_int(n, "n", minimum=2)
     X, Y = np.meshgrid(np.linspace(*d[0], n), np.linspace(*d[1], n), indexing="ij")

@@ -44,6 +44,8 @@ import numpy as np
 from ._progress import progress
 from ._validate import as_float_array, as_int, as_real
 from .errors import ParameterError, ResourceLimitError, SplineKitError
+from .implicit._checks import origin3
+from .implicit.sampled import MAX_GRID_POINTS, SampledSDF, sample
 
 __all__ = ["MAX_STEPS", "MAX_WORK", "LevelSet"]
 
@@ -84,8 +86,6 @@ class LevelSet:
     """
 
     def __init__(self, phi, origin, spacing, time: float = 0.0):
-        from .implicit.grid import MAX_GRID_POINTS, _origin3
-
         p = as_float_array(phi, "phi")
         if p.ndim != 3 or min(p.shape) < 3:
             raise ParameterError(f"phi must be an (nx, ny, nz) array with every axis >= 3, got shape {p.shape}")
@@ -101,7 +101,7 @@ class LevelSet:
             raise ParameterError(f"spacing must be one finite number > 0 (cubic voxels), got {spacing!r}")
         self._phi = np.array(p, dtype=np.float64, order="C")
         self._phi.setflags(write=False)
-        self._origin = _origin3(origin)
+        self._origin = origin3(origin)
         self._origin.setflags(write=False)
         self._h = float(h)
         with np.errstate(over="ignore"):
@@ -114,8 +114,6 @@ class LevelSet:
     def from_implicit(cls, implicit, bounds, resolution, time: float = 0.0) -> LevelSet:
         """Sample ``implicit`` (or any callable ``(n, 3) -> (n,)``) over ``bounds``
         with ``resolution`` samples along the longest side (cubic voxels)."""
-        from .implicit.grid import sample
-
         n = as_int(resolution, "resolution", minimum=3)
         g = sample(implicit, bounds, n)
         return cls(g.values, g.origin, g.spacing, time)
@@ -159,16 +157,14 @@ class LevelSet:
 
     # -- conversions ----------------------------------------------------------------------------------
     def to_sdf(self, interpolation: str = "linear"):
-        """The samples as a :class:`~splinekit.implicit.grid.SampledSDF`."""
-        from .implicit.grid import SampledSDF
-
+        """The samples as a :class:`~splinekit.implicit.sampled.SampledSDF`."""
         return SampledSDF(self._phi, self._origin, self._h, interpolation)
 
     def to_mesh(self):
         """The front as a closed triangle mesh (an
         :class:`~splinekit.implicit.meshing.ImplicitMesh`: marching tetrahedra
         straight from the samples, :meth:`SampledSDF.to_mesh
-        <splinekit.implicit.grid.SampledSDF.to_mesh>`, with its measured
+        <splinekit.implicit.sampled.SampledSDF.to_mesh>`, with its measured
         ``deviation`` from the trilinear interpolant's zero set)."""
         return self.to_sdf().to_mesh()
 

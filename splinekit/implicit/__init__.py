@@ -26,8 +26,10 @@ from .csg import (
     smooth_union,
     union,
 )
+from .frommesh import from_mesh
 from .meshing import ImplicitMesh, mesh_implicit
 from .primitives import box, capsule, cone, cylinder, plane, rounded_box, sphere, torus
+from .sampled import SampledSDF, sample
 
 __all__ = [
     "Complement",
@@ -36,6 +38,7 @@ __all__ = [
     "ImplicitMesh",
     "Intersection",
     "Offset",
+    "SampledSDF",
     "Shell",
     "SmoothIntersection",
     "SmoothUnion",
@@ -47,10 +50,12 @@ __all__ = [
     "cone",
     "cylinder",
     "difference",
+    "from_mesh",
     "intersection",
     "mesh_implicit",
     "plane",
     "rounded_box",
+    "sample",
     "smooth_difference",
     "smooth_intersection",
     "smooth_union",
@@ -58,10 +63,3 @@ __all__ = [
     "torus",
     "union",
 ]
-
-try:  # sampled grids live in their own module, written separately
-    from .grid import SampledSDF, from_mesh, sample
-except ImportError:
-    pass
-else:
-    __all__ += ["SampledSDF", "from_mesh", "sample"]

@@ -55,9 +55,11 @@ from __future__ import annotations
 
 import numpy as np
 
-from .._validate import as_float_array, as_int, as_positive
+from .._validate import as_float_array, as_int
 from ..diffgeom.protocol import ImplicitSurface, _nonzero_norm
 from ..errors import ConvergenceError, DomainError, ParameterError, SplineKitError
+from ._checks import check_bounds, check_points, positive  # noqa: F401 - also part of this module's names
+from .meshing import mesh_implicit
 
 __all__ = ["CLOSEST_MAX_ITER", "RELATIVE_STEP", "Implicit"]
 
@@ -72,46 +74,6 @@ _D1 = np.array([1.0, -8.0, 0.0, 8.0, -1.0]) / 12.0
 _OFFSETS = np.arange(-2, 3, dtype=np.float64)
 
 
-def check_points(points, name: str = "points") -> np.ndarray:
-    """``points`` as a C-contiguous finite float64 ``(n, 3)`` array (a single
-    ``(3,)`` point becomes ``(1, 3)``); a ParameterError naming the first
-    non-finite point and its index otherwise."""
-    p = as_float_array(points, name)
-    if p.ndim == 1 and p.shape[0] == 3:
-        p = p[None, :]
-    if p.ndim != 2 or p.shape[1] != 3:
-        raise ParameterError(f"{name} must be an (n, 3) array of 3-D points, got shape {p.shape}")
-    finite = np.isfinite(p).all(axis=1)
-    if not finite.all():
-        i = int(np.argmin(finite))
-        raise ParameterError(f"{name}[{i}] = {p[i].tolist()} is not finite")
-    return np.ascontiguousarray(p)
-
-
-def check_bounds(bounds, name: str = "bounds"):
-    """``(lo (3,), hi (3,))`` read-only float arrays with finite ``lo <= hi``, or None."""
-    if bounds is None:
-        return None
-    try:
-        lo, hi = bounds
-    except (TypeError, ValueError):
-        raise ParameterError(f"{name} must be a pair (lo, hi) of 3-D points, got {bounds!r}") from None
-    lo = as_float_array(lo, f"{name} lo")
-    hi = as_float_array(hi, f"{name} hi")
-    if lo.shape != (3,) or hi.shape != (3,):
-        raise ParameterError(f"{name} must be (lo, hi) with two 3-D points, got shapes {lo.shape} and {hi.shape}")
-    if not (np.isfinite(lo).all() and np.isfinite(hi).all()):
-        raise ParameterError(f"{name} must be finite, got lo={lo.tolist()}, hi={hi.tolist()}")
-    if not (lo <= hi).all():
-        axis = int(np.argmax(~(lo <= hi)))
-        raise ParameterError(f"{name} must have lo <= hi; axis {axis} has lo={float(lo[axis])!r} > hi={float(hi[axis])!r}")
-    lo, hi = lo.copy(), hi.copy()
-    lo.setflags(write=False)
-    hi.setflags(write=False)
-    return lo, hi
-
-
-positive = as_positive  # the shared validator, under the name the implicit modules use
 
 
 class Implicit(ImplicitSurface):
@@ -365,7 +327,7 @@ class Implicit(ImplicitSurface):
 
     # -- meshing ----------------------------------------------------------------------------------
     def to_mesh(self, edge_length, bounds=None):
-        """The zero set as a closed triangle mesh (manifold3d ``level_set``).
+        """The zero set as a closed triangle mesh (sampled on a grid, marching tetrahedra).
 
         Parameters
         ----------
@@ -383,63 +345,57 @@ class Implicit(ImplicitSurface):
             ``deviation`` (the measured max distance of the mesh from ``F = 0``)
             and ``edge_length``; see :func:`splinekit.implicit.meshing.mesh_implicit`.
         """
-        from .meshing import mesh_implicit
-
         return mesh_implicit(self, edge_length, bounds)
 
     # -- operators and transforms ---------------------------------------------------------------
+    # They build CSG nodes through the constructors csg.py registers in _CSG (below).
     def __or__(self, other):
-        from .csg import union
-
-        return union(self, other)
+        return _CSG["union"](self, other)
 
     def __and__(self, other):
-        from .csg import intersection
-
-        return intersection(self, other)
+        return _CSG["intersection"](self, other)
 
     def __sub__(self, other):
-        from .csg import difference
-
-        return difference(self, other)
+        return _CSG["difference"](self, other)
 
     def __neg__(self):
-        from .csg import complement
-
-        return complement(self)
+        return _CSG["complement"](self)
 
     def translate(self, vector):
         """This implicit moved by ``vector`` (3,): ``F(p - v)``; exactness kept."""
-        from .csg import transformed
-
-        return transformed(self, translation=vector)
+        return _CSG["transformed"](self, translation=vector)
 
     def rotate(self, matrix_or_axis, angle=None):
         """This implicit rotated about the origin: ``rotate(R)`` with a proper
         rotation matrix ``R`` (3, 3) (orthogonal, det +1), or ``rotate(axis,
         angle)`` with an axis (3,) and an angle in radians (right-handed).
         ``F(R^T p)``; exactness kept."""
-        from .csg import rotation_matrix, transformed
-
-        R = rotation_matrix(matrix_or_axis, angle)
-        return transformed(self, rotation=R)
+        R = _CSG["rotation_matrix"](matrix_or_axis, angle)
+        return _CSG["transformed"](self, rotation=R)
 
     def scale(self, factor):
         """This implicit scaled by ``factor`` > 0 about the origin: ``s F(p / s)``
         (uniform, so a signed distance stays one)."""
-        from .csg import transformed
-
-        return transformed(self, scale=factor)
+        return _CSG["transformed"](self, scale=factor)
 
     def offset(self, distance):
         """``F - r``: grown by ``r`` (shrunk for ``r < 0``) in model units.
         Exact when this one is, is convex and ``r >= 0``."""
-        from .csg import offset
-
-        return offset(self, distance)
+        return _CSG["offset"](self, distance)
 
     def shell(self, thickness):
         """``|F| - t / 2``: a hollow shell of thickness ``t`` > 0 centred on the surface."""
-        from .csg import shell
+        return _CSG["shell"](self, thickness)
 
-        return shell(self, thickness)
+
+_CSG: dict = {}
+"""The constructors the operators and transforms call: ``union``, ``intersection``,
+``difference``, ``complement``, ``transformed``, ``rotation_matrix``, ``offset``, ``shell``.
+CSG nodes subclass :class:`Implicit`, so their module (csg.py) imports this one and not the other
+way round; it hands them over through :func:`register_csg` when it is imported, and the package
+``__init__`` imports it, so they are in place before any Implicit can be made."""
+
+
+def register_csg(**constructors) -> None:
+    """Register the CSG constructors the operators of :class:`Implicit` call (see ``_CSG``)."""
+    _CSG.update(constructors)

@@ -36,7 +36,8 @@ import numpy as np
 
 from .._validate import as_float_array, as_real
 from ..errors import ParameterError
-from .base import Implicit, positive
+from ._checks import positive
+from .base import Implicit, register_csg
 
 __all__ = [
     "Complement",
@@ -407,3 +408,16 @@ def transformed(a, *, translation=None, rotation=None, scale=None) -> Implicit:
         # outer (R, t, s) after inner (R1, t1, s1): R R1, t + s R t1, s s1
         return Transformed(a.a, R @ a.R, t + s * (R @ a.t), s * a.s)
     return Transformed(a, R, t.astype(np.float64), s)
+
+
+# the operators and transforms of every Implicit build these nodes (base.py, _CSG)
+register_csg(
+    union=union,
+    intersection=intersection,
+    difference=difference,
+    complement=complement,
+    transformed=transformed,
+    rotation_matrix=rotation_matrix,
+    offset=offset,
+    shell=shell,
+)

@@ -1,21 +1,13 @@
 """Meshing an implicit: its zero set as a closed triangle mesh.
 
-:func:`mesh_implicit` (also :meth:`Implicit.to_mesh`) runs manifold3d's
-``Manifold.level_set`` (marching tetrahedra on a body-centred cubic grid:
-two cubic grids, one shifted by half a cell), which wants *positive inside*,
-so it is handed ``-F``.
-
-``level_set`` calls its function once per grid point from C++ (about a
-microsecond per call for a one-line Python formula); evaluating a CSG tree
-point by point through numpy costs a hundred times more. So ``F`` is evaluated
-here first, vectorized, on both grids, reproducing manifold's grid: per axis
-``n = int(extent / edge_length + 1)`` points, spacing ``extent / (n - 1)``,
-the primary grid at ``lo + spacing * i`` for ``i < n`` and the shifted one at
-``lo + spacing * (i - 1/2)`` for ``i <= n``. ``level_set`` then gets a lookup
-that turns a position back into a grid index (three dictionary look-ups of
-the coordinates, about as cheap as a one-line formula). A position that is not
-a grid point (a future manifold3d changing its grid) falls back to a direct
-evaluation, so the result is right either way, only slower.
+:func:`mesh_implicit` (also :meth:`Implicit.to_mesh`) samples ``F`` on a regular grid of
+spacing at most ``GRID_PER_EDGE * edge_length`` (per axis ``n = ceil(extent / step) + 1``
+points, spacing ``extent / (n - 1)``), vectorized in chunks of x-slabs, and hands the samples to
+:func:`~splinekit.implicit.marching.grid_mesh` (marching tetrahedra on the Kuhn split of every
+cell: the zero set of the piecewise-linear interpolant, a closed 2-manifold, outward-facing).
+That is splinekit's one iso-surface mesher; it replaced manifold3d's ``Manifold.level_set``,
+which called back into Python once per grid point and took several times longer for the same
+accuracy (``benchmarks/bench_meshing.py``).
 
 The mesh's deviation from the surface is measured afterwards: the largest
 estimated distance to ``F = 0`` over its vertices, edge midpoints and
@@ -34,19 +26,32 @@ from __future__ import annotations
 import numpy as np
 
 from .. import limits
+from ..diffgeom.protocol import ImplicitSurface
 from ..errors import BackendError, ParameterError
 from ..mesh.polymesh import PolyMesh
-from .base import check_bounds, positive
+from ..mesh.topology import Topology
+from ._checks import check_bounds, positive
+from .marching import grid_mesh
 
 __all__ = ["CHUNK", "MAX_GRID_POINTS", "PADDING", "ImplicitMesh", "mesh_implicit"]
 
 MAX_GRID_POINTS = 100_000_000
-"""Largest grid (both BCC grids together) accepted (800 MB of values, a few
-minutes of level_set callbacks); beyond it ask for a longer edge."""
+"""Largest sampling grid accepted (800 MB of values); beyond it ask for a longer edge."""
+
+BYTES_PER_GRID_POINT = 48
+"""Peak memory per grid point charged to the memory budget (:mod:`splinekit.limits`): the
+values, the inside mask and cell counts of the mesher, and the evaluation chunks."""
+
+GRID_PER_EDGE = 2.0**-0.5
+"""Grid spacing per requested edge length. Marching tetrahedra on the Kuhn split cuts triangles
+up to a cell's diagonal (about 1.7 spacings) long, and its error is about twice that of a
+body-centred grid of the same spacing; at ``edge_length / sqrt(2)`` the longest edge is about
+``1.2 edge_length`` and the deviation that of manifold3d's ``level_set`` at ``edge_length`` (the
+mesher this one replaced; ``benchmarks/bench_meshing.py``)."""
 
 PADDING = 2.0
 """Cells of margin added around an implicit's own bounds, so that the surface
-never reaches the grid's outer layer (which level_set treats as outside)."""
+never reaches the grid's outer layer."""
 
 CHUNK = 1 << 20
 """Grid points evaluated per vectorized call."""
@@ -76,8 +81,6 @@ class ImplicitMesh(PolyMesh):
 
 
 def _rebuild(vertices, face_indices, face_offsets, deviation, edge_length):
-    from ..mesh.topology import Topology
-
     return _wrap(vertices, Topology(len(vertices), face_indices, face_offsets, check=True), deviation, edge_length)
 
 
@@ -88,31 +91,30 @@ def _wrap(vertices, topology, deviation, edge_length) -> ImplicitMesh:
     return mesh
 
 
-def _grid_axes(lo, hi, edge_length):
-    """Per-axis point counts ``n`` and spacings of manifold3d's level-set grid.
+def _grid_axes(lo, hi, step):
+    """Per-axis point counts ``n`` and spacings (at most ``step``) of the sampling grid over ``lo..hi``.
 
     A grid above ``MAX_GRID_POINTS`` raises ParameterError; the count is
     checked in floating point first, so a tiny edge length over a large box
     can neither overflow the int64 cast nor wrap the product of the counts."""
     with np.errstate(over="ignore"):  # an infinite extent or count is refused just below
         extent = hi - lo
-        counts = np.maximum(np.floor(extent / edge_length + 1.0), 2.0)  # float: may exceed int64
-    total = float(np.prod(counts)) + float(np.prod(counts + 1.0))
+        counts = np.maximum(np.ceil(extent / step) + 1.0, 2.0)  # float: may exceed int64
+    total = float(np.prod(counts))
     if not total <= MAX_GRID_POINTS:
         raise ParameterError(
-            f"edge_length={edge_length!r} over a box of size {extent.tolist()} needs {total:.3g} grid points "
+            f"a grid step of {step!r} over a box of size {extent.tolist()} needs {total:.3g} grid points "
             f"(more than {MAX_GRID_POINTS:.3g}); use a longer edge length"
         )
-    # values of both grids, the evaluation chunks and manifold3d's output mesh
-    limits.check(32.0 * total, f"a level-set grid of {total:.3g} points (edge_length={edge_length!r})")
+    limits.check(BYTES_PER_GRID_POINT * total, f"a meshing grid of {total:.3g} points (step {step!r})")
     n = counts.astype(np.int64)
     return n, extent / (n - 1)
 
 
-def _sample(implicit, lo, spacing, counts, shift):
-    """``-F`` on the grid ``lo + spacing * (i + shift)``, ``i < counts``, flattened
-    C-order (x slowest), evaluated in chunks of x-slabs."""
-    axes = [lo[k] + spacing[k] * (np.arange(counts[k]) + shift) for k in range(3)]
+def _sample(implicit, lo, spacing, counts):
+    """``F`` on the grid ``lo + spacing * i``, ``i < counts``: ``(nx, ny, nz)``, evaluated in
+    chunks of x-slabs; a BackendError when ``F`` is not finite somewhere."""
+    axes = [lo[k] + spacing[k] * np.arange(counts[k]) for k in range(3)]
     nyz = int(counts[1] * counts[2])
     Y, Z = np.meshgrid(axes[1], axes[2], indexing="ij")
     yz = np.column_stack([Y.ravel(), Z.ravel()])
@@ -127,51 +129,18 @@ def _sample(implicit, lo, spacing, counts, shift):
         with np.errstate(all="ignore"):  # non-finite values are reported below
             out[start * nyz : start * nyz + m] = implicit._value(pts[:m])
     if not np.isfinite(out).all():
-        raise BackendError(f"{type(implicit).__name__} is not finite at some grid points of the level-set grid")
-    return -out
+        raise BackendError(f"{type(implicit).__name__} is not finite at some points of the meshing grid")
+    return out.reshape(tuple(int(c) for c in counts))
 
 
-def _lookup(implicit, lo, spacing, n):
-    """The callback for level_set: ``-F`` looked up by grid position, or evaluated
-    directly off the grid; and a one-item list counting the direct evaluations."""
-    even = _sample(implicit, lo, spacing, n, 0.0)
-    odd = _sample(implicit, lo, spacing, n + 1, -0.5)
-    # a memoryview indexes like a list (a Python float per access) without a copy
-    values = memoryview(np.concatenate([even, odd]))
-    ny, nz = int(n[1]), int(n[2])
-    strides = ((ny * nz, nz, 1), ((ny + 1) * (nz + 1), nz + 1, 1))
-    # per axis, coordinate -> its share of the flat index; the coordinates are computed
-    # as manifold3d computes them, so they match bit for bit. Bit 40 + axis marks the
-    # shifted grid, so a position mixing the two grids is recognised and not misread.
-    maps = []
-    for k in range(3):
-        table = {}
-        for i in range(int(n[k])):
-            table[float(lo[k] + spacing[k] * (i + 0.0))] = i * strides[0][k]
-        for i in range(int(n[k]) + 1):
-            table[float(lo[k] + spacing[k] * (i - 0.5))] = i * strides[1][k] + (1 << (40 + k)) + (len(even) if k == 0 else 0)
-        maps.append(table)
-    X, Y, Z = maps
-    shifted = 7 << 40
-    misses = [0]
-
-    def direct(x, y, z):
-        misses[0] += 1
-        return -float(implicit._value(np.array([[x, y, z]]))[0])
-
-    def sdf(x, y, z):
-        try:
-            index = X[x] + Y[y] + Z[z]
-        except KeyError:
-            return direct(x, y, z)
-        grid = index >> 40
-        if grid == 0:
-            return values[index]
-        if grid == 7:
-            return values[index - shifted]
-        return direct(x, y, z)
-
-    return sdf, misses
+def _closed_off(values, lo, hi, spacing):
+    """``grid_mesh`` of samples over the box ``lo..hi`` that the solid may leave, closed off
+    along the box: a layer of large positive values just outside puts the closing crossings
+    within a millionth of a cell of the box faces (so they do not fold), and every vertex
+    outside the box is then moved onto it. ``(mesh, vertices)``."""
+    cap = min(1e6 * max(float(np.abs(values).max()), 1.0), 1e300)
+    mesh = grid_mesh(np.pad(values, 1, constant_values=cap), lo - spacing, spacing)
+    return mesh, np.clip(np.asarray(mesh.vertices), lo, hi)
 
 
 def deviation(implicit, vertices, triangles) -> float:
@@ -224,14 +193,11 @@ def mesh_implicit(implicit, edge_length, bounds=None) -> ImplicitMesh:
         A non-positive edge length, malformed bounds, no bounds for an
         unbounded implicit, or a grid above ``MAX_GRID_POINTS`` points.
     BackendError
-        ``F`` is not finite on the grid, or manifold3d reports an error.
-    MissingDependencyError
-        manifold3d is not installed.
+        ``F`` is not finite on the grid.
     """
-    from ..interop.booleans import _require_manifold3d, from_manifold
-    from .base import Implicit
-
-    if not isinstance(implicit, Implicit):
+    # an Implicit (base.py, which imports this module): the diffgeom protocol it implements,
+    # with the evaluation hooks of the base class
+    if not (isinstance(implicit, ImplicitSurface) and hasattr(implicit, "_value") and hasattr(implicit, "bounds")):
         raise ParameterError(f"expected a splinekit.implicit.Implicit, got {type(implicit).__name__}")
     h = positive(edge_length, "edge_length")
     if bounds is None:
@@ -250,12 +216,13 @@ def mesh_implicit(implicit, edge_length, bounds=None) -> ImplicitMesh:
                 f"bounds must be at least 2 * edge_length = {2 * h!r} long on every axis, "
                 f"got lo={lo.tolist()}, hi={hi.tolist()}"
             )
-    n, spacing = _grid_axes(np.asarray(lo, float), np.asarray(hi, float), h)
-    m3 = _require_manifold3d()
-    sdf, _ = _lookup(implicit, np.asarray(lo, float), spacing, n)
-    box = [float(v) for v in lo] + [float(v) for v in hi]
-    manifold = m3.Manifold.level_set(sdf, box, h)
-    mesh = from_manifold(manifold)  # checks the status
-    V = np.asarray(mesh.vertices)
-    T = mesh.topology.face_indices.reshape(-1, 3) if mesh.topology.n_faces else np.zeros((0, 3), np.int64)
+    lo, hi = np.asarray(lo, float), np.asarray(hi, float)
+    n, spacing = _grid_axes(lo, hi, h * GRID_PER_EDGE)
+    values = _sample(implicit, lo, spacing, n)
+    if bounds is None:
+        mesh = grid_mesh(values, lo, spacing)
+        V = np.asarray(mesh.vertices)
+    else:
+        mesh, V = _closed_off(values, lo, hi, spacing)
+    T = mesh.topology.face_indices.reshape(-1, 3)
     return _wrap(V, mesh.topology, deviation(implicit, V, T), h)

@@ -37,7 +37,8 @@ import numpy as np
 
 from .._validate import as_float_array
 from ..errors import ParameterError
-from .base import Implicit, positive
+from ._checks import positive
+from .base import Implicit
 
 __all__ = ["box", "capsule", "cone", "cylinder", "plane", "rounded_box", "sphere", "torus"]
 

@@ -16,6 +16,7 @@ from ._cloud import (
     local_frames,
     neighbours,
 )
+from .normals import estimate_normals
 
 __all__ = ["PointCurvature", "curvature", "remove_outliers"]
 
@@ -63,8 +64,6 @@ def curvature(points, k: int = 20, *, normals=None) -> PointCurvature:
     -------
     PointCurvature
     """
-    from .normals import estimate_normals
-
     P = as_cloud(points)
     k = as_neighbour_count(k, len(P), minimum=6)
     if normals is None:

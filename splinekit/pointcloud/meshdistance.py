@@ -1,28 +1,58 @@
-"""Exact unsigned distance from points to a triangle mesh.
+"""Exact distance from points to a triangle mesh: :class:`MeshDistance`, the one mesh distance of
+splinekit (point-cloud queries, :func:`splinekit.implicit.from_mesh`, the conversion error
+measurements of :mod:`splinekit.convert`).
 
-Candidate triangles come from a k-d tree over triangle centroids; the result is
-then certified: no triangle outside the ``k`` candidates can be nearer than
-``d_k - R`` (``d_k`` the k-th nearest centroid distance, ``R`` the largest
-centroid-to-corner distance of any triangle), so points whose best candidate is
-farther than that are re-queried with every triangle whose centroid lies within
-``best + R``. The closest point on each triangle follows the Voronoi-region
-classification of Ericson, *Real-Time Collision Detection*, 5.1.5, on whole
-arrays.
+Unsigned: the exact nearest triangle, closest point and distance of every query point, found by
+one of two searches that answer the same question:
+
+* compiled (numba, loaded by :func:`splinekit._kernels.load` for large queries): a depth-first
+  walk of a bounding-volume hierarchy over Morton-ordered triangles (:class:`_TriangleBVH`),
+  nearer child first, each point starting from the previous point's triangle (grid points come
+  in order, so that bound is tight and prunes most of the tree);
+* numpy (small queries, or compiled code switched off): candidate triangles from a k-d tree over
+  triangle centroids, then certified: no triangle outside the ``k`` candidates can be nearer than
+  ``d_k - R`` (``d_k`` the k-th nearest centroid distance, ``R`` the largest centroid-to-corner
+  distance of any triangle), so points whose best candidate is farther than that are re-queried
+  with every triangle whose centroid lies within ``best + R``.
+
+The closest point on a triangle follows the Voronoi-region classification of Ericson,
+*Real-Time Collision Detection*, 5.1.5 (on whole arrays here, per point in the kernel, the same
+tests in the same order), which also names the feature (face, edge or vertex) it lies on.
+
+Signed (:meth:`MeshDistance.signed`, for a closed, consistently oriented mesh): the sign comes
+from the angle-weighted pseudo-normal of that feature (Baerentzen & Aanaes 2005), which is exact
+for such a mesh.
+
+Every query runs on a copy of the mesh moved and scaled (by a power of two, exactly) to the unit
+box: the region tests multiply dot products (length^4) and the pseudo-normals take norms of
+cross products, which would overflow for meshes of size ~1e77 and underflow for ~1e-77.
 """
 
 from __future__ import annotations
 
+from functools import cached_property
+
 import numpy as np
 
-from ..errors import ControlPointError, ParameterError
+from .. import _kernels
+from ..errors import ControlPointError, NotManifoldError, ParameterError
+from ..mesh.geometry import triangulate
+from ..mesh.polymesh import PolyMesh
+from ..mesh.topology import Topology
 from ._cloud import as_cloud, kd_tree
 
 __all__ = ["MeshDistance", "closest_points_on_mesh", "closest_points_on_triangles"]
 
 CANDIDATES = 8
-"""Nearest triangle centroids tried per point before the certification step."""
+"""Nearest triangle centroids tried per point by the numpy search before its certification step."""
 
 CHUNK = 65536
+"""Points per block of the numpy search (bounds temporary memory)."""
+
+KERNELS = "splinekit.pointcloud._meshdistance_kernels"
+
+# features of a closest point: 0 face interior, 1-3 vertex 0-2, 4 edge 01, 5 edge 12, 6 edge 20
+FACE, EDGE01, EDGE12, EDGE20 = 0, 4, 5, 6
 
 
 def _dot(x, y):
@@ -37,11 +67,9 @@ def _on_segments(p, a, b):
     return a + np.clip(t, 0.0, 1.0)[:, None] * ab
 
 
-def closest_points_on_triangles(p, a, b, c) -> np.ndarray:
-    """Closest points ``(m, 3)`` of triangles ``(a, b, c)`` to points ``p``, all ``(m, 3)``.
-
-    Degenerate (zero-area) triangles are treated as their three edges.
-    """
+def _closest_and_feature(p, a, b, c):
+    """Closest points ``(m, 3)`` of triangles ``(a, b, c)`` to points ``p`` (all ``(m, 3)``) and
+    their features ``(m,)`` (module notes). Degenerate triangles are treated as their edges."""
     ab, ac, ap = b - a, c - a, p - a
     d1, d2 = _dot(ab, ap), _dot(ac, ap)
     bp = p - b
@@ -51,79 +79,203 @@ def closest_points_on_triangles(p, a, b, c) -> np.ndarray:
     va = d3 * d6 - d5 * d4
     vb = d5 * d2 - d1 * d6
     vc = d1 * d4 - d3 * d2
+    feature = np.full(len(p), FACE, dtype=np.int64)
     with np.errstate(divide="ignore", invalid="ignore"):
         den = va + vb + vc
         out = a + (vb / den)[:, None] * ab + (vc / den)[:, None] * ac
-        # later assignments take precedence, in the reverse of Ericson's test order
+        # later assignments take precedence, in the reverse of Ericson's (and the kernel's) test order
         e = (d4 - d3) + (d5 - d6)
-        m = (va <= 0) & (d4 - d3 >= 0) & (d5 - d6 >= 0)
-        out[m] = (b + ((d4 - d3) / e)[:, None] * (c - b))[m]
-        m = (vb <= 0) & (d2 >= 0) & (d6 <= 0)
-        out[m] = (a + (d2 / (d2 - d6))[:, None] * ac)[m]
-        m = (d6 >= 0) & (d5 <= d6)
-        out[m] = c[m]
-        m = (vc <= 0) & (d1 >= 0) & (d3 <= 0)
-        out[m] = (a + (d1 / (d1 - d3))[:, None] * ab)[m]
-        m = (d3 >= 0) & (d4 <= d3)
-        out[m] = b[m]
-        m = (d1 <= 0) & (d2 <= 0)
-        out[m] = a[m]
+        regions = (
+            ((va <= 0) & (d4 - d3 >= 0) & (d5 - d6 >= 0), lambda: b + ((d4 - d3) / e)[:, None] * (c - b), EDGE12),
+            ((vb <= 0) & (d2 >= 0) & (d6 <= 0), lambda: a + (d2 / (d2 - d6))[:, None] * ac, EDGE20),
+            ((d6 >= 0) & (d5 <= d6), lambda: c, 3),
+            ((vc <= 0) & (d1 >= 0) & (d3 <= 0), lambda: a + (d1 / (d1 - d3))[:, None] * ab, EDGE01),
+            ((d3 >= 0) & (d4 <= d3), lambda: b, 2),
+            ((d1 <= 0) & (d2 <= 0), lambda: a, 1),
+        )
+        for m, point, code in regions:
+            if m.any():
+                out[m] = point()[m]
+                feature[m] = code
     bad = ~np.isfinite(out).all(axis=1)
     if bad.any():
         q = [_on_segments(p[bad], x[bad], y[bad]) for x, y in ((a, b), (b, c), (c, a))]
         d = np.stack([np.linalg.norm(qq - p[bad], axis=1) for qq in q])
-        out[bad] = np.stack(q)[d.argmin(axis=0), np.arange(d.shape[1])]
-    return out
+        k = d.argmin(axis=0)
+        out[bad] = np.stack(q)[k, np.arange(d.shape[1])]
+        feature[bad] = EDGE01 + k
+    return out, feature
+
+
+def closest_points_on_triangles(p, a, b, c) -> np.ndarray:
+    """Closest points ``(m, 3)`` of triangles ``(a, b, c)`` to points ``p``, all ``(m, 3)``.
+
+    Degenerate (zero-area) triangles are treated as their three edges.
+    """
+    return _closest_and_feature(p, a, b, c)[0]
+
+
+_LEAF = 4  # triangles per leaf; the kernel assumes 4
+
+
+class _TriangleBVH:
+    """A complete binary tree over Morton-ordered triangles (``_LEAF`` per leaf),
+    stored as a heap: node 1 is the root, node ``i`` has children ``2i, 2i + 1``,
+    the leaves are nodes ``L .. 2L - 1``. Built with whole-array numpy."""
+
+    def __init__(self, V, T):
+        m = len(T)
+        tri = V[T]  # (m, 3, 3)
+        cen = tri.mean(axis=1)
+        lo, hi = cen.min(axis=0), cen.max(axis=0)
+        q = np.clip(((cen - lo) / np.maximum(hi - lo, 1e-300) * 1023.0).astype(np.int64), 0, 1023)
+        code = np.zeros(m, dtype=np.int64)
+        for bit in range(10):  # interleave 10 bits per axis
+            for ax in range(3):
+                code |= ((q[:, ax] >> bit) & 1) << (3 * bit + (2 - ax))
+        order = np.argsort(code, kind="stable")
+        n_leaves = max(1, -(-m // _LEAF))
+        L = 1 << int(np.ceil(np.log2(n_leaves))) if n_leaves > 1 else 1
+        pad = L * _LEAF - m
+        tri_s = tri[order]
+        tlo = np.concatenate([tri_s.min(axis=1), np.full((pad, 3), np.inf)])
+        thi = np.concatenate([tri_s.max(axis=1), np.full((pad, 3), -np.inf)])
+        nlo = np.empty((2 * L, 3))
+        nhi = np.empty((2 * L, 3))
+        nlo[L:] = tlo.reshape(L, _LEAF, 3).min(axis=1)
+        nhi[L:] = thi.reshape(L, _LEAF, 3).max(axis=1)
+        s = L // 2
+        while s >= 1:
+            nlo[s : 2 * s] = np.minimum(nlo[2 * s : 4 * s : 2], nlo[2 * s + 1 : 4 * s : 2])
+            nhi[s : 2 * s] = np.maximum(nhi[2 * s : 4 * s : 2], nhi[2 * s + 1 : 4 * s : 2])
+            s //= 2
+        nlo[0], nhi[0] = np.inf, -np.inf
+        self.order = order
+        self.tri = np.ascontiguousarray(tri_s)
+        self.tlo, self.thi = np.ascontiguousarray(tlo), np.ascontiguousarray(thi)
+        self.lo, self.hi, self.n_leaves, self.m = nlo, nhi, L, m
+
+    def nearest(self, kernels, points, max_distance=np.inf):
+        """Exact nearest triangle of each point within ``max_distance``.
+
+        Returns ``(d (n,), triangle (n,), closest (n, 3), region (n,))``: the
+        distance (``inf`` and triangle -1 beyond ``max_distance``), the original
+        triangle index, the closest point and its feature (0 face interior,
+        1-3 vertex 0-2, 4 edge 01, 5 edge 12, 6 edge 20). ``kernels`` is the compiled
+        module (:data:`KERNELS`), whose leaves hold ``_LEAF`` = 4 triangles as here."""
+        P = np.ascontiguousarray(points, dtype=np.float64)
+        n = len(P)
+        d2 = np.full(n, np.inf)
+        tri = np.full(n, -1, dtype=np.int64)
+        cp = np.zeros((n, 3))
+        reg = np.zeros(n, dtype=np.int64)
+        limit = float(max_distance) ** 2 if np.isfinite(max_distance) else np.inf
+        kernels.nearest(P, limit, self.lo, self.hi, self.tlo, self.thi, self.tri, self.n_leaves, self.m, d2, tri, cp, reg)
+        found = tri >= 0
+        tri[found] = self.order[tri[found]]
+        return np.sqrt(d2), tri, cp, reg
+
+
+def _pseudo_normals(V, T):
+    """Angle-weighted pseudo-normals of a closed triangle mesh ``(face (m, 3), edge (m, 3, 3), vertex (n, 3))``;
+    the edge array holds, per triangle and local edge (01, 12, 20), the sum of
+    the unit normals of the edge's two triangles."""
+    a, b, c = V[T[:, 0]], V[T[:, 1]], V[T[:, 2]]
+    n = np.cross(b - a, c - a)
+    ln = np.linalg.norm(n, axis=1)
+    fn = n / np.where(ln > 0, ln, 1.0)[:, None]
+    # edges: corner k of triangle t is the half-edge T[t, k] -> T[t, k + 1]; the
+    # topology's edge table gives the edge shared by the two triangles using it
+    topo = Topology(len(V), T.ravel(), np.arange(len(T) + 1, dtype=np.int64) * 3, check=False)
+    inv = topo.halfedge_edge
+    counts = np.bincount(inv, minlength=len(topo.edges))
+    if (counts != 2).any():
+        e = int(np.flatnonzero(counts != 2)[0])
+        a, b = (int(v) for v in topo.edges[e])
+        raise NotManifoldError(
+            f"the mesh is not closed: edge ({a}, {b}) has {int(counts[e])} triangles (a closed mesh has 2 on "
+            "every edge); a signed distance needs a closed mesh"
+        )
+    rep = np.repeat(fn, 3, axis=0)
+    esum = np.stack([np.bincount(inv, weights=rep[:, k]) for k in range(3)], axis=1)
+    edge_n = esum[inv].reshape(len(T), 3, 3)
+    # corner angles for the vertex normals
+    P = V[T]
+    ang = np.empty((len(T), 3))
+    for k in range(3):
+        u = P[:, (k + 1) % 3] - P[:, k]
+        w = P[:, (k + 2) % 3] - P[:, k]
+        ang[:, k] = np.arctan2(np.linalg.norm(np.cross(u, w), axis=1), np.einsum("ij,ij->i", u, w))
+    corner_v = T.ravel()
+    weighted = (fn[:, None, :] * ang[:, :, None]).reshape(-1, 3)
+    vn = np.stack([np.bincount(corner_v, weights=weighted[:, k], minlength=len(V)) for k in range(3)], axis=1)
+    return fn, edge_n, vn
+
 
 
 class MeshDistance:
-    """Reusable distance queries to one triangle mesh.
+    """Reusable exact distance queries to one triangle mesh (module notes).
 
     Parameters
     ----------
     vertices : (nv, 3) float64
     triangles : (T, 3) int
+        Any triangles for :meth:`query`; a closed, consistently oriented mesh for :meth:`signed`.
     """
 
     def __init__(self, vertices, triangles):
         V = as_cloud(vertices, "vertices")
-        tris = np.asarray(triangles, dtype=np.int64)
+        tris = np.ascontiguousarray(triangles, dtype=np.int64)
         if tris.ndim != 2 or tris.shape[1] != 3 or len(tris) == 0:
             raise ParameterError(f"triangles must have shape (T, 3) with T >= 1, got {tris.shape}")
         if tris.min() < 0 or tris.max() >= len(V):
             raise ParameterError(f"triangle indices must lie in [0, {len(V) - 1}]")
         self.V, self.tris = V, tris
-        # the Voronoi-region tests multiply dot products (length^4): they run on a copy
-        # moved and scaled (by a power of two, exactly) to the unit box, so meshes of any
-        # size neither overflow nor underflow; results are scaled back
         lo, hi = V.min(axis=0), V.max(axis=0)
         with np.errstate(over="ignore"):
             size = float((hi - lo).max())
         if not np.isfinite(size):
             raise ControlPointError("the mesh is wider than the float range; rescale it")
         self._shift = 0.5 * lo + 0.5 * hi
+        # a power of two: scaling by it is exact
         self._scale = float(2.0 ** np.ceil(np.log2(max(size, np.finfo(float).tiny))))
-        self.corners = ((V - self._shift) / self._scale)[tris]
-        self.centroids = self.corners.mean(axis=1)
-        self.reach = float(np.linalg.norm(self.corners - self.centroids[:, None], axis=2).max())
-        self.tree = kd_tree(self.centroids)
+        self.unit_vertices = (V - self._shift) / self._scale
+        self.corners = self.unit_vertices[tris]
 
     @classmethod
     def of_mesh(cls, mesh):
-        """The distance queries of a PolyMesh (faces fan-triangulated)."""
-        from ..mesh.geometry import triangulate
-        from ..mesh.polymesh import PolyMesh
-
+        """The distance queries of a PolyMesh (faces fan-triangulated, which keeps their orientation)."""
         if not isinstance(mesh, PolyMesh):
             raise ParameterError(f"mesh must be a splinekit PolyMesh, got {type(mesh).__name__}")
         tris, _ = triangulate(mesh)
         return cls(mesh.vertices, tris)
 
-    def _pairs(self, P, t):
-        C = self.corners[t]
-        q = closest_points_on_triangles(P, C[:, 0], C[:, 1], C[:, 2])
-        return q, np.linalg.norm(q - P, axis=1)
+    # -- search structures, built on first use ------------------------------------------------
+    @cached_property
+    def centroids(self) -> np.ndarray:
+        return self.corners.mean(axis=1)
 
+    @cached_property
+    def reach(self) -> float:
+        """Largest centroid-to-corner distance of any triangle (unit box)."""
+        return float(np.linalg.norm(self.corners - self.centroids[:, None], axis=2).max())
+
+    @cached_property
+    def tree(self):
+        """k-d tree over the triangle centroids (the numpy search)."""
+        return kd_tree(self.centroids)
+
+    @cached_property
+    def bvh(self) -> _TriangleBVH:
+        """Bounding-volume hierarchy over the triangles (the compiled search)."""
+        return _TriangleBVH(self.unit_vertices, self.tris)
+
+    @cached_property
+    def pseudo_normals(self):
+        """``(face, edge, vertex)`` pseudo-normals for :meth:`signed`; NotManifoldError when open."""
+        return _pseudo_normals(self.unit_vertices, self.tris)
+
+    # -- queries ---------------------------------------------------------------------------
     def query(self, points):
         """``(distances (m,), closest points (m, 3), triangle (m,))`` of ``points`` ``(m, 3)``.
 
@@ -131,7 +283,7 @@ class MeshDistance:
         squared distance overflows raise ControlPointError."""
         P = as_cloud(points, "points")
         with np.errstate(over="ignore", invalid="ignore"):  # overflow is refused below
-            dist, close, tri = self._query((P - self._shift) / self._scale)
+            dist, tri, close, _ = self._nearest((P - self._shift) / self._scale, np.inf)
             dist, close = dist * self._scale, close * self._scale + self._shift
         bad = ~(np.isfinite(dist) & np.isfinite(close).all(axis=1))
         if bad.any():
@@ -141,45 +293,88 @@ class MeshDistance:
             )
         return dist, close, tri
 
-    def _query(self, P):
+    def signed(self, points, max_distance=np.inf):
+        """``(signed distance (m,), found (m,))`` in model units, negative inside, for finite
+        ``points`` ``(m, 3)``; points farther than ``max_distance`` get ``inf`` and no sign
+        (``found`` False). The mesh must be closed and consistently oriented (NotManifoldError
+        otherwise); a mesh oriented inside out as a whole gets negated distances."""
+        fn, en, vn = self.pseudo_normals
+        P = (np.asarray(points, dtype=np.float64) - self._shift) / self._scale
+        d, tri, cp, feature = self._nearest(P, max_distance / self._scale)
+        found = tri >= 0
+        t, f = tri[found], feature[found]
+        normal = fn[t]
+        vert = (f >= 1) & (f <= 3)
+        normal[vert] = vn[self.tris[t[vert], f[vert] - 1]]
+        edge = f >= EDGE01
+        normal[edge] = en[t[edge], f[edge] - EDGE01]
+        side = np.einsum("ij,ij->i", P[found] - cp[found], normal)
+        out = d.copy()
+        out[found] = np.where(side < 0, -d[found], d[found])
+        return out * self._scale, found
+
+    def _nearest(self, P, max_distance):
+        """Nearest triangle of unit-box points ``P``: ``(d, triangle, closest, feature)``; beyond
+        ``max_distance`` ``d`` is inf and the triangle -1. Compiled search for large queries."""
+        kernels = _kernels.load(KERNELS, work=len(P))
+        if kernels is not None:
+            return self.bvh.nearest(kernels, P, max_distance)
+        dist, close, tri, feature = self._search(P)
+        far = ~(dist <= max_distance)
+        if far.any():
+            dist[far], tri[far] = np.inf, -1
+        return dist, tri, close, feature
+
+    def _pairs(self, P, t):
+        C = self.corners[t]
+        q, feature = _closest_and_feature(P, C[:, 0], C[:, 1], C[:, 2])
+        return q, np.linalg.norm(q - P, axis=1), feature
+
+    def _search(self, P):
+        """The numpy search (module notes): ``(d, closest, triangle, feature)`` of unit-box points."""
         m = len(P)
-        dist, close, tri = np.empty(m), np.empty((m, 3)), np.empty(m, dtype=np.int64)
+        dist, close = np.empty(m), np.empty((m, 3))
+        tri, feature = np.empty(m, dtype=np.int64), np.empty(m, dtype=np.int64)
         k = min(CANDIDATES, len(self.tris))
         for s in range(0, m, CHUNK):
-            Q = P[s:s + CHUNK]
+            Q = P[s : s + CHUNK]
             dc, ic = self.tree.query(Q, k=k, workers=-1)
             dc, ic = dc.reshape(len(Q), k), ic.reshape(len(Q), k)
             # an overflowing distance leaves the tree without a candidate (index n): any
             # triangle will do, its distance overflows too and query refuses the point
             ic = np.minimum(ic, len(self.tris) - 1)
-            q, d = self._pairs(np.repeat(Q, k, axis=0), ic.ravel())
+            q, d, f = self._pairs(np.repeat(Q, k, axis=0), ic.ravel())
             d = d.reshape(len(Q), k)
             j = d.argmin(axis=1)
             rows = np.arange(len(Q))
             best = d[rows, j]
-            dist[s:s + len(Q)] = best
-            close[s:s + len(Q)] = q.reshape(len(Q), k, 3)[rows, j]
-            tri[s:s + len(Q)] = ic[rows, j]
+            block = slice(s, s + len(Q))
+            dist[block] = best
+            close[block] = q.reshape(len(Q), k, 3)[rows, j]
+            tri[block] = ic[rows, j]
+            feature[block] = f.reshape(len(Q), k)[rows, j]
             if k < len(self.tris):
                 unsure = np.flatnonzero(best > dc[:, -1] - self.reach)
                 if unsure.size:
-                    self._exhaustive(Q, s, unsure, best[unsure], dist, close, tri)
-        return dist, close, tri
+                    self._exhaustive(Q, s, unsure, best[unsure], (dist, close, tri, feature))
+        return dist, close, tri, feature
 
-    def _exhaustive(self, Q, s, unsure, best, dist, close, tri):
+    def _exhaustive(self, Q, s, unsure, best, out):
+        dist, close, tri, feature = out
         lists = self.tree.query_ball_point(Q[unsure], best + self.reach * (1 + 1e-12) + 1e-300, workers=-1)
         counts = np.fromiter((len(x) for x in lists), dtype=np.int64, count=len(lists))
         if counts.sum() == 0:
             return
         t = np.fromiter((i for x in lists for i in x), dtype=np.int64, count=int(counts.sum()))
         owner = np.repeat(np.arange(len(unsure)), counts)
-        q, d = self._pairs(Q[unsure][owner], t)
+        q, d, f = self._pairs(Q[unsure][owner], t)
         order = np.lexsort((d, owner))
         first = order[np.r_[True, owner[order][1:] != owner[order][:-1]]]
         o = owner[first]
         better = d[first] < dist[s + unsure[o]]
         i = s + unsure[o[better]]
-        dist[i], close[i], tri[i] = d[first][better], q[first][better], t[first][better]
+        pick = first[better]
+        dist[i], close[i], tri[i], feature[i] = d[pick], q[pick], t[pick], f[pick]
 
 
 def closest_points_on_mesh(mesh, points):

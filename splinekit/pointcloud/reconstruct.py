@@ -2,13 +2,15 @@
 
 from __future__ import annotations
 
-import functools
-
 import numpy as np
 
 from .._validate import as_degree, as_int, as_real
 from ..errors import FittingError, ParameterError
+from ..fit import fit_surface
+from ..fit.scattered import plane_parameters
+from ..implicit.base import Implicit
 from ._cloud import as_cloud, as_neighbour_count, kd_tree, neighbours
+from .normals import estimate_normals
 
 __all__ = ["fit_height_field", "mls_distance", "reconstruct_implicit"]
 
@@ -73,9 +75,6 @@ def fit_height_field(
         direction (noise above the tolerance, or not a height field); the
         message gives the residual reached.
     """
-    from ..fit import fit_surface
-    from ..fit.scattered import plane_parameters
-
     Q = as_cloud(points, min_count=3)
     p = as_degree(degree)
     uv = plane_parameters(Q)
@@ -155,42 +154,35 @@ def mls_distance(points, normals, tree, k: int, queries, gradient: bool = True):
     return F, G
 
 
-@functools.cache
-def _implicit_class():
-    # built on first use: the implicit package is imported only when a reconstruction is made
-    from ..implicit.base import Implicit
+class MLSImplicit(Implicit):
+    """Signed implicit moving-least-squares distance to an oriented point cloud.
 
-    class MLSImplicit(Implicit):
-        """Signed implicit moving-least-squares distance to an oriented point cloud.
+    ``F < 0`` inside (behind the normals). Near the cloud ``F`` approximates
+    the signed distance to the sampled surface (``|grad F|`` about 1); its
+    zero set smooths the samples over about ``k`` neighbours, so on a
+    surface of curvature radius ``R`` sampled at spacing ``h`` it lies
+    within about ``k h^2 / (4 pi R)`` of the true surface. See
+    :func:`mls_distance`.
 
-        ``F < 0`` inside (behind the normals). Near the cloud ``F`` approximates
-        the signed distance to the sampled surface (``|grad F|`` about 1); its
-        zero set smooths the samples over about ``k`` neighbours, so on a
-        surface of curvature radius ``R`` sampled at spacing ``h`` it lies
-        within about ``k h^2 / (4 pi R)`` of the true surface. See
-        :func:`mls_distance`.
+    Attributes
+    ----------
+    points, normals : (n, 3) the cloud and its unit normals
+    k : int
+    """
 
-        Attributes
-        ----------
-        points, normals : (n, 3) the cloud and its unit normals
-        k : int
-        """
+    def __init__(self, points, normals, k, bounds):
+        super().__init__(bounds=bounds, exact=False)
+        self.points, self.normals, self.k = points, normals, k
+        self._tree = kd_tree(points)
 
-        def __init__(self, points, normals, k, bounds):
-            super().__init__(bounds=bounds, exact=False)
-            self.points, self.normals, self.k = points, normals, k
-            self._tree = kd_tree(points)
+    def __repr__(self):
+        return f"MLSImplicit({len(self.points)} points, k={self.k})"
 
-        def __repr__(self):
-            return f"MLSImplicit({len(self.points)} points, k={self.k})"
+    def _value(self, p):
+        return mls_distance(self.points, self.normals, self._tree, self.k, p, gradient=False)
 
-        def _value(self, p):
-            return mls_distance(self.points, self.normals, self._tree, self.k, p, gradient=False)
-
-        def _gradient(self, p):
-            return mls_distance(self.points, self.normals, self._tree, self.k, p)[1]
-
-    return MLSImplicit
+    def _gradient(self, p):
+        return mls_distance(self.points, self.normals, self._tree, self.k, p)[1]
 
 
 def reconstruct_implicit(points, normals=None, *, k: int = 16):
@@ -214,8 +206,6 @@ def reconstruct_implicit(points, normals=None, *, k: int = 16):
         analytic gradient, whose ``bounds`` are the cloud's bounding box grown
         by 10 % of its diagonal; mesh it with ``.to_mesh(edge_length)``.
     """
-    from .normals import estimate_normals
-
     P = as_cloud(points, min_count=3)
     k = as_neighbour_count(k, len(P))
     if normals is None:
@@ -233,4 +223,4 @@ def reconstruct_implicit(points, normals=None, *, k: int = 16):
     margin = 0.1 * float(np.linalg.norm(hi - lo))
     if not margin > 0:
         raise FittingError("the cloud is a single point: it defines no surface")
-    return _implicit_class()(P, np.ascontiguousarray(N), k, (lo - margin, hi + margin))
+    return MLSImplicit(P, np.ascontiguousarray(N), k, (lo - margin, hi + margin))

@@ -6,7 +6,10 @@ import numpy as np
 
 from .. import limits
 from .._validate import as_int, as_real
+from ..diffgeom.curves import equal_arc_length_parameters
 from ..errors import ParameterError
+from ..mesh.geometry import triangulate
+from ..mesh.polymesh import PolyMesh
 from ._cloud import as_cloud, as_rng, kd_tree
 
 __all__ = ["poisson_disk", "sample_curve", "sample_mesh", "sample_surface"]
@@ -42,8 +45,6 @@ def sample_curve(curve, n: int) -> np.ndarray:
     ``derivatives`` and ``domain``); spacing is exact to the arc-length table's
     tolerance (``1e-12`` relative).
     """
-    from ..diffgeom.curves import equal_arc_length_parameters
-
     if not all(hasattr(curve, a) for a in ("evaluate", "derivatives", "domain")):
         raise ParameterError(f"curve must be a parametric curve (evaluate, derivatives, domain), got {type(curve).__name__}")
     n = _count(n, minimum=2)
@@ -131,9 +132,6 @@ def sample_surface(surface, n: int, rng=None, *, return_parameters: bool = False
 
 
 def _triangles(mesh):
-    from ..mesh.geometry import triangulate
-    from ..mesh.polymesh import PolyMesh
-
     if not isinstance(mesh, PolyMesh):
         raise ParameterError(f"mesh must be a splinekit PolyMesh, got {type(mesh).__name__}")
     V = np.asarray(mesh.vertices, dtype=np.float64)
