@@ -144,3 +144,18 @@ def test_long_titles_wrap_inside_the_picture(tmp_path):
 def test_object_fills_the_asked_share_of_the_frame(tmp_path, fill):
     xy, _ = raster.project(np.random.default_rng(0).normal(size=(500, 3)), (28.0, -58.0), 300, 200, fill=fill)
     assert np.isclose(max(np.ptp(xy[:, 0]) / 300, np.ptp(xy[:, 1]) / 200), fill)
+
+
+def test_symlog_scale_ignores_a_singular_spike_and_labels_clear_of_zero():
+    """99.5 % of the area at curvature 1e-3..1, 0.5 % at 1e4 (a degenerate point): the log scale
+    tops out at the 99th area percentile, not at the spike."""
+    from splinekit.plot import colors
+
+    values = np.concatenate([np.geomspace(1e-3, 1.0, 995), np.full(5, 1e4)])
+    norm, _ = colors.norm_and_cmap("curvature", values, "symlog", np.ones(1000))
+    assert 0.9 < norm.vmax <= 1.0 and norm.vmin == 0.0
+    ticks = colors.symlog_ticks(norm)
+    assert ticks[0] == 0.0 and np.all(ticks[1:] >= 0.25 * norm.linthresh) and ticks[-1] <= norm.vmax
+    signed, _ = colors.norm_and_cmap("mean", np.concatenate([-values, values]), "symlog", np.ones(2000))
+    both = colors.symlog_ticks(signed)
+    np.testing.assert_allclose(both, -both[::-1])  # symmetric about 0

@@ -83,6 +83,16 @@ def norm_and_cmap(color, values, scale, areas):
     return norm, cmap
 
 
+def symlog_ticks(norm) -> np.ndarray:
+    """Colour-bar ticks of a SymLogNorm: 0 and the powers of ten up to its limits, leaving out
+    those deep in the squeezed linear part (below a quarter of the linear threshold), where
+    their labels would sit on the 0's."""
+    high = max(abs(norm.vmin), abs(norm.vmax))
+    decades = 10.0 ** np.arange(np.ceil(np.log10(0.25 * norm.linthresh)), np.floor(np.log10(high)) + 1)
+    ticks = np.concatenate([-decades[::-1] if norm.vmin < 0 else [], [0.0], decades])
+    return ticks
+
+
 def colorbar_label(color, scale) -> str:
     label = SIGNED.get(color, "RMS curvature √((k1² + k2²)/2)")
     how = "clipped at the 98th area percentile" if scale == "percentile" else "log scale, clipped at the 99th area percentile"

@@ -156,6 +156,8 @@ def draw(tris, corner_normals, color, scale, size, view, title, path, *, corner_
             cax = fig.add_axes([1.0 - BAR_PIXELS / w, 0.14, 18.0 / w, max(top - 0.14, 0.2)])
             bar = fig.colorbar(cm.ScalarMappable(norm=norm, cmap=cmap), cax=cax)
             bar.set_label(colors.colorbar_label(color, scale), fontsize=9)
+            if scale == "symlog":
+                bar.set_ticks(colors.symlog_ticks(norm))
             bar.ax.tick_params(labelsize=8)
         if text:
             fig.text(10.0 / w, 1.0 - 6.0 / h, text, fontsize=TITLE_FONT, va="top")
