@@ -12,6 +12,16 @@
 Every writer writes a temporary file beside the target and renames it into
 place, so a failed or interrupted export leaves no partial file and never
 damages an existing one.
+
+Import it beside splinekit, splinekit first::
+
+    import splinekit as sk
+    from exporters import export_step, export_stl
+
+``exporters`` is a common name: once splinekit is imported, ``import exporters``
+raises :class:`splinekit.errors.ShadowedPackageError` (an ImportError naming
+both folders and the fix) when another project's ``exporters`` comes first on
+``sys.path``, instead of silently importing that one.
 """
 
 from ._meshio import export_mesh, import_mesh

@@ -5,6 +5,18 @@ Every model module has a docstring (what it is; lengths in millimetres),
 ``MODELS`` lists them in a stable order; :func:`build_model` builds one by name.
 The default, ``"teapot"``, builds fastest (32 patches from a table) and is
 the best-known shape in the set.
+
+Import it beside splinekit, splinekit first::
+
+    import splinekit as sk
+    from models import build_model
+
+    vase = build_model("vase", height=200.0)
+
+``models`` is a common name: once splinekit is imported, ``import models``
+raises :class:`splinekit.errors.ShadowedPackageError` (an ImportError naming
+both folders and the fix) when another project's ``models`` comes first on
+``sys.path``, instead of silently importing that one.
 """
 
 from __future__ import annotations

@@ -1,17 +1,47 @@
-"""splinekit: vectorized Bézier, B-spline and NURBS curves and surfaces.
+"""splinekit: vectorized Bézier, B-spline and NURBS curves and surfaces, subdivision
+surfaces and meshes, cross-checked against the OpenCascade kernel.
 
-The math core imports only numpy and scipy; the OpenCascade bridge
-(:mod:`splinekit.occ`) imports OCP lazily, inside its functions, and the
-booleans import manifold3d the same way.
+Every evaluator takes arrays of parameters and returns arrays: points are
+``(n, dim)`` float64, grids ``(nu, nv, dim)``. Curves, surfaces and meshes are
+immutable; knot insertion, refinement, degree elevation and splitting return
+new objects. Bad input raises :class:`SplineKitError` (a ``ValueError``).
+
+Example: a quarter of the unit circle as an exact NURBS curve::
+
+    >>> import numpy as np
+    >>> import splinekit as sk
+    >>> c = sk.NurbsCurve(2, [0, 0, 0, 1, 1, 1], [[1, 0], [1, 1], [0, 1]], [1, np.sqrt(0.5), 1])
+    >>> p = c.evaluate(np.linspace(0, 1, 5))           # (5, 2) points
+    >>> bool(np.allclose(np.hypot(p[:, 0], p[:, 1]), 1.0))
+    True
+
+Where things are (``help(sk.<name>)`` for each):
+
+* curves and surfaces: ``BezierCurve``, ``BSplineCurve``, ``NurbsCurve``,
+  ``BezierSurface``, ``BSplineSurface``, ``NurbsSurface``, ``bernstein``;
+* construction and fitting: ``line``, ``circle``, ``arc``, ``revolve``,
+  ``loft``, ``sweep``, ``coons``, ``interpolate_curve``, ``approximate_surface``...;
+* measuring: ``curvature``, ``geodesic``, ``project``, ``distance``;
+* meshes and subdivision: ``PolyMesh``, ``subdivide``, ``SubdivisionSurface``,
+  ``tessellate``; booleans of closed bodies: ``union``, ``difference``, ``intersection``;
+* subpackages loaded on first use: ``sk.brep`` (trimmed faces, shells, solids),
+  ``sk.implicit`` (SDFs), ``sk.pointcloud``, ``sk.levelset``, ``sk.convert``,
+  ``sk.plot`` (PNG pictures); ``sk.occ`` is the OpenCascade bridge;
+* files: ``from exporters import export_step, export_stl, export_mesh``;
+  parametric models: ``from models import build_model``.
+
+OCP, build123d, cadquery and manifold3d are imported inside the functions that
+need them, so ``import splinekit`` stays fast and works without them.
 """
 
+import importlib as _importlib
 import sys as _sys
 
 from . import _signals
 
 _signals.install_for_command()  # the `splinekit` command handles SIGINT/SIGTERM from its first moment
 
-from . import errors, limits
+from . import _siblings, errors, limits
 from .basis import bernstein, design_matrix
 from .curves import BezierCurve, BSplineCurve, NurbsCurve, SplineCurve
 from .errors import SplineKitError
@@ -54,20 +84,26 @@ from .surfaces import BezierSurface, BSplineSurface, NurbsSurface, SplineSurface
 from .tessellation import Tessellation, tessellate
 from .tolerances import Tolerances
 
+_siblings.install()  # `import models` / `import exporters` fail loudly when another package shadows ours
+
 # ``import splinekit.occ`` / ``from splinekit.occ import to_occ`` as the design notes spell it
 _sys.modules[__name__ + ".occ"] = occ
 
-_LAZY_SUBMODULES = ("implicit", "pointcloud", "levelset", "convert")
+# Subpackages imported on first attribute access, keeping ``import splinekit`` fast.
+_LAZY_SUBMODULES = ("brep", "convert", "implicit", "levelset", "plot", "pointcloud")
 
 
 def __getattr__(name):
-    """``splinekit.implicit``, ``.pointcloud``, ``.levelset`` and ``.convert`` are
-    imported on first use, keeping ``import splinekit`` fast."""
+    """``splinekit.brep``, ``.implicit``, ``.pointcloud``, ``.levelset``, ``.convert``
+    and ``.plot`` are imported on first use."""
     if name in _LAZY_SUBMODULES:
-        import importlib
-
-        return importlib.import_module(f"{__name__}.{name}")
+        return _importlib.import_module(f"{__name__}.{name}")
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+def __dir__():
+    """The module's names plus the lazily loaded subpackages (for ``dir()`` and tab completion)."""
+    return sorted(set(globals()) | set(_LAZY_SUBMODULES))
 
 
 __version__ = "0.1.0"
@@ -91,6 +127,7 @@ __all__ = [
     "SplineKitError",
     "Tolerances",
     "errors",
+    "limits",
     "occ",
     # construction
     "line",

@@ -19,6 +19,7 @@ __all__ = [
     "MeshTopologyError",
     "BackendError",
     "MissingDependencyError",
+    "ShadowedPackageError",
     "FittingError",
     "ConvergenceError",
     "NotManifoldError",
@@ -77,6 +78,11 @@ class BackendError(SplineKitError, RuntimeError):
 
 class MissingDependencyError(SplineKitError, ImportError):
     """An optional backend is not installed; the message names the package."""
+
+
+class ShadowedPackageError(SplineKitError, ImportError):
+    """``import models`` / ``import exporters`` found another project's package of
+    that name before the one installed beside splinekit; the message names both."""
 
 
 class FittingError(SplineKitError):

@@ -189,24 +189,3 @@ def test_render_command_on_a_written_mesh_file(tmp_path):
     assert result.returncode == 0, result.stderr
     assert "wrote" in result.stdout and "t.png" in result.stdout
     assert_good_picture(tmp_path / "t.png", size=(400, 300))
-
-
-def test_long_triangles_are_split_without_changing_the_surface():
-    from splinekit.plot import _polygon_areas, _split_long_triangles
-
-    rng = np.random.default_rng(3)
-    tris = rng.uniform(-1, 1, (40, 3, 3))
-    values = rng.uniform(-1, 1, (40, 3))
-    out, out_values, source = _split_long_triangles(tris, values, np.arange(40), relative=0.1, budget=100000)
-    assert len(out) > len(tris)
-    # each original triangle's area is shared exactly by its pieces
-    np.testing.assert_allclose(np.bincount(source, _polygon_areas(out)), _polygon_areas(tris), rtol=1e-12)
-    diagonal = np.linalg.norm(np.ptp(tris.reshape(-1, 3), axis=0))
-    assert np.linalg.norm(out[:, [1, 2, 0]] - out, axis=2).max() <= 0.1 * diagonal + 1e-12
-    # corner values are the linear interpolant of the parent's: check at each piece's corners
-    for f in (0, 17, 39):
-        pieces = np.flatnonzero(source == f)
-        A = np.c_[tris[f], np.ones(3)]  # barycentric solve in the parent's plane (least squares, exact here)
-        for p in pieces:
-            bary = np.linalg.lstsq(A.T, np.c_[out[p], np.ones(3)].T, rcond=None)[0]
-            np.testing.assert_allclose(bary.T @ values[f], out_values[p], atol=1e-9)

@@ -1,0 +1,114 @@
+"""A newcomer's first contact with the package: ``help``/``dir`` of splinekit, and
+``import models`` / ``import exporters`` when another project's package of that name
+comes first on ``sys.path`` (run in subprocesses, so sys.path and sys.modules stay clean)."""
+
+from __future__ import annotations
+
+import doctest
+import os
+import pydoc
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+import splinekit as sk
+from splinekit.errors import ShadowedPackageError, SplineKitError
+
+ROOT = Path(__file__).resolve().parents[1]
+LAZY = ("brep", "convert", "implicit", "levelset", "plot", "pointcloud")
+
+
+def test_docstring_example_runs():
+    result = doctest.testmod(sk, verbose=False)
+    assert result.attempted >= 3 and result.failed == 0
+
+
+def test_help_starts_with_the_overview():
+    lines = pydoc.render_doc(sk, renderer=pydoc.plaintext).splitlines()
+    head = "\n".join(lines[:45])
+    assert "Example" in head and "sk.NurbsCurve(" in head and "sk.brep" in head
+
+
+def test_dir_lists_lazy_subpackages_without_importing_them():
+    code = (
+        "import sys, splinekit as sk\n"
+        f"names = dir(sk)\n"
+        f"print(all(n in names for n in {LAZY!r}), [m for m in {LAZY!r} if 'splinekit.' + m in sys.modules])\n"
+        "print(sorted(set(sk.__all__) - set(names)), names == sorted(names))\n"
+    )
+    out = _run(code, cwd=ROOT)
+    assert out.splitlines() == ["True []", "[] True"]
+
+
+@pytest.mark.parametrize("name", LAZY)
+def test_lazy_subpackage_resolves(name):
+    module = getattr(sk, name)
+    assert module.__name__ == f"splinekit.{name}"
+
+
+def test_unknown_attribute_still_raises():
+    with pytest.raises(AttributeError, match="no_such_thing"):
+        sk.no_such_thing  # noqa: B018
+
+
+def test_shadowed_package_error_is_an_import_error_and_a_splinekit_error():
+    assert issubclass(ShadowedPackageError, ImportError)
+    assert issubclass(ShadowedPackageError, SplineKitError)
+
+
+def _run(code: str, cwd, env=None, check=True):
+    environment = dict(os.environ, PYTHONPATH=str(ROOT), **(env or {}))
+    result = subprocess.run([sys.executable, "-c", code], cwd=cwd, env=environment, capture_output=True, text=True)
+    if check:
+        assert result.returncode == 0, result.stderr
+        return result.stdout.strip()
+    return result
+
+
+def _shadow(folder: Path) -> Path:
+    """A folder holding another project's ``models`` package and ``exporters`` module."""
+    (folder / "models").mkdir()
+    (folder / "models" / "__init__.py").write_text("FOREIGN = True\n")
+    (folder / "exporters.py").write_text("FOREIGN = True\n")
+    return folder
+
+
+@pytest.mark.parametrize("name", ["models", "exporters"])
+def test_shadowing_package_fails_loudly(tmp_path, name):
+    """The script's folder comes first on sys.path, before splinekit's folder."""
+    folder = _shadow(tmp_path)
+    code = (
+        "import sys; sys.path.insert(0, '')\n"
+        "import splinekit\n"
+        "try:\n"
+        f"    import {name}\n"
+        "except ImportError as exc:\n"
+        "    print(type(exc).__name__); print(exc)\n"
+        "else:\n"
+        f"    print('imported', {name}.__file__)\n"
+    )
+    kind, message = _run(code, cwd=folder).split("\n", 1)
+    assert kind == "ShadowedPackageError"
+    assert str(folder / name) in message  # the other package's location
+    assert str(ROOT / name) in message  # ours
+    assert "SPLINEKIT_ALLOW_SHADOWING=1" in message and "Rename or move" in message
+
+
+def test_shadowing_can_be_allowed(tmp_path):
+    folder = _shadow(tmp_path)
+    code = "import sys; sys.path.insert(0, ''); import splinekit, models, exporters; print(models.FOREIGN, exporters.FOREIGN)"
+    assert _run(code, cwd=folder, env={"SPLINEKIT_ALLOW_SHADOWING": "1"}) == "True True"
+
+
+def test_our_packages_import_when_nothing_shadows_them(tmp_path):
+    code = "import splinekit, models, exporters; print(models.__file__); print(exporters.__file__)"
+    out = _run(code, cwd=tmp_path).splitlines()
+    assert out == [str(ROOT / "models" / "__init__.py"), str(ROOT / "exporters" / "__init__.py")]
+
+
+def test_other_top_level_imports_are_left_alone(tmp_path):
+    """The guard looks at two names only: a project's own ``mymodels`` still imports."""
+    (tmp_path / "mymodels.py").write_text("OK = 1\n")
+    assert _run("import sys; sys.path.insert(0, ''); import splinekit, mymodels; print(mymodels.OK)", cwd=tmp_path) == "1"
