@@ -233,7 +233,7 @@ def test_one_level_matches_numpy(scheme, name, opts, compiled):
     edge_s = edge_sharpness(t, kw.get("creases"))
     vertex_s = vertex_sharpness(t, kw.get("corners"), kw["boundary"])
     ref = module.refine_numpy(t, edge_s, vertex_s)
-    fast = module.refine(t, edge_s, vertex_s)  # dispatches to the kernels (MIN_FACES = 0)
+    fast = module.refine(t, edge_s, vertex_s)  # dispatches to the kernels (MIN_WORK = 0)
     assert "_uniform_size" in fast[0].__dict__, "the kernel path was not taken"
     assert_same_stencil(ref[1], fast[1])
     assert_same_topology(ref[0], fast[0])
