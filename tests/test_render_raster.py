@@ -43,7 +43,7 @@ def test_barycentric_weights_reproduce_the_pixel_centres():
     assert f.covered.sum() > 200
     centres = f.interpolate(xy)
     rows, cols = np.nonzero(f.covered)
-    np.testing.assert_allclose(centres[rows, cols], np.column_stack([cols + 0.5, rows + 0.5]), atol=1e-9)
+    np.testing.assert_allclose(centres, np.column_stack([cols + 0.5, rows + 0.5]), atol=1e-9)
     assert np.all(f.weights[f.covered] >= 0) and np.allclose(f.weights[f.covered].sum(axis=1), 1.0)
 
 
@@ -86,8 +86,8 @@ def test_edge_on_and_offscreen_triangles_cover_nothing():
 
 def test_projection_keeps_proportions_and_fills_the_frame():
     cube = np.array([[x, y, z] for x in (0, 2) for y in (0, 2) for z in (0, 2)], float)
-    xy, depth = raster.project(cube, (0.0, 0.0), 200, 100, fill=0.9)  # looking along -x: y right, z up
-    assert np.isclose(np.ptp(xy[:, 0]), np.ptp(xy[:, 1])) and np.isclose(np.ptp(xy[:, 1]), 90.0)
+    xy, depth, scale = raster.project(cube, (0.0, 0.0), 200, 100, fill=0.9)  # looking along -x: y right, z up
+    assert np.isclose(np.ptp(xy[:, 0]), np.ptp(xy[:, 1])) and np.isclose(np.ptp(xy[:, 1]), 90.0) and np.isclose(scale, 45.0)
     np.testing.assert_allclose(depth, cube[:, 0])
     right = xy[cube[:, 1] == 2, 0].min() > xy[cube[:, 1] == 0, 0].max()
     up = xy[cube[:, 2] == 2, 1].max() < xy[cube[:, 2] == 0, 1].min()  # rows grow downwards
@@ -142,7 +142,7 @@ def test_long_titles_wrap_inside_the_picture(tmp_path):
 
 @pytest.mark.parametrize("fill", [0.5, 0.92])
 def test_object_fills_the_asked_share_of_the_frame(tmp_path, fill):
-    xy, _ = raster.project(np.random.default_rng(0).normal(size=(500, 3)), (28.0, -58.0), 300, 200, fill=fill)
+    xy, _, _ = raster.project(np.random.default_rng(0).normal(size=(500, 3)), (28.0, -58.0), 300, 200, fill=fill)
     assert np.isclose(max(np.ptp(xy[:, 0]) / 300, np.ptp(xy[:, 1]) / 200), fill)
 
 
