@@ -28,12 +28,15 @@ def _centres_inside(lo, hi, n):
 @given(st.floats(0, 30), st.floats(0, 30), st.floats(1, 30), st.floats(1, 30))
 @settings(max_examples=40, deadline=None)
 def test_rectangle_covers_exactly_the_pixel_centres_inside_it(x0, y0, w, h):
-    """A shared diagonal leaves no crack and covers no pixel twice-wrong: the covered set is
-    exactly the pixel centres inside the rectangle (edges included)."""
+    """A shared diagonal leaves no crack: the covered set is exactly the pixel centres inside
+    the rectangle. Centres on its outline (within rounding) may go either way."""
     xy, depth = _square(x0, y0, x0 + w, y0 + h)
     f = raster.rasterize(xy, depth, 64, 48)
-    expected = _centres_inside(y0, y0 + h, 48)[:, None] & _centres_inside(x0, x0 + w, 64)[None, :]
-    np.testing.assert_array_equal(f.covered, expected)
+    eps = 1e-9
+    inside = _centres_inside(y0 + eps, y0 + h - eps, 48)[:, None] & _centres_inside(x0 + eps, x0 + w - eps, 64)[None, :]
+    near = _centres_inside(y0 - eps, y0 + h + eps, 48)[:, None] & _centres_inside(x0 - eps, x0 + w + eps, 64)[None, :]
+    assert f.covered[inside].all()
+    assert not f.covered[~near].any()
 
 
 def test_barycentric_weights_reproduce_the_pixel_centres():
