@@ -64,6 +64,8 @@ def triangle_areas(tris):
 
 
 def _wrapped_title(title, width):
+    """``(text, height)``: ``title`` broken into lines that fit ``width`` pixels at TITLE_FONT,
+    and the pixels the lines take at the top of the picture (0 without a title)."""
     if not title:
         return "", 0
     lines = textwrap.wrap(str(title), max(20, int((width - 20) / 7.5))) or [""]
