@@ -162,3 +162,15 @@ def test_symlog_scale_ignores_a_singular_spike_and_labels_clear_of_zero():
     signed, _ = colors.norm_and_cmap("mean", np.concatenate([-values, values]), "symlog", np.ones(2000))
     both = colors.symlog_ticks(signed)
     np.testing.assert_allclose(both, -both[::-1])  # symmetric about 0
+
+
+@pytest.mark.parametrize("scale", ["percentile", "symlog"])
+def test_colour_bar_names_the_scale_asked_for(tmp_path, monkeypatch, scale):
+    from splinekit.plot import colors
+
+    asked = []
+    label = colors.colorbar_label
+    monkeypatch.setattr(colors, "colorbar_label", lambda color, s: asked.append(s) or label(color, s))
+    render_mesh(_crossed_quads(), tmp_path / "s.png", color="mean", scale=scale, size=(300, 200))
+    assert asked == [scale]
+    assert ("log scale" in label("mean", scale)) == (scale == "symlog")

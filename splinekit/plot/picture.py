@@ -132,7 +132,7 @@ def draw(tris, corner_normals, color, scale, size, view, title, path, *, corner_
     frame_h = max(h - title_px, 16)
     s = SUPERSAMPLE
     points = tris.reshape(-1, 3)
-    xy, depth, scale = raster.project(points, view, frame_w * s, frame_h * s)
+    xy, depth, pixels_per_unit = raster.project(points, view, frame_w * s, frame_h * s)
     fragments = raster.rasterize(xy.reshape(-1, 3, 2), depth.reshape(-1, 3), frame_w * s, frame_h * s)
     hit = fragments.covered
     triangle = fragments.triangle[hit]
@@ -146,7 +146,7 @@ def draw(tris, corner_normals, color, scale, size, view, title, path, *, corner_
     image[hit] = colors.shade(base, n, eye, light)
     normals = np.zeros(hit.shape + (3,), dtype=np.float32)
     normals[hit] = n
-    image[_outlines(fragments, hit, normals, 1.0 / scale)] *= 0.45
+    image[_outlines(fragments, hit, normals, 1.0 / pixels_per_unit)] *= 0.45
     image = image.reshape(frame_h, s, frame_w, s, 3).mean(axis=(1, 3))
 
     fig = plt.figure(figsize=(w / DPI, h / DPI), dpi=DPI)
