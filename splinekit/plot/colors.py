@@ -118,6 +118,9 @@ def shade(base, normals, eye, light):
     for ``(n, 3)`` unit normals seen along ``eye`` and lit along ``light`` (unit ``(3,)``)."""
     half = unit_rows((eye + light)[None, :])[0]
     diffuse = np.abs(normals @ light)
-    spec = np.abs(normals @ half) ** 40
+    c = np.abs(normals @ half)
+    c2 = c * c
+    c8 = (c2 * c2) ** 2
+    spec = c8 * c8 * c8 * c8 * c8  # c ** 40 by multiplications: a float power is several times slower
     rgb = base * (0.4 + 0.6 * diffuse)[:, None] + 0.2 * spec[:, None]
     return np.clip(rgb, 0.0, 1.0)

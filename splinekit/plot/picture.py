@@ -64,16 +64,19 @@ def triangle_areas(tris):
 
 
 def _wrapped_title(title, width):
+    """``(text, height)``: ``title`` broken into lines that fit ``width`` pixels at TITLE_FONT,
+    and the pixels the lines take at the top of the picture (0 without a title)."""
     if not title:
         return "", 0
     lines = textwrap.wrap(str(title), max(20, int((width - 20) / 7.5))) or [""]
     return "\n".join(lines), 12 + 17 * len(lines)
 
 
-def _outlines(fragments, normals, pixel_size):
+def _outlines(fragments, covered, normals, pixel_size):
     """``(h, w)`` booleans: samples on a silhouette, at a depth jump (one surface in front
-    of another) or on a crease, compared with the right and lower neighbours."""
-    covered, depth = fragments.covered, fragments.depth
+    of another) or on a crease, compared with the right and lower neighbours; ``covered``
+    and ``normals`` ``(h, w, 3)`` per sample, ``pixel_size`` in model units."""
+    depth = fragments.depth
     edge = np.zeros_like(covered)
     jump = 6.0 * pixel_size  # steeper than ~80 degrees between neighbouring samples: another surface
     for axis in (0, 1):
@@ -129,23 +132,21 @@ def draw(tris, corner_normals, color, scale, size, view, title, path, *, corner_
     frame_h = max(h - title_px, 16)
     s = SUPERSAMPLE
     points = tris.reshape(-1, 3)
-    xy, depth = raster.project(points, view, frame_w * s, frame_h * s)
+    xy, depth, pixels_per_unit = raster.project(points, view, frame_w * s, frame_h * s)
     fragments = raster.rasterize(xy.reshape(-1, 3, 2), depth.reshape(-1, 3), frame_w * s, frame_h * s)
     hit = fragments.covered
     triangle = fragments.triangle[hit]
-    normals = np.zeros(hit.shape + (3,))
-    normals[hit] = colors.unit_rows(fragments.interpolate(np.nan_to_num(corner_normals))[hit])
-    lost = hit.copy()
-    lost[hit] = ~normals[hit].any(axis=1)  # corner normals cancelled or undefined: the triangle's own
-    normals[lost] = face_normals[fragments.triangle[lost]]
-    values = None if corner_values is None else fragments.interpolate(corner_values)[hit]
-    base = colors.base_colors(color, values=values, normals=normals[hit],
+    n = colors.unit_rows(fragments.interpolate(np.nan_to_num(corner_normals), hit))
+    lost = ~n.any(axis=1)  # corner normals cancelled or undefined: the triangle's own
+    n[lost] = face_normals[triangle[lost]]
+    values = None if corner_values is None else fragments.interpolate(corner_values, hit)
+    base = colors.base_colors(color, values=values, normals=n,
                               patch_id=None if patch_id is None else np.asarray(patch_id)[triangle], norm=norm, cmap=cmap)
-    image = np.ones(hit.shape + (3,))
-    image[hit] = colors.shade(base, normals[hit], eye, light)
-    extent = np.ptp(xy, axis=0).max() if len(xy) else 1.0
-    pixel_size = np.ptp(points @ np.column_stack([right, up]), axis=0).max() / max(extent, 1e-300) if len(points) else 1.0
-    image[_outlines(fragments, normals, pixel_size)] *= 0.45
+    image = np.ones(hit.shape + (3,), dtype=np.float32)
+    image[hit] = colors.shade(base, n, eye, light)
+    normals = np.zeros(hit.shape + (3,), dtype=np.float32)
+    normals[hit] = n
+    image[_outlines(fragments, hit, normals, 1.0 / pixels_per_unit)] *= 0.45
     image = image.reshape(frame_h, s, frame_w, s, 3).mean(axis=(1, 3))
 
     fig = plt.figure(figsize=(w / DPI, h / DPI), dpi=DPI)

@@ -39,19 +39,20 @@ def project(points, view, width: int, height: int, fill: float = 0.92):
 
     One scale for all three axes (true proportions), chosen so that the points'
     projected bounding box fills ``fill`` of the ``width x height`` frame, centred.
-    Returns ``(xy (n, 2) in pixels, depth (n,) in model units, larger is nearer)``.
+    Returns ``(xy (n, 2) in pixels, depth (n,) in model units (larger is nearer), scale)``,
+    ``scale`` in pixels per model unit.
     """
     eye, right, up = view_basis(*view)
     points = np.asarray(points, dtype=np.float64)
     sx, sy, depth = points @ right, points @ up, points @ eye
     if not len(points):
-        return np.zeros((0, 2)), depth
+        return np.zeros((0, 2)), depth, 1.0
     lo_x, hi_x, lo_y, hi_y = sx.min(), sx.max(), sy.min(), sy.max()
     span = max(hi_x - lo_x, 1e-300), max(hi_y - lo_y, 1e-300)
     scale = fill * min(width / span[0], height / span[1])
     x = 0.5 * width + scale * (sx - 0.5 * (lo_x + hi_x))
     y = 0.5 * height - scale * (sy - 0.5 * (lo_y + hi_y))
-    return np.column_stack([x, y]), depth
+    return np.column_stack([x, y]), depth, float(scale)
 
 
 @dataclass(frozen=True)
@@ -69,17 +70,15 @@ class Fragments:
     def covered(self) -> np.ndarray:
         return self.triangle >= 0
 
-    def interpolate(self, corner_values) -> np.ndarray:
-        """Per-pixel values ``(height, width, ...)`` of per-corner ``(T, 3, ...)`` data
-        (0 on the background)."""
+    def interpolate(self, corner_values, covered=None) -> np.ndarray:
+        """Values ``(n, ...)`` at the ``n`` covered pixels (row by row, as ``np.nonzero(covered)``
+        lists them) of per-corner ``(T, 3, ...)`` data; ``covered`` may be passed when known."""
         corner_values = np.asarray(corner_values)
-        out = np.zeros(self.triangle.shape + corner_values.shape[2:])
-        hit = self.covered
+        hit = self.covered if covered is None else covered
         w = self.weights[hit]
         picked = corner_values[self.triangle[hit]].reshape(len(w), 3, -1)
         blend = w[:, 0, None] * picked[:, 0] + w[:, 1, None] * picked[:, 1] + w[:, 2, None] * picked[:, 2]
-        out[hit] = blend.reshape((len(w),) + corner_values.shape[2:])
-        return out
+        return blend.reshape((len(w),) + corner_values.shape[2:])
 
 
 def rasterize(xy, depth, width: int, height: int) -> Fragments:
