@@ -6,9 +6,15 @@ runs from, or another distribution's top-level ``exporters``, comes first on
 ``sys.path`` and ``import models`` silently returns it; the first sign would be an
 ``AttributeError`` far from the cause. Once splinekit is imported, :func:`install`
 puts a finder in front of ``sys.meta_path`` that looks where the ordinary path
-search would find these two names and raises :class:`ShadowedPackageError`, naming
-both locations and the fix, when that is not the package beside splinekit. It only
-looks; the import itself is left to the ordinary machinery (including editable
+search would find these two names. When that is not the package beside splinekit:
+
+- an import made by splinekit's own code (the command line, a model importing the
+  exporters) raises :class:`ShadowedPackageError`, naming both locations and the fix:
+  there our package is certainly the one meant;
+- an import made by the user's code warns (:class:`ShadowedPackageWarning`, naming
+  both) and goes on: a user's own ``models.py`` keeps working beside splinekit.
+
+It only looks; the import itself is left to the ordinary machinery (including editable
 installs). ``SPLINEKIT_ALLOW_SHADOWING=1`` turns the guard off for people who
 want the other package and do not use splinekit's.
 """
@@ -18,6 +24,7 @@ from __future__ import annotations
 import importlib.machinery
 import os
 import sys
+import warnings
 
 from .errors import ShadowedPackageError
 
@@ -40,6 +47,26 @@ def _inside(path: str, folder: str) -> bool:
     return os.path.commonpath([path, folder]) == folder
 
 
+class ShadowedPackageWarning(UserWarning):
+    """A user's ``import models`` / ``import exporters`` loads another project's package,
+    not the one beside splinekit."""
+
+
+OWN_PACKAGES = ("splinekit", *SIBLINGS)
+
+
+def _importer() -> str:
+    """``__name__`` of the module whose code runs the import (the first frame outside the
+    import machinery and this module)."""
+    frame = sys._getframe(1)
+    while frame is not None:
+        filename = frame.f_code.co_filename
+        if not (filename.startswith("<frozen importlib") or filename == __file__ or "importlib" in filename):
+            return str(frame.f_globals.get("__name__", ""))
+        frame = frame.f_back
+    return ""
+
+
 class SiblingGuard:
     """A ``sys.meta_path`` finder that finds nothing itself: for ``exporters`` and
     ``models`` it raises when the path search would import another project's package."""
@@ -53,12 +80,25 @@ class SiblingGuard:
         found = importlib.machinery.PathFinder.find_spec(name)
         if found is None or _inside(_location(found), ours):
             return None
-        raise ShadowedPackageError(
-            f"`import {name}` would load {_location(found)}, another package named {name!r} that comes "
-            f"before splinekit's ({ours}) on sys.path. Rename or move the other one, run from a folder "
-            f"without it, or put {ROOT} first on sys.path; to use the other package anyway, set "
-            f"{ALLOW_VARIABLE}=1."
-        )
+        clash = (f"`import {name}` would load {_location(found)}, another package named {name!r} that "
+                 f"comes before splinekit's ({ours}) on sys.path.")
+        importer = _importer()
+        if importer.split(".")[0] in OWN_PACKAGES or importer == "__main__" and _runs_splinekit():
+            raise ShadowedPackageError(
+                f"{clash} Rename or move the other one, run from a folder without it, or put {ROOT} "
+                f"first on sys.path."
+            )
+        warnings.warn(f"{clash} It is imported; set {ALLOW_VARIABLE}=1 to silence this warning.",
+                      ShadowedPackageWarning, stacklevel=2)
+        return None
+
+
+def _runs_splinekit() -> bool:
+    """True in the ``splinekit`` command (its console script or ``python -m splinekit``)."""
+    main = sys.modules.get("__main__")
+    spec = getattr(main, "__spec__", None)
+    return os.path.basename(sys.argv[0] if sys.argv else "") == "splinekit" or (
+        spec is not None and (spec.name or "").split(".")[0] == "splinekit")
 
 
 def install() -> None:

@@ -76,12 +76,14 @@ def _shadow(folder: Path) -> Path:
 
 
 @pytest.mark.parametrize("name", ["models", "exporters"])
-def test_shadowing_package_fails_loudly(tmp_path, name):
-    """The script's folder comes first on sys.path, before splinekit's folder."""
+def test_shadowing_package_fails_loudly_in_splinekit(tmp_path, name):
+    """splinekit's own code (here the command line, run from a folder holding other ``models`` and
+    ``exporters``: ``python -m`` puts that folder first on sys.path) refuses the other package."""
     folder = _shadow(tmp_path)
     code = (
-        "import sys; sys.path.insert(0, '')\n"
-        "import splinekit\n"
+        "import sys, splinekit, splinekit._siblings as s\n"
+        "sys.path.insert(0, '')\n"
+        "sys.argv = ['splinekit']\n"  # as the command runs
         "try:\n"
         f"    import {name}\n"
         "except ImportError as exc:\n"
@@ -93,7 +95,33 @@ def test_shadowing_package_fails_loudly(tmp_path, name):
     assert kind == "ShadowedPackageError"
     assert str(folder / name) in message  # the other package's location
     assert str(ROOT / name) in message  # ours
-    assert "SPLINEKIT_ALLOW_SHADOWING=1" in message and "Rename or move" in message
+    assert "Rename or move" in message
+
+
+def test_command_line_names_the_clash(tmp_path):
+    folder = _shadow(tmp_path)
+    result = subprocess.run([sys.executable, "-m", "splinekit", "list"], cwd=folder, capture_output=True, text=True,
+                            env=dict(os.environ, PYTHONPATH=str(ROOT)))
+    assert result.returncode != 0
+    assert "another package named" in result.stderr and str(folder) in result.stderr
+    assert len(result.stderr.strip().splitlines()) == 1  # one line, no traceback
+
+
+@pytest.mark.parametrize("name", ["models", "exporters"])
+def test_users_own_package_of_that_name_imports_with_a_warning(tmp_path, name):
+    """A user's own ``models.py`` keeps working beside splinekit: the import warns and goes on."""
+    folder = _shadow(tmp_path)
+    code = (
+        "import sys, warnings; sys.path.insert(0, '')\n"
+        "import splinekit\n"
+        "with warnings.catch_warnings(record=True) as caught:\n"
+        "    warnings.simplefilter('always')\n"
+        f"    import {name}\n"
+        f"print({name}.FOREIGN); print(caught[0].category.__name__); print(caught[0].message)\n"
+    )
+    foreign, kind, message = _run(code, cwd=folder).split("\n", 2)
+    assert foreign == "True" and kind == "ShadowedPackageWarning"
+    assert str(folder / name) in message and str(ROOT / name) in message
 
 
 def test_shadowing_can_be_allowed(tmp_path):
