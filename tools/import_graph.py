@@ -26,7 +26,8 @@ PACKAGES = ("splinekit", "exporters", "models")
 # Layers in import order: a module may import from its own layer and from layers above it.
 LAYERS: tuple[tuple[str, tuple[str, ...]], ...] = (
     ("base", ("splinekit.errors", "splinekit._validate", "splinekit.tolerances", "splinekit.limits",
-              "splinekit._atomic", "splinekit._progress", "splinekit._signals", "splinekit._kernels")),
+              "splinekit._atomic", "splinekit._progress", "splinekit._signals", "splinekit._kernels",
+              "splinekit._siblings")),
     ("basis", ("splinekit.basis",)),
     ("curves/surfaces", ("splinekit.curves", "splinekit.surfaces")),
     ("construct/fit/project", ("splinekit.construct", "splinekit.fit", "splinekit.closest")),
