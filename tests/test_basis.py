@@ -350,15 +350,20 @@ def exact_de_casteljau(points, t: Fraction):
 BEZIER_RTOL = 1e-13
 
 
-def _degree25_setup(seed):
+def _degree25_setup(seed, n_random=195):
     rng = np.random.default_rng(seed)
     P = rng.uniform(-1, 1, size=(26, 3)) * np.array([1.0, 10.0, 1e3])
-    ts = np.concatenate([[0.0, 1.0, 0.5, 1e-3, 1 - 1e-3], rng.uniform(0, 1, 195)])
+    ts = np.concatenate([[0.0, 1.0, 0.5, 1e-3, 1 - 1e-3], rng.uniform(0, 1, n_random)])
     return P, ts
 
 
-def test_degree_25_bezier_against_exact_fractions():
-    P, ts = _degree25_setup(25)
+# exact Fractions take about 30 ms per parameter: 45 random parameters by default, 195 under -m slow
+N_RANDOM = [45, pytest.param(195, marks=pytest.mark.slow)]
+
+
+@pytest.mark.parametrize("n_random", N_RANDOM)
+def test_degree_25_bezier_against_exact_fractions(n_random):
+    P, ts = _degree25_setup(25, n_random)
     curve = BezierCurve(P)
     assert curve.degree == 25
     got = curve.evaluate(ts)
@@ -373,8 +378,9 @@ def test_degree_25_bezier_against_exact_fractions():
     np.testing.assert_array_equal(got[1], P[-1])
 
 
-def test_degree_25_rational_bezier_against_exact_fractions():
-    P, ts = _degree25_setup(26)
+@pytest.mark.parametrize("n_random", N_RANDOM)
+def test_degree_25_rational_bezier_against_exact_fractions(n_random):
+    P, ts = _degree25_setup(26, n_random)
     w = np.random.default_rng(27).uniform(0.25, 4.0, size=26)
     curve = BezierCurve(P, weights=w)
     got = curve.evaluate(ts)

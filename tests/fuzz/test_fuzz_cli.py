@@ -291,7 +291,7 @@ def _build_case(argv, name):
         assert os.path.islink(os.path.join(folder, "link-to-file"))
 
 
-@FUZZ
+@FEW  # each case builds and writes files (about 0.2 s): 5000 of them under -m slow
 @given(argv=build_args())
 def test_fuzz_build(fake_registry, argv):
     _build_case(argv, "build")

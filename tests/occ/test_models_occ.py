@@ -46,15 +46,19 @@ def occ_area(shape) -> float:
 # models made of exact B-rep solids run several OCC booleans and fillets per build (seconds each):
 # their parameter-range sweeps are slow tests
 SOLID_MODELS = ("bracket", "block")
+# the mug at its sharpest creases and its finest level sews and integrates thousands of patches in
+# OCC (20 to 80 s each); the other ends of those ranges stay in the default run
+SLOW_EDGES = {("mug", "sharpness", "max"), ("mug", "levels", "max")}
 
 
 def edge_cases():
     """(model name, parameter, value) for the minimum and the maximum of every parameter."""
     cases = []
     for name, module in models.MODELS.items():
-        marks = [pytest.mark.slow] if name in SOLID_MODELS else []
         for p in module.PARAMETERS:
-            for value in (p.minimum, p.maximum):
+            for end, value in (("min", p.minimum), ("max", p.maximum)):
+                slow = name in SOLID_MODELS or (name, p.name, end) in SLOW_EDGES
+                marks = [pytest.mark.slow] if slow else []
                 cases.append(pytest.param(name, p.name, value, id=f"{name}-{p.name}={value:g}", marks=marks))
     return cases
 
