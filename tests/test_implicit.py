@@ -254,16 +254,15 @@ def test_sphere_mesh_volume_within_edge_length_bound():
     R, h = 1.0, 0.06
     mesh = si.sphere((0.2, 0.1, -0.3), R).to_mesh(h)
     assert isinstance(mesh, PolyMesh) and mesh.is_closed and mesh.euler_characteristic == 2
-    # bound: vertices interpolate |p| - R linearly along grid edges of length <= h (error
-    # <= h^2 / (8R)); every point of a triangle lies within e_max / sqrt(3) of a vertex,
+    # bound: vertices interpolate |p| - R linearly along tetrahedron edges of length <= sqrt(3) h
+    # (error <= 3 h^2 / (8R)); every point of a triangle lies within e_max / sqrt(3) of a vertex,
     # where the sphere has fallen away from the vertex's tangent plane by at most
-    # (e_max^2 / 3) / (2R). With e_max <= 1.5 h (checked) the distance to the sphere is
-    # <= h^2 / (8R) + 0.375 h^2 / R = h^2 / (2R), and |dV| <= area * that.
+    # (e_max^2 / 3) / (2R). The triangles lie in grid cells, so e_max <= sqrt(3) h (checked).
     e = max_edge(mesh)
-    assert e <= 1.5 * h
-    bound = mesh.area * (h**2 / (8 * R) + e**2 / (6 * R))
+    assert e <= np.sqrt(3) * h
+    bound = mesh.area * (3 * h**2 / (8 * R) + e**2 / (6 * R))
     assert abs(mesh.volume - 4 / 3 * np.pi * R**3) <= bound
-    assert mesh.deviation <= h**2 / (8 * R) + e**2 / (6 * R)
+    assert mesh.deviation <= 3 * h**2 / (8 * R) + e**2 / (6 * R)
     assert abs(mesh.volume - 4 / 3 * np.pi * R**3) <= mesh.deviation * mesh.area
     # the mesh is outward-facing: positive volume, normals agree with the gradient
     assert mesh.volume > 0
@@ -314,7 +313,7 @@ def test_torus_mesh_is_watertight_of_genus_one_with_closed_form_area_and_volume(
     assert true.max() <= mesh.deviation * (1 + 1e-9)
     assert abs(mesh.volume - 2 * np.pi**2 * R * r**2) <= mesh.deviation * mesh.area
     assert abs(mesh.area / (4 * np.pi**2 * R * r) - 1) <= h**2 / (R - r) / r
-    assert max_edge(mesh) <= 1.5 * h
+    assert max_edge(mesh) <= np.sqrt(3) * h
 
 
 def test_to_mesh_with_explicit_bounds_and_empty_result():

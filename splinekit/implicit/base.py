@@ -332,7 +332,8 @@ class Implicit(ImplicitSurface):
         Parameters
         ----------
         edge_length : float
-            Grid spacing, about the longest triangle edge (model units).
+            Grid spacing (model units); no triangle edge is longer than a cell
+            diagonal, ``sqrt(3) * edge_length``.
         bounds : (lo (3,), hi (3,)), optional
             Box to mesh in; required when :attr:`bounds` is None. The surface
             is clipped (closed off) where it leaves the box.

@@ -170,7 +170,9 @@ class _TriangleBVH:
         cp = np.zeros((n, 3))
         reg = np.zeros(n, dtype=np.int64)
         limit = float(max_distance) ** 2 if np.isfinite(max_distance) else np.inf
-        kernels.nearest(P, limit, self.lo, self.hi, self.tlo, self.thi, self.tri, self.n_leaves, self.m, d2, tri, cp, reg)
+        kernels.nearest(
+            P, limit, self.lo, self.hi, self.tlo, self.thi, self.tri, self.n_leaves, self.m, d2, tri, cp, reg
+        )
         found = tri >= 0
         tri[found] = self.order[tri[found]]
         return np.sqrt(d2), tri, cp, reg
