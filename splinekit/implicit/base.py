@@ -55,9 +55,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from .._validate import as_float_array, as_int
+from .._validate import as_int
 from ..diffgeom.protocol import ImplicitSurface, _nonzero_norm
-from ..errors import ConvergenceError, DomainError, ParameterError, SplineKitError
+from ..errors import ConvergenceError, DomainError, SplineKitError
 from ._checks import check_bounds, check_points, positive  # noqa: F401 - also part of this module's names
 from .meshing import mesh_implicit
 
