@@ -85,7 +85,8 @@ def mesh_rows(quick):
                 row += [f"{m.area / area - 1:+.2e}", f"{m.volume / volume - 1:+.2e}",
                         f"{m.deviation:.2e}", f"{dist(V).max():.2e}"]  # fmt: skip
             rows.append(row)
-    print("| shape | h | to_mesh | triangles | closed | Euler | area rel. err | volume rel. err | deviation | true vertex dist |")
+    print("| shape | h | to_mesh | triangles | closed | Euler | area rel. err | volume rel. err | deviation "
+          "| true vertex dist |")
     print("|---|---:|---:|---:|---|---:|---:|---:|---:|---:|")
     for name, h, t, nf, closed, chi, ea, ev, dev, true in rows:
         print(f"| {name} | {h} | {t * 1e3:.1f} ms | {nf} | {closed} | {chi} | {ea} | {ev} | {dev} | {true} |")

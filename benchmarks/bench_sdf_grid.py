@@ -33,8 +33,8 @@ splinekit there), hence its max |difference| of about 0.5.
 
 The grid is then meshed both ways: marching tetrahedra straight from the
 samples (``SampledSDF.to_mesh()``, including the deviation measurement) and
-the base class's manifold3d ``level_set`` on the interpolant at the grid
-spacing (``SampledSDF.to_mesh(h)``).
+the base class's meshing of the interpolant resampled for edge length ``h``,
+the grid spacing (``SampledSDF.to_mesh(h)``).
 """
 
 from __future__ import annotations
@@ -44,7 +44,7 @@ import time
 
 import numpy as np
 
-from splinekit.implicit.grid import from_mesh
+from splinekit.implicit import from_mesh
 from splinekit.mesh import PolyMesh, primitives
 from splinekit.mesh.geometry import triangulate
 
@@ -116,13 +116,13 @@ def main():
         )
 
     # meshing the grid: marching tetrahedra straight from the samples vs the
-    # base class's manifold3d level_set on the interpolant at the same spacing
+    # base class's meshing of the interpolant resampled for edge length h
     m_grid, t_grid = _timed(sdf.to_mesh)
     h = float(sdf.spacing.min())
     m_ls, t_ls = _timed(sdf.to_mesh, h)
     print(
         f"to_mesh from the samples      : {t_grid:8.3f} s  ({m_grid.n_faces} triangles); "
-        f"level_set at edge {h:.4g}: {t_ls:.3f} s ({m_ls.n_faces} triangles); ratio {t_ls / t_grid:.1f}"
+        f"resampled for edge {h:.4g}: {t_ls:.3f} s ({m_ls.n_faces} triangles); ratio {t_ls / t_grid:.1f}"
     )
 
 

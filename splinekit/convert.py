@@ -230,7 +230,7 @@ def sdf_to_mesh(implicit, edge_length, *, bounds=None, samples: int = DEFAULT_SA
     return Conversion(
         mesh,
         error,
-        "level set (manifold3d)",
+        "grid sampling + marching tetrahedra",
         f"two-sided max distance: {a} mesh points projected onto F = 0, {b} zero-set points to the mesh",
     )
 

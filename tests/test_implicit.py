@@ -254,16 +254,15 @@ def test_sphere_mesh_volume_within_edge_length_bound():
     R, h = 1.0, 0.06
     mesh = si.sphere((0.2, 0.1, -0.3), R).to_mesh(h)
     assert isinstance(mesh, PolyMesh) and mesh.is_closed and mesh.euler_characteristic == 2
-    # bound: vertices interpolate |p| - R linearly along grid edges of length <= h (error
-    # <= h^2 / (8R)); every point of a triangle lies within e_max / sqrt(3) of a vertex,
+    # bound: vertices interpolate |p| - R linearly along tetrahedron edges of length <= sqrt(3) h
+    # (error <= 3 h^2 / (8R)); every point of a triangle lies within e_max / sqrt(3) of a vertex,
     # where the sphere has fallen away from the vertex's tangent plane by at most
-    # (e_max^2 / 3) / (2R). With e_max <= 1.5 h (checked) the distance to the sphere is
-    # <= h^2 / (8R) + 0.375 h^2 / R = h^2 / (2R), and |dV| <= area * that.
+    # (e_max^2 / 3) / (2R). The triangles lie in grid cells, so e_max <= sqrt(3) h (checked).
     e = max_edge(mesh)
-    assert e <= 1.5 * h
-    bound = mesh.area * (h**2 / (8 * R) + e**2 / (6 * R))
+    assert e <= np.sqrt(3) * h
+    bound = mesh.area * (3 * h**2 / (8 * R) + e**2 / (6 * R))
     assert abs(mesh.volume - 4 / 3 * np.pi * R**3) <= bound
-    assert mesh.deviation <= h**2 / (8 * R) + e**2 / (6 * R)
+    assert mesh.deviation <= 3 * h**2 / (8 * R) + e**2 / (6 * R)
     assert abs(mesh.volume - 4 / 3 * np.pi * R**3) <= mesh.deviation * mesh.area
     # the mesh is outward-facing: positive volume, normals agree with the gradient
     assert mesh.volume > 0
@@ -314,7 +313,7 @@ def test_torus_mesh_is_watertight_of_genus_one_with_closed_form_area_and_volume(
     assert true.max() <= mesh.deviation * (1 + 1e-9)
     assert abs(mesh.volume - 2 * np.pi**2 * R * r**2) <= mesh.deviation * mesh.area
     assert abs(mesh.area / (4 * np.pi**2 * R * r) - 1) <= h**2 / (R - r) / r
-    assert max_edge(mesh) <= 1.5 * h
+    assert max_edge(mesh) <= np.sqrt(3) * h
 
 
 def test_to_mesh_with_explicit_bounds_and_empty_result():
@@ -612,3 +611,21 @@ def test_project_uses_the_implicits_own_closest_points_across_csg_seams():
     assert abs(f(r.points)[0]) <= 1e-9
     assert np.allclose(r.points, f.closest_points(p))
     assert r.distances[0] == pytest.approx(np.linalg.norm(r.points[0] - p[0]))
+
+
+def test_implicit_pointcloud_levelset_convert_have_no_import_circles_or_in_function_imports():
+    # the import graph drawn by tools/import_graph.py, restricted to these modules
+    import importlib.util
+    import sys
+    from pathlib import Path
+
+    path = Path(__file__).resolve().parent.parent / "tools" / "import_graph.py"
+    spec = importlib.util.spec_from_file_location("import_graph", path)
+    graph_tool = importlib.util.module_from_spec(spec)
+    sys.modules.setdefault("import_graph", graph_tool)  # its dataclasses look their module up
+    spec.loader.exec_module(graph_tool)
+    mine = ("splinekit.implicit", "splinekit.pointcloud", "splinekit.levelset", "splinekit.convert")
+    g = graph_tool.build()
+    assert not [c for c in graph_tool.cycles(g) if any(m.startswith(mine) for m in c)]
+    assert not [e for e in graph_tool.upward(g) if e[0].startswith(mine)]
+    assert not [e for e in graph_tool.inner_project_imports(g) if e[0].startswith(mine)]

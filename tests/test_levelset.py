@@ -9,7 +9,7 @@ from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 
 from splinekit.errors import ParameterError, SplineKitError
-from splinekit.implicit.grid import SampledSDF
+from splinekit.implicit.sampled import SampledSDF
 from splinekit.levelset import LevelSet
 from splinekit.mesh import PolyMesh
 

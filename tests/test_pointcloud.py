@@ -326,6 +326,38 @@ def test_mesh_distance_matches_trimesh_on_a_torus():
     assert np.allclose(d, ref, rtol=1e-9, atol=1e-12)
 
 
+@pytest.mark.parametrize("compiled", [False, True], ids=["numpy k-d tree", "compiled BVH"])
+def test_both_mesh_distance_searches_match_trimesh_with_signs(compiled, monkeypatch):
+    # the one MeshDistance has two searches for the nearest triangle (module notes): each one is
+    # checked against trimesh, unsigned and signed (trimesh: positive inside)
+    trimesh = pytest.importorskip("trimesh")
+    from splinekit import _kernels
+    from splinekit.errors import NotManifoldError
+    from splinekit.mesh.geometry import triangulate
+
+    if compiled:
+        pytest.importorskip("numba")
+        monkeypatch.setattr(_kernels, "MIN_WORK", 0)
+    else:
+        monkeypatch.setenv("SPLINEKIT_NUMBA", "0")
+    mesh = primitives.torus(24, 12, 1.0, 0.3)
+    tris, _ = triangulate(mesh)
+    P = np.random.default_rng(23).uniform(-1.6, 1.6, (3000, 3))
+    md = MeshDistance.of_mesh(mesh)
+    d, q, _ = md.query(P)
+    tm = trimesh.Trimesh(np.asarray(mesh.vertices), tris, process=False)
+    ref = trimesh.proximity.signed_distance(tm, P)
+    assert np.allclose(d, np.abs(ref), rtol=1e-9, atol=1e-12)
+    assert np.allclose(np.linalg.norm(q - P, axis=1), d, rtol=1e-12, atol=1e-15)
+    signed, found = md.signed(P)
+    assert found.all() and np.allclose(signed, -ref, rtol=1e-9, atol=1e-12)
+    near, found = md.signed(P, max_distance=0.1)
+    assert np.array_equal(found, d <= 0.1) and np.isinf(near[~found]).all()
+    assert np.allclose(near[found], signed[found])
+    with pytest.raises(NotManifoldError, match="not closed"):
+        MeshDistance(np.asarray(mesh.vertices), tris[:-1]).signed(P)
+
+
 # ------------------------------------------------------------------------------------------
 # reconstruction
 

@@ -11,14 +11,11 @@ from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 
 from splinekit.errors import NotManifoldError, ParameterError, SplineKitError
-from splinekit.implicit.grid import (
-    MAX_GRID_POINTS,
-    NarrowBandSDF,
-    SampledSDF,
-    from_mesh,
-    grid_mesh,
-    sample,
-)
+from splinekit.implicit import grid
+from splinekit.implicit.frommesh import from_mesh
+from splinekit.implicit.marching import grid_mesh
+from splinekit.implicit.narrowband import NarrowBandSDF
+from splinekit.implicit.sampled import MAX_GRID_POINTS, SampledSDF, sample
 from splinekit.mesh import PolyMesh, primitives
 from splinekit.mesh.geometry import triangulate
 
@@ -283,11 +280,17 @@ def test_grid_mesh_caps_a_solid_cut_by_the_border_and_handles_empty():
     assert empty.n_faces == 0
 
 
-def test_to_mesh_with_an_edge_length_uses_the_level_set_mesher():
+def test_to_mesh_with_an_edge_length_resamples_the_interpolant():
     g = sample(SPHERE, ((-1.3,) * 3, (1.3,) * 3), 27, interpolation="cubic")
     m = g.to_mesh(0.15)
     assert m.is_closed and m.euler_characteristic == 2
     assert np.abs(np.linalg.norm(m.vertices, axis=1) - 1).max() < 0.03
+
+
+def test_the_old_grid_module_path_still_names_the_same_objects():
+    assert (grid.SampledSDF, grid.NarrowBandSDF, grid.sample, grid.from_mesh, grid.grid_mesh, grid.MAX_GRID_POINTS) == (
+        SampledSDF, NarrowBandSDF, sample, from_mesh, grid_mesh, MAX_GRID_POINTS
+    )
 
 
 # -- bad input ---------------------------------------------------------------------------------------------

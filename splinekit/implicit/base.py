@@ -55,9 +55,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from .._validate import as_float_array, as_int
+from .._validate import as_int
 from ..diffgeom.protocol import ImplicitSurface, _nonzero_norm
-from ..errors import ConvergenceError, DomainError, ParameterError, SplineKitError
+from ..errors import ConvergenceError, DomainError, SplineKitError
 from ._checks import check_bounds, check_points, positive  # noqa: F401 - also part of this module's names
 from .meshing import mesh_implicit
 
@@ -332,7 +332,8 @@ class Implicit(ImplicitSurface):
         Parameters
         ----------
         edge_length : float
-            Grid spacing, about the longest triangle edge (model units).
+            Grid spacing (model units); no triangle edge is longer than a cell
+            diagonal, ``sqrt(3) * edge_length``.
         bounds : (lo (3,), hi (3,)), optional
             Box to mesh in; required when :attr:`bounds` is None. The surface
             is clipped (closed off) where it leaves the box.

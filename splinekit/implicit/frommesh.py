@@ -12,7 +12,6 @@ slip of the pseudo-normal test.
 from __future__ import annotations
 
 import numpy as np
-from scipy import ndimage
 
 from ..errors import NotManifoldError, ParameterError
 from ..mesh.geometry import triangulate
@@ -123,6 +122,8 @@ def _component_signs(d, found, gap):
     sign (over samples with a known sign) of their 6-connected component of
     samples farther than ``gap``, which cannot cross the surface (a crossing
     between two neighbours puts one of them within half a step of it)."""
+    from scipy import ndimage  # imported on use: it takes longer to import than the rest of implicit/
+
     near = found & (np.abs(d) <= gap)
     far = ~near
     labels, count = ndimage.label(far)

@@ -1,13 +1,14 @@
 """Meshing an implicit: its zero set as a closed triangle mesh.
 
 :func:`mesh_implicit` (also :meth:`Implicit.to_mesh`) samples ``F`` on a regular grid of
-spacing at most ``GRID_PER_EDGE * edge_length`` (per axis ``n = ceil(extent / step) + 1``
-points, spacing ``extent / (n - 1)``), vectorized in chunks of x-slabs, and hands the samples to
+spacing at most ``edge_length`` (per axis ``n = ceil(extent / edge_length) + 1`` points,
+spacing ``extent / (n - 1)``), vectorized in chunks of x-slabs, and hands the samples to
 :func:`~splinekit.implicit.marching.grid_mesh` (marching tetrahedra on the Kuhn split of every
 cell: the zero set of the piecewise-linear interpolant, a closed 2-manifold, outward-facing).
-That is splinekit's one iso-surface mesher; it replaced manifold3d's ``Manifold.level_set``,
-which called back into Python once per grid point and took several times longer for the same
-accuracy (``benchmarks/bench_meshing.py``).
+That is splinekit's one iso-surface mesher. It replaced manifold3d's ``Manifold.level_set``
+(marching tetrahedra on a body-centred grid, called back once per grid point): at the same
+edge length this one is several times faster and gives about 1.7 times as many triangles and
+about twice the deviation, still ``O(edge_length^2)`` (``benchmarks/bench_meshing.py``).
 
 The mesh's deviation from the surface is measured afterwards: the largest
 estimated distance to ``F = 0`` over its vertices, edge midpoints and
@@ -33,21 +34,23 @@ from ..mesh.topology import Topology
 from ._checks import check_bounds, positive
 from .marching import grid_mesh
 
-__all__ = ["CHUNK", "MAX_GRID_POINTS", "PADDING", "ImplicitMesh", "mesh_implicit"]
+__all__ = [
+    "BYTES_PER_GRID_POINT",
+    "CHUNK",
+    "MAX_GRID_POINTS",
+    "PADDING",
+    "ImplicitMesh",
+    "deviation",
+    "mesh_implicit",
+]
 
 MAX_GRID_POINTS = 100_000_000
-"""Largest sampling grid accepted (800 MB of values); beyond it ask for a longer edge."""
+"""Largest sampling grid accepted (800 MB of values); beyond it ask for a longer edge. The memory
+budget (:mod:`splinekit.limits`) usually refuses a smaller grid first."""
 
 BYTES_PER_GRID_POINT = 48
 """Peak memory per grid point charged to the memory budget (:mod:`splinekit.limits`): the
 values, the inside mask and cell counts of the mesher, and the evaluation chunks."""
-
-GRID_PER_EDGE = 2.0**-0.5
-"""Grid spacing per requested edge length. Marching tetrahedra on the Kuhn split cuts triangles
-up to a cell's diagonal (about 1.7 spacings) long, and its error is about twice that of a
-body-centred grid of the same spacing; at ``edge_length / sqrt(2)`` the longest edge is about
-``1.2 edge_length`` and the deviation that of manifold3d's ``level_set`` at ``edge_length`` (the
-mesher this one replaced; ``benchmarks/bench_meshing.py``)."""
 
 PADDING = 2.0
 """Cells of margin added around an implicit's own bounds, so that the surface
@@ -148,8 +151,12 @@ def deviation(implicit, vertices, triangles) -> float:
     and centroids of a triangle mesh ``(V, 3)``, ``(T, 3)`` (module notes)."""
     if len(triangles) == 0:
         return 0.0
-    a, b, c = (vertices[triangles[:, k]] for k in range(3))
-    pts = np.concatenate([vertices, 0.5 * (a + b), 0.5 * (b + c), 0.5 * (c + a), (a + b + c) / 3.0])
+    # each edge once (two triangles share it): the same points as per triangle, a third fewer
+    ends = np.sort(triangles[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1)
+    edges = np.unique(ends[:, 0] * len(vertices) + ends[:, 1])
+    a, b = vertices[edges // len(vertices)], vertices[edges % len(vertices)]
+    centroids = vertices[triangles].mean(axis=1)
+    pts = np.concatenate([vertices, 0.5 * (a + b), centroids])
     worst = 0.0
     for start in range(0, len(pts), CHUNK):
         q = pts[start : start + CHUNK]
@@ -173,7 +180,9 @@ def mesh_implicit(implicit, edge_length, bounds=None) -> ImplicitMesh:
     ----------
     implicit : Implicit
     edge_length : float
-        Grid spacing in model units (> 0), about the longest edge of the result.
+        Grid spacing in model units (> 0): the largest step of the sampling
+        grid. Triangles lie in the grid's cells, so no edge is longer than a
+        cell diagonal, ``sqrt(3) * edge_length``.
     bounds : (lo (3,), hi (3,)), optional
         The box to mesh; default the implicit's own bounds grown by
         ``PADDING`` cells. Required for unbounded implicits (a plane, a
@@ -217,7 +226,7 @@ def mesh_implicit(implicit, edge_length, bounds=None) -> ImplicitMesh:
                 f"got lo={lo.tolist()}, hi={hi.tolist()}"
             )
     lo, hi = np.asarray(lo, float), np.asarray(hi, float)
-    n, spacing = _grid_axes(lo, hi, h * GRID_PER_EDGE)
+    n, spacing = _grid_axes(lo, hi, h)
     values = _sample(implicit, lo, spacing, n)
     if bounds is None:
         mesh = grid_mesh(values, lo, spacing)

@@ -22,6 +22,7 @@ for trilinear, so discontinuous across cell faces). Outside the grid box the
 value is ``F(c) + |p - c|`` with ``c`` the nearest point of the box, and the
 gradient its derivative.
 """
+
 from __future__ import annotations
 
 import numpy as np
@@ -44,14 +45,13 @@ _CHUNK = 1 << 18  # points per evaluation block (bounds temporary memory)
 
 _INTERPOLATIONS = ("linear", "cubic")
 
-
-# -- input checks ---------------------------------------------------------------------------------
 BYTES_PER_GRID_POINT = 64
 """Peak memory per grid sample charged to the memory budget (:mod:`splinekit.limits`):
 the float64 values plus the distances, flags, signs and evaluation temporaries of
-:func:`from_mesh` (the costliest builder)."""
+:func:`~splinekit.implicit.frommesh.from_mesh` (the costliest builder)."""
 
 
+# -- input checks ---------------------------------------------------------------------------------
 def _check_count(shape) -> None:
     count = int(np.prod([int(s) for s in shape], dtype=object))
     if count > MAX_GRID_POINTS:
@@ -301,12 +301,11 @@ class SampledSDF(Implicit):
         """The zero set as a closed, outward-oriented triangle mesh.
 
         With ``edge_length`` and ``bounds`` None (the default) the mesh comes
-        straight from the samples (:func:`grid_mesh`: marching tetrahedra on
-        the grid, the zero set of the piecewise-linear interpolant on the Kuhn
-        triangulation of each cell; about 25 times faster than the level-set
-        sampling at the same spacing).
+        straight from the samples (:func:`~splinekit.implicit.marching.grid_mesh`:
+        marching tetrahedra on the grid, the zero set of the piecewise-linear
+        interpolant on the Kuhn triangulation of each cell; no resampling).
         With an ``edge_length`` (or ``bounds``) it is the base class's
-        meshing of the interpolant resampled at that spacing
+        meshing of the interpolant resampled for that edge length
         (:func:`~splinekit.implicit.meshing.mesh_implicit`). Either way the result is an
         :class:`~splinekit.implicit.meshing.ImplicitMesh` whose ``deviation``
         is measured against this grid's interpolant.

@@ -170,16 +170,18 @@ class _TriangleBVH:
         cp = np.zeros((n, 3))
         reg = np.zeros(n, dtype=np.int64)
         limit = float(max_distance) ** 2 if np.isfinite(max_distance) else np.inf
-        kernels.nearest(P, limit, self.lo, self.hi, self.tlo, self.thi, self.tri, self.n_leaves, self.m, d2, tri, cp, reg)
+        kernels.nearest(
+            P, limit, self.lo, self.hi, self.tlo, self.thi, self.tri, self.n_leaves, self.m, d2, tri, cp, reg
+        )
         found = tri >= 0
         tri[found] = self.order[tri[found]]
         return np.sqrt(d2), tri, cp, reg
 
 
 def _pseudo_normals(V, T):
-    """Angle-weighted pseudo-normals of a closed triangle mesh ``(face (m, 3), edge (m, 3, 3), vertex (n, 3))``;
-    the edge array holds, per triangle and local edge (01, 12, 20), the sum of
-    the unit normals of the edge's two triangles."""
+    """Angle-weighted pseudo-normals ``(face (m, 3), edge (m, 3, 3), vertex (n, 3))`` of a closed
+    triangle mesh; the edge array holds, per triangle and local edge (01, 12, 20), the sum of the
+    unit normals of the edge's two triangles. NotManifoldError when an edge has not two triangles."""
     a, b, c = V[T[:, 0]], V[T[:, 1]], V[T[:, 2]]
     n = np.cross(b - a, c - a)
     ln = np.linalg.norm(n, axis=1)
@@ -210,7 +212,6 @@ def _pseudo_normals(V, T):
     weighted = (fn[:, None, :] * ang[:, :, None]).reshape(-1, 3)
     vn = np.stack([np.bincount(corner_v, weights=weighted[:, k], minlength=len(V)) for k in range(3)], axis=1)
     return fn, edge_n, vn
-
 
 
 class MeshDistance:
