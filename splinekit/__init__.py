@@ -5,8 +5,6 @@ The math core imports only numpy and scipy; the OpenCascade bridge
 booleans import manifold3d the same way.
 """
 
-import sys as _sys
-
 from . import _signals
 
 _signals.install_for_command()  # the `splinekit` command handles SIGINT/SIGTERM from its first moment
@@ -46,7 +44,6 @@ from .diffgeom.curves import ParametricCurve, frenet_frame, rotation_minimizing_
 from .diffgeom.curves import curvature as curve_curvature
 from .diffgeom.curves import torsion as curve_torsion
 from .fit import approximate_curve, approximate_surface, fit_surface, interpolate_curve, interpolate_surface
-from .interop import occ
 from .interop.booleans import difference, intersection, union, union_all
 from .mesh import PolyMesh
 from .subdiv import Refinement, SubdivisionSurface, subdivide, subdivision_matrix
@@ -54,14 +51,13 @@ from .surfaces import BezierSurface, BSplineSurface, NurbsSurface, SplineSurface
 from .tessellation import Tessellation, tessellate
 from .tolerances import Tolerances
 
-# ``import splinekit.occ`` / ``from splinekit.occ import to_occ`` as the design notes spell it
-_sys.modules[__name__ + ".occ"] = occ
-
-_LAZY_SUBMODULES = ("implicit", "pointcloud", "levelset", "convert")
+# ``splinekit.occ`` (the OpenCascade bridge, splinekit.interop.occ under its short name) loads the
+# B-rep layer with it: it is imported on first use too
+_LAZY_SUBMODULES = ("implicit", "pointcloud", "levelset", "convert", "occ")
 
 
 def __getattr__(name):
-    """``splinekit.implicit``, ``.pointcloud``, ``.levelset`` and ``.convert`` are
+    """``splinekit.implicit``, ``.pointcloud``, ``.levelset``, ``.convert`` and ``.occ`` are
     imported on first use, keeping ``import splinekit`` fast."""
     if name in _LAZY_SUBMODULES:
         import importlib
