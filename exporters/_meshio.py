@@ -20,9 +20,8 @@ import stat
 
 import numpy as np
 
-from splinekit import limits
+from splinekit import _kernels, limits
 from splinekit._atomic import atomic_write, checked_path, write_target
-from splinekit._signals import reraise_interrupt
 from splinekit.errors import (
     FileFormatError,
     MeshTopologyError,
@@ -138,13 +137,11 @@ def triangle_normals(P: np.ndarray, scale: bool = True) -> np.ndarray:
     return n
 
 
-MIN_COMPILED_TRIANGLES = 20_000
+MIN_COMPILED_TRIANGLES = _kernels.MIN_WORK
 """Binary STL records of at least this many triangles are filled by a numba kernel (one pass, no
-temporaries) when numba is importable and ``SPLINEKIT_NUMBA`` is not ``0``; smaller meshes, and
-every mesh without numba, take the numpy path. Both give the same bytes (the tests compare them):
-the numpy path computes the same float64 normal of the float32 triangle."""
-
-_compiled: dict = {}
+temporaries, :mod:`exporters._stl_kernel`) when :mod:`splinekit._kernels` serves compiled code;
+smaller meshes, and every mesh without numba, take the numpy path. Both give the same bytes (the
+tests compare them): the numpy path computes the same float64 normal of the float32 triangle."""
 
 
 def stl_fill_kernel(n_triangles: int):
@@ -154,45 +151,8 @@ def stl_fill_kernel(n_triangles: int):
     records: normal then the three corners, all rounded to float32 before the normal is computed,
     as the numpy path does).
     """
-    if n_triangles < MIN_COMPILED_TRIANGLES or os.environ.get("SPLINEKIT_NUMBA", "1") == "0":
-        return None
-    if "stl" not in _compiled:
-        try:
-            _compiled["stl"] = _build_stl_kernel()
-        except ImportError as exc:  # numba absent or broken: numpy serves
-            reraise_interrupt(exc)  # but an interrupted import is an interrupt, not a broken numba
-            _compiled["stl"] = None
-    return _compiled["stl"]
-
-
-def _build_stl_kernel():
-    from numba import njit
-
-    @njit(cache=True, nogil=True)
-    def fill(V, tris, out):  # pragma: no cover - compiled
-        f0 = np.float32(0.0)
-        for t in range(tris.shape[0]):
-            a, b, c = tris[t, 0], tris[t, 1], tris[t, 2]
-            ax, ay, az = np.float32(V[a, 0]), np.float32(V[a, 1]), np.float32(V[a, 2])
-            bx, by, bz = np.float32(V[b, 0]), np.float32(V[b, 1]), np.float32(V[b, 2])
-            cx, cy, cz = np.float32(V[c, 0]), np.float32(V[c, 1]), np.float32(V[c, 2])
-            # the normal of the float32 triangle, in float64 (float32 coordinates cannot overflow it)
-            ux, uy, uz = np.float64(bx) - ax, np.float64(by) - ay, np.float64(bz) - az
-            vx, vy, vz = np.float64(cx) - ax, np.float64(cy) - ay, np.float64(cz) - az
-            nx = uy * vz - uz * vy
-            ny = uz * vx - ux * vz
-            nz = ux * vy - uy * vx
-            length = np.sqrt(nx * nx + ny * ny + nz * nz)
-            r = out[t]
-            if length > 0 and np.isfinite(length):
-                r[0], r[1], r[2] = nx / length, ny / length, nz / length
-            else:
-                r[0], r[1], r[2] = f0, f0, f0
-            r[3], r[4], r[5] = ax, ay, az
-            r[6], r[7], r[8] = bx, by, bz
-            r[9], r[10], r[11] = cx, cy, cz
-
-    return fill
+    K = _kernels.load("exporters._stl_kernel", work=n_triangles)
+    return None if K is None else K.fill
 
 
 # -- writing ----------------------------------------------------------------------------------

@@ -93,26 +93,20 @@ class _Model:
                 self._fail(f"object id {oid!r} is used twice")
             data = oid
             self.objects[oid] = {"mesh": None, "components": None}
-        elif local == "mesh":
+        elif local in ("mesh", "components"):  # an object holds one of them, once
             if parent != "object":
-                self._fail("a <mesh> outside an <object>")
+                self._fail(f"a <{local}> outside an <object>")
             data = self.stack[-1][1]
-            if self.objects[data]["mesh"] is not None or self.objects[data]["components"] is not None:
+            obj = self.objects[data]
+            if obj["mesh"] is not None or obj["components"] is not None:
                 self._fail(f"object {data!r} has more than one <mesh> or <components>")
-            self.objects[data]["mesh"] = [None, None]
+            obj[local] = [None, None] if local == "mesh" else []  # mesh: vertex and triangle ranges
         elif local in ("vertices", "triangles"):
             if parent != "mesh":
                 self._fail(f"a <{local}> outside a <mesh>")
             if self.objects[self.stack[-1][1]]["mesh"][0 if local == "vertices" else 1] is not None:
                 self._fail(f"a <mesh> has more than one <{local}>")
             data = self._flushed_count(local)
-        elif local == "components":
-            if parent != "object":
-                self._fail("a <components> outside an <object>")
-            data = self.stack[-1][1]
-            if self.objects[data]["mesh"] is not None or self.objects[data]["components"] is not None:
-                self._fail(f"object {data!r} has more than one <mesh> or <components>")
-            self.objects[data]["components"] = []
         elif local == "component":
             if parent != "components":
                 self._fail("a <component> outside <components>")

@@ -28,7 +28,8 @@ from splinekit import limits
 from splinekit.errors import FileFormatError, ParameterError, SplineKitError
 
 from . import _meshio
-from ._threemf_model import (  # noqa: F401  (the limits MAX_COMPONENT_DEPTH, MAX_RELS_BYTES, MODEL_BYTES_FACTOR stay importable here)
+# the reader's limits (MAX_..., MODEL_BYTES_FACTOR) stay importable from this module
+from ._threemf_model import (  # noqa: F401
     _CORE_NS,
     _MODEL_TYPE,
     MAX_COMPONENT_DEPTH,

@@ -35,7 +35,6 @@ need them, so ``import splinekit`` stays fast and works without them.
 """
 
 import importlib as _importlib
-import sys as _sys
 
 from . import _signals
 
@@ -76,7 +75,6 @@ from .diffgeom.curves import ParametricCurve, frenet_frame, rotation_minimizing_
 from .diffgeom.curves import curvature as curve_curvature
 from .diffgeom.curves import torsion as curve_torsion
 from .fit import approximate_curve, approximate_surface, fit_surface, interpolate_curve, interpolate_surface
-from .interop import occ
 from .interop.booleans import difference, intersection, union, union_all
 from .mesh import PolyMesh
 from .subdiv import Refinement, SubdivisionSurface, subdivide, subdivision_matrix
@@ -84,17 +82,15 @@ from .surfaces import BezierSurface, BSplineSurface, NurbsSurface, SplineSurface
 from .tessellation import Tessellation, tessellate
 from .tolerances import Tolerances
 
-_siblings.install()  # `import models` / `import exporters` fail loudly when another package shadows ours
+_siblings.install()  # splinekit's own imports of models/exporters refuse another package of that name
 
-# ``import splinekit.occ`` / ``from splinekit.occ import to_occ`` as the design notes spell it
-_sys.modules[__name__ + ".occ"] = occ
-
-# Subpackages imported on first attribute access, keeping ``import splinekit`` fast.
-_LAZY_SUBMODULES = ("brep", "convert", "implicit", "levelset", "plot", "pointcloud")
+# Subpackages imported on first attribute access, keeping ``import splinekit`` fast; ``splinekit.occ``
+# (the OpenCascade bridge, splinekit.interop.occ under its short name) loads the B-rep layer with it
+_LAZY_SUBMODULES = ("brep", "convert", "implicit", "levelset", "occ", "plot", "pointcloud")
 
 
 def __getattr__(name):
-    """``splinekit.brep``, ``.implicit``, ``.pointcloud``, ``.levelset``, ``.convert``
+    """``splinekit.brep``, ``.implicit``, ``.pointcloud``, ``.levelset``, ``.convert``, ``.occ``
     and ``.plot`` are imported on first use."""
     if name in _LAZY_SUBMODULES:
         return _importlib.import_module(f"{__name__}.{name}")

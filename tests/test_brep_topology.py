@@ -141,6 +141,8 @@ def test_pair_by_samples_finds_the_edges_it_was_built_from(seed, n_edges):
     order = rng.permutation(len(uses))
     labels = pair_by_samples(np.array(uses)[order], tol)
     assert _partition(labels) == _partition(np.array(truth)[order])
+    # numbered 0, 1, 2, ... in order of each group's first use
+    assert np.array_equal(labels[np.sort(np.unique(labels, return_index=True)[1])], np.arange(labels.max() + 1))
 
 
 def test_pair_by_samples_needs_every_sample_within_the_larger_tolerance():

@@ -299,6 +299,9 @@ def test_binary_stl_large_mesh_both_paths(tmp_path, monkeypatch, numba):
     monkeypatch.setenv("SPLINEKIT_NUMBA", numba)
     mesh = primitives.icosphere(5, radius=3.0)
     assert mesh.n_faces >= _meshio.MIN_COMPILED_TRIANGLES
+    # numba is a core dependency: the flag alone decides which path writes the records
+    assert (_meshio.stl_fill_kernel(mesh.n_faces) is not None) == (numba == "1")
+    assert _meshio.stl_fill_kernel(_meshio.MIN_COMPILED_TRIANGLES - 1) is None
     exporters.export_stl(tmp_path / "big.stl", mesh)
     rec = np.frombuffer((tmp_path / "big.stl").read_bytes(), offset=84,
                         dtype=np.dtype([("n", "<f4", 3), ("p", "<f4", (3, 3)), ("a", "<u2")]))

@@ -305,6 +305,19 @@ def test_3mf_components_are_placed_like_trimesh_places_them(tmp_path):
     np.testing.assert_allclose(np.sort(other.vertices, axis=0), np.sort(mesh.vertices, axis=0), rtol=1e-9, atol=1e-9)
 
 
+@pytest.mark.parametrize("resources, message", [
+    (f'<mesh></mesh>{mesh_object(1, TETRA_V, TETRA_T)}', r"a <mesh> outside an <object>"),
+    (f'<components/>{mesh_object(1, TETRA_V, TETRA_T)}', r"a <components> outside an <object>"),
+    ('<object id="1"><mesh></mesh><components/></object>', r"object '1' has more than one <mesh> or <components>"),
+    ('<object id="1"><components/><mesh></mesh></object>', r"object '1' has more than one <mesh> or <components>"),
+    ('<object id="1"><mesh></mesh><mesh></mesh></object>', r"object '1' has more than one <mesh> or <components>"),
+])
+def test_3mf_misplaced_mesh_or_components_is_refused(tmp_path, resources, message):
+    """An object holds one <mesh> or one <components>, and only an object holds either."""
+    path = write_3mf(tmp_path / "odd.3mf", model_xml(resources, '<item objectid="1"/>'))
+    with pytest.raises(FileFormatError, match=r"odd\.3mf.*" + message + r" at line 1"):
+        exporters.import_3mf(path)
+
 def test_3mf_transform_that_overflows_is_refused(tmp_path):
     big = "1e300 0 0 0 1e300 0 0 0 1e300 0 0 0"
     path = write_3mf(tmp_path / "inf.3mf", model_xml(mesh_object(1, TETRA_V * 1e10, TETRA_T), f'<item objectid="1" transform="{big}"/>'))

@@ -3,10 +3,10 @@
 from __future__ import annotations
 
 from ..errors import ParameterError
-from .face import TrimmedFace
 from . import mass
 from .check import Checkable, check_shell, check_solid
 from .classify import contains
+from .face import TrimmedFace
 from .topology import TopologyQueries, shell_topology
 
 __all__ = ["Shell", "Solid"]

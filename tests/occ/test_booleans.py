@@ -71,6 +71,7 @@ from splinekit.errors import (
     ParameterError,
     SplineKitError,
 )
+from splinekit.interop import booleans
 from splinekit.interop.booleans import (
     difference,
     from_manifold,
@@ -402,19 +403,17 @@ def test_manifold_in_error_state_raises_backend_error():
 
 def test_tessellate_is_called_with_tolerance(monkeypatch):
     calls = []
-    fake = type(sys)("splinekit.tessellation")
 
     def tessellate(obj, tolerance):
         calls.append((obj, tolerance))
         return icosphere(2, center=(0.5, 0, 0))
 
-    fake.tessellate = tessellate
-    monkeypatch.setitem(sys.modules, "splinekit.tessellation", fake)
+    monkeypatch.setattr(booleans, "tessellate", tessellate)  # the name booleans calls
     token = object()
     r = union(icosphere(2), token, tolerance=0.01)
     assert calls == [(token, 0.01)]
     assert r.volume == pytest.approx(union(icosphere(2), icosphere(2, center=(0.5, 0, 0))).volume, rel=1e-12)
-    fake.tessellate = lambda obj, tolerance: "not a mesh"
+    monkeypatch.setattr(booleans, "tessellate", lambda obj, tolerance: "not a mesh")
     with pytest.raises(BackendError, match="str"):
         union(icosphere(1), token)
 
