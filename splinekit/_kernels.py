@@ -26,6 +26,8 @@ import importlib
 import os
 from types import ModuleType
 
+from ._signals import reraise_interrupt
+
 MIN_WORK = 20_000
 """Smallest amount of work (points, faces, cells: the caller's unit) sent to compiled kernels."""
 
@@ -48,6 +50,7 @@ def load(module: str, work: int | None = None) -> ModuleType | None:
     if module not in _modules:
         try:
             _modules[module] = importlib.import_module(module)
-        except ImportError:  # numba absent or broken: the numpy path serves
+        except ImportError as exc:  # numba absent or broken: the numpy path serves
+            reraise_interrupt(exc)  # ...but Ctrl-C while numba initialises stays an interrupt
             _modules[module] = None
     return _modules[module]
