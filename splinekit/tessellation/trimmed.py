@@ -40,10 +40,15 @@ from __future__ import annotations
 import numpy as np
 
 from .. import limits
-from ..errors import ParameterError
+from ..errors import BackendError, ParameterError
+from .batch import CurveBatch, SurfaceBatch
+from .cells import second_derivative_bounds
+from .counts import initial_counts
 from .edges import _face_name, check_domains, edge_uses, group_uses, sample_groups
+from .grids import span_params
 from .result import Tessellation
 from .surfaces import BYTES_PER_TRIANGLE
+from .welding import close_pairs, components
 
 __all__ = ["tessellate_faces"]
 
@@ -70,8 +75,6 @@ def _triangulator():
     try:
         import triangle
     except ImportError as exc:  # pragma: no cover - a core dependency
-        from ..errors import BackendError
-
         raise BackendError("tessellating trimmed faces needs the 'triangle' package: pip install triangle") from exc
     return triangle
 
@@ -87,11 +90,9 @@ def _face_grids(batch, tol, angle_tol, bounds=None):
     span row (column) the largest a-priori count of its cells, times :data:`GRID_FRACTION`, then
     lowered where the grid's MEASURED chord error allows (:func:`_measured_counts`)
     (``bounds``: the cell sets' second-derivative bounds, when already known)."""
-    from .surfaces import _initial_counts, _span_params
-
-    nu, nv = _initial_counts(batch.cellsets, tol, angle_tol, bounds)
+    nu, nv = initial_counts(batch.cellsets, tol, angle_tol, bounds)
     if angle_tol is not None:  # the angle criterion's own counts: a floor for the measured ones
-        au, av = _initial_counts(batch.cellsets, np.inf, angle_tol, bounds)
+        au, av = initial_counts(batch.cellsets, np.inf, angle_tol, bounds)
     else:
         au, av = np.ones_like(nu), np.ones_like(nv)
     counts = []
@@ -108,8 +109,8 @@ def _face_grids(batch, tol, angle_tol, bounds=None):
     for k, (cu, cv) in enumerate(lowered):
         bu, bv = batch.bu[k], batch.bv[k]
         g = _FaceGrid()
-        g.us, _ = _span_params(bu, cu)
-        g.vs, _ = _span_params(bv, cv)
+        g.us, _ = span_params(bu, cu)
+        g.vs, _ = span_params(bv, cv)
         # the scaled plane stays the a-priori one: edges keep their sampling, and Delaunay its
         # metric near collapsed edges (a cone's apex), where a coarser one flips triangles
         g.scale = np.array([counts[k][0].sum() / (bu[-1] - bu[0]), counts[k][1].sum() / (bv[-1] - bv[0])])
@@ -126,12 +127,10 @@ def _measured_counts(batch, counts, tol):
     that it becomes :data:`MEASURED_FRACTION` of ``tol``, never above the a-priori count nor
     below the angle criterion's (``counts``: per face ``(cu, cv, angle cu, angle cv)``).
     One batch evaluation of every face's grid. Returns ``[(cu, cv)]``."""
-    from .surfaces import _span_params
-
     fs, us, vs, grids = [], [], [], []
     for k, (cu, cv, _, _) in enumerate(counts):
-        u, _ = _span_params(batch.bu[k], cu)
-        v, _ = _span_params(batch.bv[k], cv)
+        u, _ = span_params(batch.bu[k], cu)
+        v, _ = span_params(batch.bv[k], cv)
         U, V = np.meshgrid(u, v, indexing="ij")
         fs.append(np.full(U.size, k))
         us.append(U.ravel())
@@ -236,11 +235,9 @@ def _loops(faces, uses, groups, samples, vid_of_group, scales):
 def _edge_vertices(samples, size, tolerance):
     """Mesh vertices of the edge samples: end points welded (within the weld distance), inner
     samples numbered after them. Returns ``(vid_of_group, xyz (n, 3))``."""
-    from .surfaces import _close_pairs, _components
-
     ends = np.concatenate([[s.points[0], s.points[-1]] for s in samples]) if samples else np.zeros((0, 3))
-    pairs = _close_pairs(ends, max(WELD * size, 10.0 * tolerance))
-    lab = _components(len(ends), pairs[:, 0], pairs[:, 1]) if len(pairs) else np.arange(len(ends))
+    pairs = close_pairs(ends, max(WELD * size, 10.0 * tolerance))
+    lab = components(len(ends), pairs[:, 0], pairs[:, 1]) if len(pairs) else np.arange(len(ends))
     first, end_vid = np.unique(lab, return_index=True, return_inverse=True)[1:]
     end_vid = end_vid.reshape(-1, 2)
     xyz = [ends[first]]
@@ -361,14 +358,12 @@ def _keep_inside(T, N, nxt):
     the label spreads over triangles connected across non-trim edges. Returns ``(keep (t,)
     bool, conflict, along (t, 3) bool)``: ``conflict`` is a triangle whose region is both inside
     and outside (crossing or badly nested loops), or -1; ``along`` marks edges on a trim."""
-    from .surfaces import _components
-
     a, b = _half_edges(T)
     fwd = nxt[a] == b  # nxt of an interior point is -1, never a point index
     rev = nxt[b] == a
     along = fwd | rev
     t, k = np.nonzero((N >= 0) & ~along)
-    lab = _components(len(T), t, N[t, k])
+    lab = components(len(T), t, N[t, k])
     inside = np.zeros(len(T), dtype=bool)
     outside = np.zeros(len(T), dtype=bool)
     inside[lab[np.nonzero(fwd)[0]]] = True
@@ -387,9 +382,6 @@ class _Prepared:
     __slots__ = ("faces", "size", "batch", "bounds", "edge_tol", "uses", "pcurves", "groups", "memo")
 
     def __init__(self, faces, size):
-        from .batch import CurveBatch, SurfaceBatch
-        from .cells import second_derivative_bounds
-
         self.faces, self.size = tuple(faces), size
         self.batch = SurfaceBatch([face.surface for face in faces])
         self.bounds = [second_derivative_bounds(cs) for cs in self.batch.cellsets]
