@@ -26,10 +26,9 @@ from .._validate import (
     homogeneous,
     overflow_safe,
 )
-from .. import limits
+from .. import _kernels, limits
 from ..basis import algebra
 from ..basis.bspline import basis_ders_t, basis_funs_t, combine, find_span, span_bounds
-from ..basis.jit import kernels
 from ..basis.knots import clamped_uniform, domain, is_clamped, reparametrized, validate_knots
 from ..basis.rational import rational_surface_derivatives
 from ..errors import DomainError, KnotRemovalError, KnotVectorError, ParameterError
@@ -209,7 +208,7 @@ class SplineSurface:
 
     def _points(self, fu, fv):
         """Points ``(n, dim)`` at checked flat parameters (no overflow handling)."""
-        jit = kernels(fu.size)
+        jit = _kernels.load("splinekit.basis._numba_kernels", work=3 * fu.size // 2)  # a surface point: 1.5 curve points
         if jit is not None:
             pts = np.empty((fu.size, self.dim))
             spans = (*span_bounds(self._pu, self._ku), *span_bounds(self._pv, self._kv))
@@ -305,7 +304,7 @@ class SplineSurface:
         """
         nu, nv, k = self._coefs.shape
         mu, mv = su.size, sv.size
-        jit = kernels(mu * mv)
+        jit = _kernels.load("splinekit.basis._numba_kernels", work=mu * mv // 16)  # a grid point: 1/16 of a curve point
         if jit is not None:
             out = np.empty((mu, mv, k - 1 if divide else k))
             Nv_vals = np.ascontiguousarray(Nv_vals)
@@ -424,7 +423,7 @@ class SplineSurface:
         if self._unit_sized() is not self:
             return self._unit_sized().normal_grid(us, vs)
         (su, Nu), (sv, Nv) = self._grid_basis(us, vs, 1)
-        jit = kernels(su.size * sv.size)
+        jit = _kernels.load("splinekit.basis._numba_kernels", work=su.size * sv.size // 2)  # a grid normal: half a curve point
         if jit is not None:
             out = np.empty((su.size, sv.size, 3))
             weak = np.empty((su.size, sv.size), dtype=np.bool_)
