@@ -3,11 +3,11 @@
 from __future__ import annotations
 
 import math
+import sys
 
 import numpy as np
 
 from .._validate import as_int, as_real
-from ..brep import Shell, Solid, TrimmedFace
 from ..curves import BezierCurve, SplineCurve
 from ..errors import ParameterError
 from ..mesh import PolyMesh
@@ -29,6 +29,12 @@ triangle edge (tangents of a polyline segment); OpenCascade's BRepMesh default."
 def _brep_faces(obj):
     """The trimmed faces of a TrimmedFace, Shell, Solid or a list of them, or None when ``obj``
     is none of these."""
+    # B-rep objects exist only once splinekit.brep is imported; not importing it here keeps
+    # ``import splinekit`` fast (brep loads scipy.spatial)
+    brep = sys.modules.get("splinekit.brep")
+    if brep is None:
+        return None
+    TrimmedFace, Shell, Solid = brep.TrimmedFace, brep.Shell, brep.Solid
     kinds = (TrimmedFace, Shell, Solid)
     if isinstance(obj, kinds):
         obj = [obj]
