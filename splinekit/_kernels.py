@@ -14,13 +14,13 @@ module for it::
 
 ``work`` is the size of the job in point-equivalents: one unit is about what the numpy path
 spends on one point of a cubic curve (a microsecond or so), so a caller whose unit is cheaper
-or dearer scales its count (a grid point of a surface costs about a twentieth of that, a point
+or dearer scales its count (a grid point of a surface costs about a sixteenth of that, a point
 with its full curvature about three).
 
 One cache policy: kernel modules decorate with ``numba.njit(cache=True)``, so compiled code is
 kept on disk beside the source and later processes only load it. Loading is still not free:
 importing numba and initialising its compiler takes about 0.3-1 s in a fresh process, far more
-than the numpy path needs for a typical call (a 1000 x 1000 grid: about 15 ms). Hence two
+than the numpy path needs for a typical call (a 1000 x 1000 grid: 10-50 ms). Hence two
 thresholds, in the same unit:
 
 - :data:`MIN_WORK`: a job smaller than this always runs on the numpy path (the compiled code
@@ -32,9 +32,11 @@ thresholds, in the same unit:
   Once any kernel module is loaded (numba's compiler is up), further modules load at the first
   job of at least :data:`MIN_WORK`.
 
-One switch: the environment variable ``SPLINEKIT_NUMBA=0`` turns compiled code off everywhere
-(read on every call; the test suite checks that both paths agree). numba is imported on the
-first load, never by ``import splinekit``.
+One switch, the environment variable ``SPLINEKIT_NUMBA`` (read on every call): ``0`` turns
+compiled code off everywhere (the test suite checks that both paths agree); ``1`` loads the
+kernels at the first job of at least :data:`MIN_WORK`, without waiting for :data:`LOAD_WORK`
+(for long sessions and benchmarks of the steady state); unset, the rule above. numba is
+imported on the first load, never by ``import splinekit``.
 """
 
 from __future__ import annotations
@@ -57,7 +59,12 @@ _served = 0  # work the numpy path has served while no kernel module was loaded
 
 def enabled() -> bool:
     """False when ``SPLINEKIT_NUMBA=0`` is set (read on every call, so tests may flip it)."""
-    return os.environ.get("SPLINEKIT_NUMBA", "1") != "0"
+    return os.environ.get("SPLINEKIT_NUMBA", "") != "0"
+
+
+def _eager() -> bool:
+    """True when ``SPLINEKIT_NUMBA=1`` is set: no waiting for :data:`LOAD_WORK`."""
+    return os.environ.get("SPLINEKIT_NUMBA", "") == "1"
 
 
 def loaded() -> bool:
@@ -75,21 +82,23 @@ def get(module: str) -> ModuleType | None:
     return _modules.get(module) if enabled() else None
 
 
-def load(module: str, work: float | None = None) -> ModuleType | None:
+def load(module: str, work: float | None = None, *, min_work: float | None = None) -> ModuleType | None:
     """The compiled-kernel module ``module`` (a dotted name), or None when the numpy path should serve.
 
     None when compiled code is switched off, when numba is missing or broken, when ``work`` is
-    given and below :data:`MIN_WORK`, or while no kernel module is loaded yet and the work the
-    numpy path has served (this job included) is below :data:`LOAD_WORK`. Without ``work`` the
-    module is loaded unconditionally. A module is imported once and remembered.
+    given and below ``min_work`` (default :data:`MIN_WORK`; a family whose kernels win on
+    smaller jobs passes its own), or while no kernel module is loaded yet and the work the
+    numpy path has served (this job included) is below :data:`LOAD_WORK` (unless
+    ``SPLINEKIT_NUMBA=1``). Without ``work`` the module is loaded unconditionally. A module is
+    imported once and remembered.
     """
     global _served
     if not enabled():
         return None
     if work is not None:
-        if work < MIN_WORK:
+        if work < (MIN_WORK if min_work is None else min_work):
             return None
-        if module not in _modules and not loaded():
+        if module not in _modules and not loaded() and not _eager():
             _served += work
             if _served < LOAD_WORK:
                 return None

@@ -131,9 +131,11 @@ def tessellate_patches(patches, tol: float, angle_tol, weld_scale: float) -> Tes
         # every cell's current counts: the mesh this round would hold, checked before its grids exist
         total = 2 * float((nu.astype(np.float64) * nv).sum())
         limits.check(total * BYTES_PER_TRIANGLE, f"tessellation at tolerance {tol:.3g} ({total:,.0f} triangles)")
-        # the compiled kernels serve every step of a tessellation once loaded; a round asks for
-        # them with its size (a quad costs the numpy path about four point-equivalents)
-        _kernels.load("splinekit.tessellation._kernels", work=4 * float((nu[todo].astype(np.float64) * nv[todo]).sum()))
+        # the compiled kernels serve every step of a tessellation once loaded, and win at every
+        # size (serial kernels: no thread start-up); a round counts its size toward loading them
+        # (a quad costs the numpy path about four point-equivalents)
+        work = 4 * float((nu[todo].astype(np.float64) * nv[todo]).sum())
+        _kernels.load("splinekit.tessellation._kernels", work=work, min_work=0)
         new = []
         # single-cell patches: group by (cell set, nu, nv), evaluate each group at once
         single = todo[~multi[todo]]
