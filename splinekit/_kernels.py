@@ -50,8 +50,10 @@ MIN_WORK = 20_000
 
 LOAD_WORK = 2_000_000
 """Work the numpy path serves (in jobs of at least :data:`MIN_WORK`) before the first kernel
-module is loaded: about two seconds of numpy time, twice the cost of the load, so loading
-never makes a job (or a session) more than about 1.5 times slower than the numpy path."""
+module is loaded: about two seconds of numpy time, about twice the cost of the load. A first
+call loads only when it is this large itself, so it stays within about 1.5 times the numpy
+path's time; later, the job that brings the total to this pays the load whole, which adds at
+most about half to what the session has spent on such jobs so far."""
 
 _modules: dict[str, ModuleType | None] = {}
 _served = 0  # work the numpy path has served while no kernel module was loaded

@@ -65,26 +65,16 @@ __all__ = ["tessellate_patches"]
 
 MAX_ROUNDS = 8
 """Largest number of measure-and-refine rounds."""
-
-
 ANGLE_MAX_COUNT = 64
 """The angle criterion refines a cell direction only while it has fewer steps than this."""
-
-
 BYTES_PER_TRIANGLE = 420
 """Peak memory per triangle of a tessellation (the sample grids of every round, the
 welding tables and the result), measured on the teapot at 1.6 and 5.5 million
 triangles (405-410 bytes); what :func:`splinekit.limits.check` is given."""
-
-
 PILOT = 8
 """Largest per-direction count of the first (pilot) evaluation of a cell."""
-
-
 PILOT_TARGET = 0.8
 """Counts predicted from the pilot aim at this fraction of the tolerance."""
-
-
 WELD = 1e-8
 """Weld and edge-matching distance, relative to the model's bounding-box diagonal."""
 
