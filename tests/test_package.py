@@ -163,6 +163,38 @@ def test_kernels_load_once_the_numpy_path_has_served_load_work():
     assert out == "[False, False, False, False, True, True]"
 
 
+def test_env_switch_one_loads_kernels_at_the_first_large_job():
+    """SPLINEKIT_NUMBA=1 (the steady state of a long session): the first job of at least
+    MIN_WORK loads the kernels, without waiting for LOAD_WORK; smaller jobs still do not."""
+    pytest.importorskip("numba")
+    code = (
+        "import os, sys, numpy as np\n"
+        "os.environ['SPLINEKIT_NUMBA'] = '1'\n"
+        "import splinekit as sk\n"
+        "from splinekit import _kernels\n"
+        "c = sk.BSplineCurve.uniform(3, np.random.rand(10, 3))\n"
+        "c.evaluate(np.linspace(0, 1, _kernels.MIN_WORK - 1))\n"
+        "small = 'numba' in sys.modules\n"
+        "c.evaluate(np.linspace(0, 1, _kernels.MIN_WORK))\n"
+        "print(small, _kernels.get('splinekit.basis._numba_kernels') is not None)"
+    )
+    assert _run(code) == "False True"
+
+
+def test_first_small_tessellation_does_not_import_numba():
+    """A first tessellation of a small model (a few thousand triangles) runs on the numpy path:
+    its kernels would take far longer to load than the tessellation takes."""
+    out = _run(
+        "import sys, numpy as np, splinekit as sk\n"
+        "g = np.linspace(-1, 1, 6)\n"
+        "P = np.stack([*np.meshgrid(g, g, indexing='ij'), np.zeros((6, 6))], axis=-1)\n"
+        "P[..., 2] = 0.3 * np.sin(2 * P[..., 0]) * np.cos(2 * P[..., 1])\n"
+        "mesh = sk.tessellate(sk.BSplineSurface.uniform(3, 3, P), 1e-3, relative=True)\n"
+        "print(len(mesh.faces) > 1000, 'numba' in sys.modules)"
+    )
+    assert out == "True False"
+
+
 def test_env_switch_is_read_at_call_time(monkeypatch):
     module = "splinekit.basis._numba_kernels"
     monkeypatch.setenv("SPLINEKIT_NUMBA", "0")
