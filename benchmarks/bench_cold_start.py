@@ -12,9 +12,10 @@ Each case runs in a fresh Python process per path: ``import splinekit``, build t
 timed), time the first call (**cold**: it pays for importing numba and loading the compiled
 kernels from numba's on-disk cache, when the library chooses them), then the median of five more
 calls (**warm**). The numpy path is the same process with ``SPLINEKIT_NUMBA=0``; the compiled
-path is the library's default (:mod:`splinekit._kernels` decides, so it may well be the numpy
-path), or with ``--forced`` (thresholds 0) every size goes to the compiled kernels. The numba cache is
-filled by a first untimed run, so "cold" means a new process, not a new install.
+path is the library's default with ``SPLINEKIT_NUMBA`` unset (:mod:`splinekit._kernels` decides,
+so it may well be the numpy path), or with ``--forced`` (``SPLINEKIT_NUMBA=1``, thresholds 0)
+the compiled kernels at every size, as before the cold-start rule. The numba cache is filled by
+a first untimed run, so "cold" means a new process, not a new install.
 
 Families (one case each, at the sizes of the README's benchmark table):
 curve points, curve derivatives, scattered surface points, tensor grids (the ``splinekit demo``
@@ -107,8 +108,14 @@ CASES = ("curve points", "curve derivatives", "surface points", "grid (demo)", "
 
 
 def run(case: str, numba: bool, forced: bool) -> dict:
-    """One fresh process: the cold and warm seconds of ``case``."""
-    env = dict(os.environ, SPLINEKIT_NUMBA="1" if numba else "0")
+    """One fresh process: the cold and warm seconds of ``case``: the numpy path
+    (``SPLINEKIT_NUMBA=0``), the library's default (the variable unset) or, ``forced``, the
+    compiled kernels at every size (``SPLINEKIT_NUMBA=1`` and thresholds 0)."""
+    env = {k: v for k, v in os.environ.items() if k != "SPLINEKIT_NUMBA"}
+    if not numba:
+        env["SPLINEKIT_NUMBA"] = "0"
+    elif forced:
+        env["SPLINEKIT_NUMBA"] = "1"
     done = subprocess.run([sys.executable, "-c", CHILD, case, "1" if forced else "0"], env=env,
                           capture_output=True, text=True, check=False)
     if done.returncode:
