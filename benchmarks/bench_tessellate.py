@@ -69,6 +69,11 @@ triangles), and the distance of those flat points from the surface (OCC point
 projection, a random sample of triangles). The table shows triangles, median
 time, triangles per second, both deviations, and the speed ratio. Tessellation time excludes building the input (and, for OCC,
 building the faces).
+
+The figures are those of the steady state of a long session: the compiled kernels are loaded at
+the first tessellation (``SPLINEKIT_NUMBA=1`` unless set otherwise; by default splinekit loads
+them only once a large job, or enough work, pays for the load). The first call after
+``import splinekit`` is the subject of ``benchmarks/bench_cold_start.py``.
 """
 
 from __future__ import annotations
@@ -88,6 +93,7 @@ from splinekit.basis.knots import clamped_uniform
 from splinekit.tessellation import tessellate
 
 S2 = np.sqrt(0.5)
+os.environ.setdefault("SPLINEKIT_NUMBA", "1")  # the steady state: see the docstring
 
 
 # --------------------------------------------------------------------------------------

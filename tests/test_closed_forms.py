@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 import splinekit as sk
-from splinekit.basis import jit
+from splinekit import _kernels
 
 
 def sphere_patch():
@@ -23,9 +23,21 @@ def sphere_patch():
     return sk.NurbsSurface(2, 2, [0, 0, 0, 0.5, 0.5, 1, 1, 1], [0, 0, 0, 1, 1, 1], P, W)
 
 
-@pytest.mark.parametrize("count", [41, 160])  # below and above the compiled-kernel threshold
-def test_sphere_points_and_normals(count):
-    assert (count * count >= jit.MIN_POINTS) == (count == 160)
+@pytest.fixture(params=["numpy", "compiled"])
+def kernel_path(request, monkeypatch):
+    """The numpy path (SPLINEKIT_NUMBA=0), or the compiled kernels at every size (thresholds 0)."""
+    if request.param == "numpy":
+        monkeypatch.setenv("SPLINEKIT_NUMBA", "0")
+    else:
+        pytest.importorskip("numba")
+        monkeypatch.delenv("SPLINEKIT_NUMBA", raising=False)
+        monkeypatch.setattr(_kernels, "MIN_WORK", 0)
+        monkeypatch.setattr(_kernels, "LOAD_WORK", 0)
+    return request.param
+
+
+@pytest.mark.parametrize("count", [41, 160])
+def test_sphere_points_and_normals(count, kernel_path):
     s = sphere_patch()
     g = np.linspace(0, 1, count)
     X = s.evaluate_grid(g, g)

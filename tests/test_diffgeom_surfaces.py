@@ -384,10 +384,16 @@ def test_long_geodesics_are_bounded_not_hanging(monkeypatch):
 
 @pytest.mark.parametrize("kind", ["nurbs", "bspline", "sphere", "bezier"])
 def test_compiled_grid_kernel_matches_numpy_path(kind, monkeypatch):
-    """Grids of at least MIN_POINTS points run one fused compiled kernel; it
-    must agree with the numpy path (forced by SPLINEKIT_NUMBA=0) everywhere,
-    including the poles of a sphere, which it hands back to the numpy path."""
-    from splinekit.basis.jit import MIN_POINTS
+    """Large grids run one fused compiled kernel (loaded here at once: by default only a
+    large job, or enough work, loads it); it must agree with the numpy path (forced by
+    SPLINEKIT_NUMBA=0) everywhere, including the poles of a sphere, which it hands back
+    to the numpy path."""
+    from splinekit import _kernels
+
+    pytest.importorskip("numba")
+    monkeypatch.delenv("SPLINEKIT_NUMBA", raising=False)
+    monkeypatch.setattr(_kernels, "LOAD_WORK", 0)
+    MIN_POINTS = _kernels.MIN_WORK
 
     rng = np.random.default_rng(9)
     if kind == "sphere":
@@ -401,6 +407,7 @@ def test_compiled_grid_kernel_matches_numpy_path(kind, monkeypatch):
     n = int(np.ceil(np.sqrt(MIN_POINTS))) + 1
     us, vs = np.linspace(a, b, n), np.linspace(c0, d0, n)
     fast = curvature(s, us, vs, grid=True)
+    assert _kernels.get("splinekit.diffgeom._kernels") is not None
     monkeypatch.setenv("SPLINEKIT_NUMBA", "0")
     slow = curvature(s, us, vs, grid=True)
     assert np.array_equal(fast.singular, slow.singular)

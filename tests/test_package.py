@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 import splinekit as sk
-from splinekit.basis import jit
+from splinekit import _kernels
 from splinekit.errors import MissingDependencyError, SplineKitError
 
 HEAVY = ("OCP", "build123d", "cadquery", "manifold3d", "matplotlib", "numba")
@@ -78,13 +78,18 @@ def _random_nurbs_surface(rng, pu=3, pv=2, nu=9, nv=7, dim=3):
 def test_compiled_and_numpy_paths_agree(rational, dim, monkeypatch):
     """The numba kernels repeat the numpy path's arithmetic: curve points and
     derivatives and scattered surface points agree exactly; grids and grid
-    normals (BLAS order and reciprocal in the kernels) to rounding."""
+    normals (BLAS order and reciprocal in the kernels) to rounding. The kernels serve at
+    every size here (thresholds 0; by default only a large job, or enough work, loads them)."""
+    pytest.importorskip("numba")
+    monkeypatch.delenv("SPLINEKIT_NUMBA", raising=False)
+    monkeypatch.setattr(_kernels, "MIN_WORK", 0)
+    monkeypatch.setattr(_kernels, "LOAD_WORK", 0)
     rng = np.random.default_rng(7 + dim)
     S = _random_nurbs_surface(rng, dim=dim)
     if not rational:
         S = sk.BSplineSurface(S.degree_u, S.degree_v, S.knots_u, S.knots_v, S.control_points)
     C = S.isocurve(u=0.37)
-    n = jit.MIN_POINTS + 5
+    n = 20_005
     u = rng.uniform(0, 1, n)
     v = rng.uniform(0, 1, n)
     us, vs = np.linspace(0, 1, 150), np.linspace(0, 1, 140)
@@ -99,6 +104,7 @@ def test_compiled_and_numpy_paths_agree(rational, dim, monkeypatch):
         )
 
     fast = run()
+    assert _kernels.get("splinekit.basis._numba_kernels") is not None
     monkeypatch.setenv("SPLINEKIT_NUMBA", "0")
     slow = run()
     np.testing.assert_array_equal(fast[0], slow[0])
@@ -124,11 +130,78 @@ def test_numba_is_not_imported_for_small_batches():
     assert out == "False"
 
 
+def test_numba_is_not_imported_by_the_first_demo_grid():
+    """The README's demo grid (1000 x 1000 points): the numpy path serves a first call in a
+    fresh process, as loading the compiled kernels would cost many times the call itself."""
+    out = _run(
+        "import sys, numpy as np\n"
+        "from splinekit.cli import demo_surface\n"
+        "g = np.linspace(0, 1, 1000)\n"
+        "demo_surface().evaluate_grid(g, g)\n"
+        "print('numba' in sys.modules)"
+    )
+    assert out == "False"
+
+
+def test_kernels_load_once_the_numpy_path_has_served_load_work():
+    """Jobs of at least MIN_WORK add up: the kernels load with the job that brings the work
+    served to LOAD_WORK, and from then on serve every job of at least MIN_WORK."""
+    pytest.importorskip("numba")
+    out = _run(
+        "import os, sys, numpy as np\n"
+        "os.environ.pop('SPLINEKIT_NUMBA', None)\n"
+        "import splinekit as sk\n"
+        "from splinekit import _kernels\n"
+        "_kernels.LOAD_WORK = 100_000\n"
+        "c = sk.BSplineCurve.uniform(3, np.random.rand(10, 3))\n"
+        "seen = []\n"
+        "for n in (30_000, 5_000, 30_000, 30_000, 30_000, 20_000):\n"
+        "    c.evaluate(np.linspace(0, 1, n))\n"
+        "    seen.append(_kernels.get('splinekit.basis._numba_kernels') is not None)\n"
+        "print(seen)"
+    )
+    assert out == "[False, False, False, False, True, True]"
+
+
+def test_env_switch_one_loads_kernels_at_the_first_large_job():
+    """SPLINEKIT_NUMBA=1 (the steady state of a long session): the first job of at least
+    MIN_WORK loads the kernels, without waiting for LOAD_WORK; smaller jobs still do not."""
+    pytest.importorskip("numba")
+    code = (
+        "import os, sys, numpy as np\n"
+        "os.environ['SPLINEKIT_NUMBA'] = '1'\n"
+        "import splinekit as sk\n"
+        "from splinekit import _kernels\n"
+        "c = sk.BSplineCurve.uniform(3, np.random.rand(10, 3))\n"
+        "c.evaluate(np.linspace(0, 1, _kernels.MIN_WORK - 1))\n"
+        "small = 'numba' in sys.modules\n"
+        "c.evaluate(np.linspace(0, 1, _kernels.MIN_WORK))\n"
+        "print(small, _kernels.get('splinekit.basis._numba_kernels') is not None)"
+    )
+    assert _run(code) == "False True"
+
+
+def test_first_small_tessellation_does_not_import_numba():
+    """A first tessellation of a small model (a few thousand triangles) runs on the numpy path:
+    its kernels would take far longer to load than the tessellation takes."""
+    out = _run(
+        "import sys, numpy as np, splinekit as sk\n"
+        "g = np.linspace(-1, 1, 6)\n"
+        "P = np.stack([*np.meshgrid(g, g, indexing='ij'), np.zeros((6, 6))], axis=-1)\n"
+        "P[..., 2] = 0.3 * np.sin(2 * P[..., 0]) * np.cos(2 * P[..., 1])\n"
+        "mesh = sk.tessellate(sk.BSplineSurface.uniform(3, 3, P), 1e-3, relative=True)\n"
+        "print(len(mesh.faces) > 1000, 'numba' in sys.modules)"
+    )
+    assert out == "True False"
+
+
 def test_env_switch_is_read_at_call_time(monkeypatch):
+    module = "splinekit.basis._numba_kernels"
     monkeypatch.setenv("SPLINEKIT_NUMBA", "0")
-    assert jit.kernels(10**7) is None
+    assert _kernels.load(module, work=10**9) is None
+    assert _kernels.get(module) is None
     monkeypatch.delenv("SPLINEKIT_NUMBA")
-    assert jit.kernels(10) is None
+    assert _kernels.load(module, work=10) is None
     assert os.environ.get("SPLINEKIT_NUMBA") is None
 
 

@@ -19,9 +19,23 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import splinekit as sk
+from splinekit import _kernels
 from splinekit.errors import SplineKitError
 from splinekit.mesh.primitives import torus
 from splinekit.tessellation import Polyline, Tessellation, tessellate
+
+TESS_KERNELS = "splinekit.tessellation._kernels"
+
+
+@pytest.fixture
+def compiled(monkeypatch):
+    """Compiled kernels on at every size: thresholds 0 and the tessellation kernels loaded now
+    (by default they load only once a large job, or enough work, pays for loading them)."""
+    pytest.importorskip("numba")
+    monkeypatch.delenv("SPLINEKIT_NUMBA", raising=False)
+    monkeypatch.setattr(_kernels, "MIN_WORK", 0)
+    monkeypatch.setattr(_kernels, "LOAD_WORK", 0)
+    assert _kernels.load(TESS_KERNELS) is not None
 
 S2 = np.sqrt(0.5)
 
@@ -278,8 +292,7 @@ def test_normals_match_surface_normal_on_random_surfaces():
         assert np.abs(S.evaluate(mesh.uv[:, 0], mesh.uv[:, 1]) - mesh.vertices).max() < 1e-9 * np.abs(mesh.vertices).max()
 
 
-def test_numpy_path_matches_compiled_kernel(monkeypatch):
-    pytest.importorskip("numba")
+def test_numpy_path_matches_compiled_kernel(compiled, monkeypatch):
     cases = [(sphere_surface(), 1e-3), (sphere_patches(), 1e-3), (random_surface(4, rational=True), 1e-2)]
     fast = [tessellate(s, t, relative=True) for s, t in cases]
     monkeypatch.setenv("SPLINEKIT_NUMBA", "0")
@@ -472,13 +485,13 @@ def test_close_pairs_match_a_kd_tree():
     plane across the sweep direction (which takes the k-d tree fallback)."""
     from scipy.spatial import cKDTree
 
-    from splinekit.tessellation.surfaces import _SWEEP, _close_pairs
+    from splinekit.tessellation.welding import SWEEP, close_pairs
 
     rng = np.random.default_rng(3)
     g = np.stack(np.meshgrid(np.arange(30.0), np.arange(30.0), indexing="ij"), axis=-1).reshape(-1, 2)
-    e1 = np.cross(_SWEEP, [1.0, 0.0, 0.0])
+    e1 = np.cross(SWEEP, [1.0, 0.0, 0.0])
     e1 /= np.linalg.norm(e1)
-    e2 = np.cross(_SWEEP, e1)
+    e2 = np.cross(SWEEP, e1)
     clouds = [
         rng.random((500, 3)),
         np.column_stack([g, np.zeros(len(g))]),  # a plane z = 0
@@ -490,7 +503,7 @@ def test_close_pairs_match_a_kd_tree():
         k = rng.choice(len(X), len(X) // 3, replace=False)
         X = np.concatenate([X, X[k] + rng.uniform(-0.5, 0.5, (k.size, 3)) * r, X[k[:20]] + 3 * r])
         X = X[rng.permutation(len(X))]
-        got = {tuple(sorted(map(int, p))) for p in _close_pairs(X, r)}
+        got = {tuple(sorted(map(int, p))) for p in close_pairs(X, r)}
         want = {tuple(sorted(map(int, p))) for p in cKDTree(X).query_pairs(r)}
         assert got == want and len(want) >= len(k) // 2
 
@@ -501,7 +514,7 @@ def test_components_match_scipy_connected_components():
     from scipy.sparse import coo_matrix
     from scipy.sparse.csgraph import connected_components
 
-    from splinekit.tessellation.surfaces import _components
+    from splinekit.tessellation.welding import components
 
     rng = np.random.default_rng(5)
     for n, m in [(1, 0), (10, 0), (50, 30), (400, 390), (1000, 600)]:
@@ -509,7 +522,7 @@ def test_components_match_scipy_connected_components():
         if n == 400:  # one long chain through a random permutation
             perm = rng.permutation(n)
             a, b = perm[:-1][:m], perm[1:][:m]
-        lab = _components(n, a, b)
+        lab = components(n, a, b)
         _, ref = connected_components(coo_matrix((np.ones(m), (a, b)), shape=(n, n)), directed=False)
         assert (lab[a] == lab[b]).all()
         # same partition: the map ref -> lab is one-to-one
@@ -577,8 +590,9 @@ def test_open_patch_keeps_the_winding_of_its_parametrization(flip):
 def kernel_path(request, monkeypatch):
     """Runs a test once on the numpy path and once on the compiled kernels."""
     if request.param == "1":
-        pytest.importorskip("numba")
-    monkeypatch.setenv("SPLINEKIT_NUMBA", request.param)
+        request.getfixturevalue("compiled")
+    else:
+        monkeypatch.setenv("SPLINEKIT_NUMBA", "0")
     return request.param
 
 
@@ -612,7 +626,7 @@ def test_weld_triangles_match_a_plain_loop_reference(kernel_path):
     """Random ring triangles with merged vertices (collapsed and repeated triangles in
     both windings): the survivors, their patches, their pre-weld corners and the kept
     ring vertices are those of a one-triangle-at-a-time reference."""
-    from splinekit.tessellation import surfaces
+    from splinekit.tessellation.assembly import _weld_triangles
 
     rng = np.random.default_rng(11)
     for NI, NR, t in [(0, 3, 1), (5, 8, 40), (20, 30, 200), (0, 50, 300), (100, 6, 50)]:
@@ -626,9 +640,9 @@ def test_weld_triangles_match_a_plain_loop_reference(kernel_path):
         n_in = 9
         T = np.full((n_in + len(E0), 3), -7, dtype=np.int64)
         FP = np.full(n_in + len(E0), -7, dtype=np.int64)
-        jit = surfaces._kernels()
+        jit = _kernels.get(TESS_KERNELS)
         if jit is None:
-            T, FP, pre, kept = surfaces._weld_triangles(E0, FE, rep, NI, NR, T, FP, n_in)
+            T, FP, pre, kept = _weld_triangles(E0, FE, rep, NI, NR, T, FP, n_in)
         else:
             count, pre, kept = jit.weld_triangles(E0, FE, rep, NI, NR, T[n_in:], FP[n_in:])
             T, FP = T[: n_in + count], FP[: n_in + count]
@@ -644,7 +658,7 @@ def test_volume_sign_test_on_both_paths(kernel_path):
     """The cheap orientation test: a closed outward sphere (volume about 4/3 pi) is clearly
     positive; the same mesh with every triangle flipped is not, nor is a flat mesh of zero
     volume."""
-    from splinekit.tessellation.surfaces import _clearly_positive_volume
+    from splinekit.tessellation.assembly import _clearly_positive_volume
 
     mesh = tessellate(sphere_patches(), 1e-3)
     V, F = np.array(mesh.vertices), np.array(mesh.faces)
@@ -655,10 +669,9 @@ def test_volume_sign_test_on_both_paths(kernel_path):
     assert not _clearly_positive_volume(np.eye(3), np.array([[0, 1, 2], [0, 2, 1]]))
 
 
-def test_rational_second_derivative_bounds_agree_on_both_paths(monkeypatch):
+def test_rational_second_derivative_bounds_agree_on_both_paths(compiled, monkeypatch):
     """The compiled sampler of |S_uu|, |S_uv|, |S_vv| of rational cells reproduces the
     numpy one bit for bit (the sample counts derive from it)."""
-    pytest.importorskip("numba")
     from splinekit.tessellation.cells import _sampled_second_derivatives, cells_of_patches
 
     patches = [random_surface(s, rational=True) for s in range(6)] + sphere_patches()
@@ -672,10 +685,9 @@ def test_rational_second_derivative_bounds_agree_on_both_paths(monkeypatch):
         assert np.isfinite(got[1]).all() and (got[1] >= 0).all()
 
 
-def test_pole_normals_are_exact_and_equal_on_both_paths(monkeypatch):
+def test_pole_normals_are_exact_and_equal_on_both_paths(compiled, monkeypatch):
     """The limit normals at the sphere's poles (collapsed patch edges) are (0, 0, +-1) on
     both paths, bit for bit the same; every other mesh array also agrees exactly."""
-    pytest.importorskip("numba")
     meshes = []
     for env in ("0", "1"):
         monkeypatch.setenv("SPLINEKIT_NUMBA", env)

@@ -1,7 +1,7 @@
 """Compiled kernels for the hot evaluation paths (numba, ``cache=True``).
 
-This module imports numba and is itself imported only by
-:func:`splinekit.basis.jit.kernels` on the first large evaluation, never when
+This module imports numba and is itself imported only through
+:func:`splinekit._kernels.load` for large evaluations, never when
 splinekit is imported. Each kernel performs, per point, exactly the floating-
 point operations of the numpy path in the same order (span search, the A2.2
 triangle, the sequential sum over local basis functions), so both paths give

@@ -12,6 +12,10 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
+from .._validate import as_degree, as_float_array, as_order, as_params
+from ..errors import KnotVectorError
+from .knots import domain, validate_knots
+
 __all__ = ["find_span", "basis_funs", "basis_ders", "design_matrix"]
 
 
@@ -133,10 +137,6 @@ def design_matrix(degree: int, knots, u, order: int = 0) -> sp.csr_matrix:
     ``order``-th derivative) at ``u``; the same matrix serves fitting.
     Checks its arguments (the other functions here are the unchecked kernels).
     """
-    from .._validate import as_degree, as_float_array, as_order, as_params
-    from ..errors import KnotVectorError
-    from .knots import domain, validate_knots
-
     degree = as_degree(degree)
     order = as_order(order)
     U = as_float_array(knots, "knots", KnotVectorError)

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .._validate import as_float_array, frozen
+from .._validate import as_float_array, as_real, frozen
 from ..errors import DomainError, KnotVectorError
 
 __all__ = [
@@ -89,8 +89,6 @@ def validate_knots(knots, degree: int, n_ctrl: int, name: str = "knots") -> np.n
 
 def reparametrized(degree: int, knots: np.ndarray, start, end) -> np.ndarray:
     """``knots`` mapped affinely so that the domain becomes ``[start, end]`` (validated)."""
-    from .._validate import as_real
-
     start = as_real(start, "start", DomainError)
     end = as_real(end, "end", DomainError)
     if not start < end:

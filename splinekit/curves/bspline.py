@@ -31,10 +31,10 @@ from .._validate import (
     homogeneous,
     overflow_safe,
 )
+from .. import _kernels
 from ..basis import algebra
 from ..basis.bernstein import bezier_knots
 from ..basis.bspline import basis_ders_t, basis_funs_t, combine, find_span, span_bounds
-from ..basis.jit import kernels
 from ..basis.knots import clamped_uniform, domain, validate_knots
 from ..basis.rational import rational_curve_derivatives
 from ..errors import KnotRemovalError, ParameterError
@@ -199,7 +199,7 @@ class SplineCurve(CurveKnotAlgebra, CurveMeasures):
     def _points(self, flat):
         """Points ``(n, dim)`` at the checked parameters ``flat`` (no overflow handling)."""
         p, U = self._degree, self._knots
-        jit = kernels(flat.size)
+        jit = _kernels.load("splinekit.basis._numba_kernels", work=flat.size)
         if jit is not None:
             pts = np.empty((flat.size, self.dim))
             jit.curve_points(p, U, *span_bounds(p, U), self._coefs, flat, self._rational, pts)
@@ -238,7 +238,7 @@ class SplineCurve(CurveKnotAlgebra, CurveMeasures):
     def _derivatives(self, flat, order):
         """``(order + 1, n, dim)`` at the checked parameters ``flat`` (no overflow handling)."""
         p, U = self._degree, self._knots
-        jit = kernels(flat.size)
+        jit = _kernels.load("splinekit.basis._numba_kernels", work=flat.size)
         if jit is not None:
             ders = np.empty((order + 1, flat.size, self.dim))
             binom = np.array([[comb(k, j) for j in range(order + 1)] for k in range(order + 1)], dtype=np.float64)

@@ -5,7 +5,7 @@ values (the net contracted in u once per grid row, as in
 ``basis._numba_kernels.grid_tensor4``), the rational quotient rule, then the
 same algebra as :func:`splinekit.diffgeom.curvature._from_derivatives`, with
 no temporaries between the stages. Imported only through
-:func:`splinekit.basis.jit._load` for large grids.
+:func:`splinekit._kernels.load` for large grids.
 """
 
 from __future__ import annotations

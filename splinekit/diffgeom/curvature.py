@@ -17,8 +17,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .. import _kernels
 from .._validate import as_float_array
-from ..basis import jit
 from ..errors import ParameterError
 from ..surfaces import SplineSurface
 from .protocol import ImplicitSurface, _nonzero_norm, as_surface
@@ -279,7 +279,7 @@ def _compiled_grid(surface, us, vs):
     spline = getattr(surface, "_spline", surface)  # a BezierSurface wraps a spline
     if not isinstance(spline, SplineSurface) or spline.dim != 3:
         return None
-    kernels = jit.compiled("splinekit.diffgeom._kernels", us.size * vs.size)
+    kernels = _kernels.load("splinekit.diffgeom._kernels", work=3 * us.size * vs.size)  # a point with its curvature: 3 curve points
     if kernels is None:
         return None
     (su, Nu), (sv, Nv) = spline._grid_basis(us, vs, 2)

@@ -12,7 +12,7 @@ import numpy as np
 from .. import limits
 from .._validate import as_order, as_params, overflow_safe
 from ..basis.bspline import basis_ders_t, combine, find_span
-from ..basis.jit import kernels
+from .. import _kernels
 from ..basis.rational import rational_surface_derivatives
 
 __all__ = ["SurfaceGrids"]
@@ -74,7 +74,7 @@ class SurfaceGrids:
         """
         nu, nv, k = self._coefs.shape
         mu, mv = su.size, sv.size
-        jit = kernels(mu * mv)
+        jit = _kernels.load("splinekit.basis._numba_kernels", work=mu * mv // 16)  # a grid point: 1/16 of a curve point
         if jit is not None:
             out = np.empty((mu, mv, k - 1 if divide else k))
             Nv_vals = np.ascontiguousarray(Nv_vals)

@@ -9,7 +9,7 @@ from __future__ import annotations
 import numpy as np
 
 from .._validate import as_params
-from ..basis.jit import kernels
+from .. import _kernels
 from ..errors import ParameterError
 
 __all__ = ["SurfaceNormals"]
@@ -93,7 +93,7 @@ class SurfaceNormals:
         if self._unit_sized() is not self:
             return self._unit_sized().normal_grid(us, vs)
         (su, Nu), (sv, Nv) = self._grid_basis(us, vs, 1)
-        jit = kernels(su.size * sv.size)
+        jit = _kernels.load("splinekit.basis._numba_kernels", work=su.size * sv.size // 2)  # a grid normal: half a curve point
         if jit is not None:
             out = np.empty((su.size, sv.size, 3))
             weak = np.empty((su.size, sv.size), dtype=np.bool_)

@@ -3,8 +3,9 @@ and the fixed per-call work of small models (a-priori bounds of rational cells, 
 weld sweep and its components, vertex gathering, the post-weld triangle remap, pole
 normals and the orientation test).
 
-Imported lazily through :func:`splinekit.basis.jit._load` (never by ``import
-splinekit``); :mod:`splinekit.tessellation.surfaces` keeps a numpy path with the
+Imported lazily through :func:`splinekit._kernels.load` (never by ``import
+splinekit``); the tessellation modules that call these kernels (:mod:`.grids`,
+:mod:`.welding`, :mod:`.assembly`, :mod:`.poles`, :mod:`.cells`) keep a numpy path with the
 same results (bit for bit, except the rounding of the fused pass's normals) for when
 numba is absent or ``SPLINEKIT_NUMBA=0``.
 """

@@ -10,12 +10,9 @@ map to the piece's local parameter, combine.
 
 from __future__ import annotations
 
-import functools
-
 import numpy as np
 
-from ..basis import algebra
-from .cells import cells_of_patches
+from .cells import bezier_matrix, cells_of_patches
 
 __all__ = ["CurveBatch", "SurfaceBatch"]
 
@@ -133,23 +130,6 @@ def _homogeneous(curve):
         return np.asarray(curve.homogeneous_points)
     P = np.asarray(curve.control_points)
     return np.column_stack([P, np.ones(len(P))])
-
-
-@functools.lru_cache(maxsize=256)
-def bezier_matrix(p, knots):
-    """``(breaks, M (s, p + 1, n))``: the Bézier segments of any degree-``p`` spline on ``knots``
-    (a tuple) are ``M @ coefficients``. Cached: B-reps repeat a few knot vectors (lines, circles,
-    arcs) over and over, and the decomposition by knot refinement costs far more than the
-    product (read-only arrays)."""
-    U = np.asarray(knots, dtype=np.float64)
-    n = U.size - p - 1
-    if U.size == 2 * (p + 1) and U[0] == U[p] and U[p + 1] == U[-1]:  # one Bézier span
-        breaks, M = np.array([U[0], U[-1]]), np.eye(n)[None]
-    else:
-        breaks, M = algebra.bezier_segments(p, U, np.eye(n))
-    for a in (breaks, M):
-        a.setflags(write=False)
-    return breaks, M
 
 
 class SurfaceBatch:

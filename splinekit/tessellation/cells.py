@@ -14,10 +14,11 @@ import functools
 
 import numpy as np
 
-from ..basis import algebra, jit
+from .. import _kernels
+from ..basis import algebra
 from ..basis.bernstein import all_bernstein
 
-__all__ = ["CellSet", "cells_of_patches", "edge_samples", "second_derivative_bounds"]
+__all__ = ["CellSet", "bezier_matrix", "cells_of_patches", "edge_samples", "second_derivative_bounds"]
 
 
 class CellSet:
@@ -97,11 +98,26 @@ def _cellset(p, q, index, surfaces) -> CellSet:
     return CellSet(p, q, nets, np.repeat(np.asarray(index, dtype=np.int64), count), box, span)
 
 
+@functools.lru_cache(maxsize=256)
+def bezier_matrix(p, knots):
+    """``(breaks, M (s, p + 1, n))``: the Bézier segments of any degree-``p`` spline on ``knots``
+    (a tuple) are ``M @ coefficients``. Cached: B-reps repeat a few knot vectors (lines, circles,
+    arcs) over and over, and the decomposition by knot refinement costs far more than the
+    product (read-only arrays)."""
+    U = np.asarray(knots, dtype=np.float64)
+    n = U.size - p - 1
+    if U.size == 2 * (p + 1) and U[0] == U[p] and U[p + 1] == U[-1]:  # one Bézier span
+        breaks, M = np.array([U[0], U[-1]]), np.eye(n)[None]
+    else:
+        breaks, M = algebra.bezier_segments(p, U, np.eye(n))
+    for a in (breaks, M):
+        a.setflags(write=False)
+    return breaks, M
+
+
 def _split(p, q, surface):
     """``(nets (k, p + 1, q + 1, 4), boxes (k, 4), spans (k, 2))`` of a multi-span patch's
     Bézier cells, ``(iu, iv)`` order with ``iu`` major."""
-    from .batch import bezier_matrix
-
     coefs = np.asarray(surface.homogeneous_points)
     bu, Mu = bezier_matrix(p, tuple(surface.knots_u.tolist()))  # (nsu, p + 1, nu)
     bv, Mv = bezier_matrix(q, tuple(surface.knots_v.tolist()))  # (nsv, q + 1, nv)
@@ -159,7 +175,7 @@ def _sampled_second_derivatives(nets, p, q, samples: int = 6):
     """Max of ``|S_uu|``, ``|S_uv|``, ``|S_vv|`` of rational cells on a ``samples^2`` grid."""
     Bu = _bernstein_table(p, samples, 2)  # (3, p + 1, s)
     Bv = _bernstein_table(q, samples, 2)
-    kernels = jit._load("splinekit.tessellation._kernels") if jit._enabled() else None
+    kernels = _kernels.get("splinekit.tessellation._kernels")
     if kernels is not None:
         M = kernels.sampled_second_derivatives(np.ascontiguousarray(nets), np.ascontiguousarray(Bu), np.ascontiguousarray(Bv))
         return M[:, 0], M[:, 1], M[:, 2]

@@ -3,11 +3,19 @@
 from __future__ import annotations
 
 import math
+import sys
 
 import numpy as np
 
 from .._validate import as_int, as_real
+from ..curves import BezierCurve, SplineCurve
 from ..errors import ParameterError
+from ..mesh import PolyMesh
+from ..subdiv.surface import SubdivisionSurface
+from ..surfaces import BezierSurface, SplineSurface
+from .curves import tessellate_curve
+from .surfaces import tessellate_patches
+from .trimmed import tessellate_faces
 
 __all__ = ["DEFAULT_ANGLE_TOLERANCE", "DEFAULT_RELATIVE_TOLERANCE", "tessellate"]
 
@@ -21,8 +29,12 @@ triangle edge (tangents of a polyline segment); OpenCascade's BRepMesh default."
 def _brep_faces(obj):
     """The trimmed faces of a TrimmedFace, Shell, Solid or a list of them, or None when ``obj``
     is none of these."""
-    from ..brep import Shell, Solid, TrimmedFace
-
+    # B-rep objects exist only once splinekit.brep is imported; not importing it here keeps
+    # ``import splinekit`` fast (brep loads scipy.spatial)
+    brep = sys.modules.get("splinekit.brep")
+    if brep is None:
+        return None
+    TrimmedFace, Shell, Solid = brep.TrimmedFace, brep.Shell, brep.Solid
     kinds = (TrimmedFace, Shell, Solid)
     if isinstance(obj, kinds):
         obj = [obj]
@@ -44,10 +56,6 @@ def _brep_faces(obj):
 def _patches(obj, levels):
     """``(kind, items)``: ``("curve", curve)``, ``("faces", [TrimmedFace, ...])`` or
     ``("surfaces", [SplineSurface, ...])``."""
-    from ..curves import BezierCurve, SplineCurve
-    from ..subdiv.surface import SubdivisionSurface
-    from ..surfaces import BezierSurface, SplineSurface
-
     faces = _brep_faces(obj)
     if faces is not None:
         return "faces", faces
@@ -86,9 +94,6 @@ def _subdivision_patches(surface, levels: int):
     set has no T-junctions and tessellates watertight; ``to_bsplines(levels)``
     refines only around irregular faces, which leaves T-junctions that patch
     stitching cannot close."""
-    from ..mesh import PolyMesh
-    from ..subdiv.surface import SubdivisionSurface
-
     if levels == 0:
         return surface.to_bsplines(0)[0]
     r = surface.refinement(levels)
@@ -207,13 +212,7 @@ def tessellate(obj, tolerance=None, *, angle_tolerance=DEFAULT_ANGLE_TOLERANCE, 
     if not (np.isfinite(tol) and tol > 0):
         raise ParameterError(f"the tolerance {tol!r} (model units) is not a positive finite distance")
     if kind == "curve":
-        from .curves import tessellate_curve
-
         return tessellate_curve(item, tol, angle_tolerance)
     if kind == "faces":
-        from .trimmed import tessellate_faces
-
         return tessellate_faces(item, tol, angle_tolerance, size)
-    from .surfaces import tessellate_patches
-
     return tessellate_patches(item, tol, angle_tolerance, size)

@@ -28,6 +28,10 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import ParameterError
+from ..mesh.topology import ranges
+from .batch import CurveBatch
+from .curves import _span_bounds
+from .welding import close_pairs, components
 
 __all__ = ["EdgeUse", "check_domains", "edge_uses", "group_uses", "sample_groups"]
 
@@ -102,8 +106,6 @@ def group_uses(uses, weld: float, pcurves, surfaces):
     (``pcurves``, ``surfaces``: :mod:`.batch` evaluators of the uses' pcurves and the faces'
     surfaces); :mod:`splinekit.brep` topology may supply the pairing of a shell instead.
     """
-    from .surfaces import _close_pairs, _components
-
     by_key: dict = {}
     loose = []
     singles = []
@@ -124,13 +126,13 @@ def group_uses(uses, weld: float, pcurves, surfaces):
         face = np.array([uses[i].f for i in loose])
         pts = surfaces.evaluate(np.repeat(face, EDGE_FRACTIONS.size), uv[:, 0], uv[:, 1]).reshape(len(loose), -1, 3)
         lab = np.arange(len(loose))
-        pairs = _close_pairs(pts[:, 2], weld)
+        pairs = close_pairs(pts[:, 2], weld)
         if len(pairs):
             A, B = pts[pairs[:, 0]], pts[pairs[:, 1]]
             same = (np.linalg.norm(A - B, axis=-1) <= weld).all(axis=1)
             flip = (np.linalg.norm(A - B[:, ::-1], axis=-1) <= weld).all(axis=1)
             ok = pairs[same | flip]
-            lab = _components(len(loose), ok[:, 0], ok[:, 1])
+            lab = components(len(loose), ok[:, 0], ok[:, 1])
         order = np.argsort(lab, kind="stable")
         cuts = np.flatnonzero(np.diff(lab[order])) + 1
         groups += [[loose[j] for j in part] for part in np.split(order, cuts)]
@@ -185,8 +187,6 @@ def sample_groups(uses, groups, scales, tol, angle_tol, surfaces, pc, memo=None)
     span bounds, filled on the first call).
     Returns a list of :class:`SampledGroup`, one per group.
     """
-    from ..mesh.topology import ranges
-
     memo = {} if memo is None else memo
     if "head" not in memo:
         face = np.array([u.f for u in uses], dtype=np.int64)
@@ -332,9 +332,6 @@ def _live_groups(uses, groups, live, G, face, pdom, surfaces, pc, group_of, dege
     has a 3-D curve, its index in the 3-D curve batch ``c3``, the representative's parameter
     domain, the uses of live groups and their group, whether each runs against its
     representative, and the 3-D curves' per-span bounds by degree)."""
-    from .batch import CurveBatch
-    from .curves import _span_bounds
-
     # the representative of each group: a use with a 3-D curve if there is one
     rep = np.array([next((i for i in groups[g] if uses[i].edge.curve is not None), groups[g][0]) for g in live])
     has_curve = np.array([uses[i].edge.curve is not None for i in rep], dtype=bool)

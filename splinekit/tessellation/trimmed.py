@@ -3,14 +3,14 @@
 Design (whole-array work; Python loops run over faces, edges and refinement rounds, never over
 points or triangles):
 
-1. Interior grid. Each face's surface is cut into Bézier cells (:mod:`.cells`); the same a-priori
-   bounds on the second derivatives that size the untrimmed patch grids give each cell its
-   ``nu x nv`` steps, and a knot span row (column) takes the largest count of its cells; that
-   grid is evaluated once and each span's count lowered to what its measured chord error needs
-   (the bounds hold over whole cells, so they over-count on spheres and rational arcs): one
-   tensor grid of parameters per face. Everything that does not depend on the tolerance (batch
-   evaluators, bounds, edge uses and their pairing, checks) is computed once per face set and
-   cached on its first face.
+1. Interior grid (:mod:`.face_grids`). Each face's surface is cut into Bézier cells
+   (:mod:`.cells`); the same a-priori bounds on the second derivatives that size the untrimmed
+   patch grids give each cell its ``nu x nv`` steps, and a knot span row (column) takes the
+   largest count of its cells; that grid is evaluated once and each span's count lowered to
+   what its measured chord error needs (the bounds hold over whole cells, so they over-count on
+   spheres and rational arcs): one tensor grid of parameters per face. Everything that does
+   not depend on the tolerance (batch evaluators, bounds, edge uses and their pairing, checks)
+   is computed once per face set and cached on its first face.
 2. Scaled parameter plane. Each face is triangulated in ``(u, v)`` scaled by
    ``(steps in u / range of u, steps in v / range of v)``: there the grid's step is about one in
    both directions, i.e. lengths measure the local chordal error, so Delaunay triangles that are
@@ -40,23 +40,19 @@ from __future__ import annotations
 import numpy as np
 
 from .. import limits
-from ..errors import ParameterError
+from ..errors import BackendError, ParameterError
+from .batch import CurveBatch, SurfaceBatch
+from .cells import second_derivative_bounds
 from .edges import _face_name, check_domains, edge_uses, group_uses, sample_groups
+from .face_grids import face_grids
 from .result import Tessellation
 from .surfaces import BYTES_PER_TRIANGLE
+from .welding import close_pairs, components
 
 __all__ = ["tessellate_faces"]
 
 MAX_ROUNDS = 8
 """Largest number of measure-and-refine rounds."""
-GRID_FRACTION = 0.75
-"""The a-priori grid steps are bounds over whole cells; the interior grid starts at this
-fraction of them and the measured refinement adds points where the bound was needed."""
-MEASURED_FRACTION = 0.4
-"""The interior grid's steps are set so that their measured chord error along each parameter
-direction is this fraction of the tolerance (a triangle's diagonal then errs by about the sum)."""
-MIN_LOWERING = 0.5
-"""The measured counts are at least this fraction of the a-priori ones."""
 UV_GAP = 0.25
 """Largest gap (scaled grid steps) between one edge's last (u, v) and the next edge's first."""
 CLEARANCE = 0.5
@@ -70,100 +66,8 @@ def _triangulator():
     try:
         import triangle
     except ImportError as exc:  # pragma: no cover - a core dependency
-        from ..errors import BackendError
-
         raise BackendError("tessellating trimmed faces needs the 'triangle' package: pip install triangle") from exc
     return triangle
-
-
-class _FaceGrid:
-    """A face's interior parameter grid ``us`` x ``vs`` and its scale (steps per parameter unit)."""
-
-    __slots__ = ("us", "vs", "scale")
-
-
-def _face_grids(batch, tol, angle_tol, bounds=None):
-    """The interior grid of every surface of ``batch`` (a :class:`.batch.SurfaceBatch`): per knot
-    span row (column) the largest a-priori count of its cells, times :data:`GRID_FRACTION`, then
-    lowered where the grid's MEASURED chord error allows (:func:`_measured_counts`)
-    (``bounds``: the cell sets' second-derivative bounds, when already known)."""
-    from .surfaces import _initial_counts, _span_params
-
-    nu, nv = _initial_counts(batch.cellsets, tol, angle_tol, bounds)
-    if angle_tol is not None:  # the angle criterion's own counts: a floor for the measured ones
-        au, av = _initial_counts(batch.cellsets, np.inf, angle_tol, bounds)
-    else:
-        au, av = np.ones_like(nu), np.ones_like(nv)
-    counts = []
-    for k in range(len(batch.bu)):
-        cells = slice(batch.first[k], batch.first[k] + batch.nsu[k] * batch.nsv[k])
-        shape = (batch.nsu[k], batch.nsv[k])
-
-        def per_span(c, axis):
-            return np.maximum(np.ceil(c[cells].reshape(shape).max(axis=axis) * GRID_FRACTION), 1).astype(np.int64)
-
-        counts.append((per_span(nu, 1), per_span(nv, 0), per_span(au, 1), per_span(av, 0)))
-    lowered = _measured_counts(batch, counts, tol)
-    out = []
-    for k, (cu, cv) in enumerate(lowered):
-        bu, bv = batch.bu[k], batch.bv[k]
-        g = _FaceGrid()
-        g.us, _ = _span_params(bu, cu)
-        g.vs, _ = _span_params(bv, cv)
-        # the scaled plane stays the a-priori one: edges keep their sampling, and Delaunay its
-        # metric near collapsed edges (a cone's apex), where a coarser one flips triangles
-        g.scale = np.array([counts[k][0].sum() / (bu[-1] - bu[0]), counts[k][1].sum() / (bv[-1] - bv[0])])
-        out.append(g)
-    return out
-
-
-def _measured_counts(batch, counts, tol):
-    """Per face, the a-priori per-span counts ``(cu, cv)`` lowered to what the grid's measured
-    chord error needs: the a-priori counts come from bounds over whole cells (a sphere's
-    equator sets its count up to the poles; a rational arc's fastest end sets the whole arc's),
-    so the grid is evaluated once, each span's largest second difference along u (v) gives the
-    chord error of its steps (``|second difference| / 8``), and the span's count is scaled so
-    that it becomes :data:`MEASURED_FRACTION` of ``tol``, never above the a-priori count nor
-    below the angle criterion's (``counts``: per face ``(cu, cv, angle cu, angle cv)``).
-    One batch evaluation of every face's grid. Returns ``[(cu, cv)]``."""
-    from .surfaces import _span_params
-
-    fs, us, vs, grids = [], [], [], []
-    for k, (cu, cv, _, _) in enumerate(counts):
-        u, _ = _span_params(batch.bu[k], cu)
-        v, _ = _span_params(batch.bv[k], cv)
-        U, V = np.meshgrid(u, v, indexing="ij")
-        fs.append(np.full(U.size, k))
-        us.append(U.ravel())
-        vs.append(V.ravel())
-        grids.append((u, v))
-    X = batch.evaluate(np.concatenate(fs), np.concatenate(us), np.concatenate(vs))
-    out, start = [], 0
-    for k, (cu, cv, au, av) in enumerate(counts):
-        u, v = grids[k]
-        n = u.size * v.size
-        G = X[start : start + n].reshape(u.size, v.size, 3)
-        start += n
-        out.append((_lowered(G, u, batch.bu[k], cu, au, tol), _lowered(G.transpose(1, 0, 2), v, batch.bv[k], cv, av, tol)))
-    return out
-
-
-def _lowered(G, t, breaks, c, floor, tol):
-    """Counts ``c`` per span of the grid lines along axis 0 of ``G`` ``(n, m, 3)`` (parameters
-    ``t`` ``(n,)`` over spans ``breaks``) scaled to the measured chord error (see
-    :func:`_measured_counts`)."""
-    if G.shape[0] < 3:
-        return c
-    d2 = G[:-2] - 2.0 * G[1:-1] + G[2:]
-    m = np.sqrt(np.einsum("ijk,ijk->ij", d2, d2)).max(axis=1)  # (n - 2,) largest over the lines
-    span = np.clip(np.searchsorted(breaks, t[1:-1], side="right") - 1, 0, c.size - 1)
-    worst = np.zeros(c.size)
-    np.maximum.at(worst, span, m)
-    factor = np.sqrt(worst / (8.0 * MEASURED_FRACTION * tol))
-    # at most halved: lines that measure straight (a cone's rulings) keep some interior points,
-    # without which the triangles fanning from a collapsed edge (the apex) flip
-    low = np.maximum(np.minimum(floor, c), np.ceil(MIN_LOWERING * c))
-    return np.clip(np.ceil(c * factor), low, c).astype(np.int64)
 
 
 class _Points:
@@ -236,11 +140,9 @@ def _loops(faces, uses, groups, samples, vid_of_group, scales):
 def _edge_vertices(samples, size, tolerance):
     """Mesh vertices of the edge samples: end points welded (within the weld distance), inner
     samples numbered after them. Returns ``(vid_of_group, xyz (n, 3))``."""
-    from .surfaces import _close_pairs, _components
-
     ends = np.concatenate([[s.points[0], s.points[-1]] for s in samples]) if samples else np.zeros((0, 3))
-    pairs = _close_pairs(ends, max(WELD * size, 10.0 * tolerance))
-    lab = _components(len(ends), pairs[:, 0], pairs[:, 1]) if len(pairs) else np.arange(len(ends))
+    pairs = close_pairs(ends, max(WELD * size, 10.0 * tolerance))
+    lab = components(len(ends), pairs[:, 0], pairs[:, 1]) if len(pairs) else np.arange(len(ends))
     first, end_vid = np.unique(lab, return_index=True, return_inverse=True)[1:]
     end_vid = end_vid.reshape(-1, 2)
     xyz = [ends[first]]
@@ -361,14 +263,12 @@ def _keep_inside(T, N, nxt):
     the label spreads over triangles connected across non-trim edges. Returns ``(keep (t,)
     bool, conflict, along (t, 3) bool)``: ``conflict`` is a triangle whose region is both inside
     and outside (crossing or badly nested loops), or -1; ``along`` marks edges on a trim."""
-    from .surfaces import _components
-
     a, b = _half_edges(T)
     fwd = nxt[a] == b  # nxt of an interior point is -1, never a point index
     rev = nxt[b] == a
     along = fwd | rev
     t, k = np.nonzero((N >= 0) & ~along)
-    lab = _components(len(T), t, N[t, k])
+    lab = components(len(T), t, N[t, k])
     inside = np.zeros(len(T), dtype=bool)
     outside = np.zeros(len(T), dtype=bool)
     inside[lab[np.nonzero(fwd)[0]]] = True
@@ -387,9 +287,6 @@ class _Prepared:
     __slots__ = ("faces", "size", "batch", "bounds", "edge_tol", "uses", "pcurves", "groups", "memo")
 
     def __init__(self, faces, size):
-        from .batch import CurveBatch, SurfaceBatch
-        from .cells import second_derivative_bounds
-
         self.faces, self.size = tuple(faces), size
         self.batch = SurfaceBatch([face.surface for face in faces])
         self.bounds = [second_derivative_bounds(cs) for cs in self.batch.cellsets]
@@ -419,7 +316,7 @@ def tessellate_faces(faces, tol: float, angle_tol, size: float) -> Tessellation:
     triangle = _triangulator()
     prep = _Prepared.of(faces, size)
     batch, uses, groups, edge_tol = prep.batch, prep.uses, prep.groups, prep.edge_tol
-    grids = _face_grids(batch, tol, angle_tol, prep.bounds)
+    grids = face_grids(batch, tol, angle_tol, prep.bounds)
     scales = np.stack([g.scale for g in grids])
     samples = sample_groups(uses, groups, scales, tol, angle_tol, batch, prep.pcurves, prep.memo)
     vid_of_group, edge_xyz = _edge_vertices(samples, size, edge_tol)

@@ -11,7 +11,7 @@ in a random box of size 0.1..100, weights uniform in [0.2, 5]; every test runs
 polynomial and rational. Each case draws from
 ``numpy.random.default_rng([SALT, seed, rational])`` and failure messages
 print the full case, so any failure is reproducible from its test id.
-Evaluation of large batches (at least ``splinekit.basis.jit.MIN_POINTS``
+Evaluation of large batches (at least ``splinekit._kernels.MIN_WORK``
 points) may run compiled kernels instead of numpy; the ``large_batch`` tests
 check that path against OCC as well.
 
@@ -45,6 +45,7 @@ from OCP.TColgp import TColgp_Array1OfPnt, TColgp_Array2OfPnt
 from OCP.TColStd import TColStd_Array1OfInteger, TColStd_Array1OfReal, TColStd_Array2OfReal
 
 import splinekit as sk
+from splinekit import _kernels
 from _geometry import (
     interior_params,
     middle_of_widest_span,
@@ -827,7 +828,7 @@ def test_bezier_surface(seed, rational):
 
 
 # ========================================================================================
-# Large batches: evaluation of at least jit.MIN_POINTS points may take a compiled path
+# Large batches: evaluation of at least _kernels.MIN_WORK points may take a compiled path
 # (numba kernels) instead of numpy; check that path against OCC too, on a subset.
 # ========================================================================================
 SALT_BATCH_CURVE = 401
@@ -835,14 +836,18 @@ SALT_BATCH_SURFACE = 402
 
 
 def _batch_size() -> int:
-    from splinekit.basis import jit
+    return max(int(_kernels.MIN_WORK), 1000)
 
-    return max(int(jit.MIN_POINTS), 1000)
+
+@pytest.fixture(autouse=False)
+def eager_kernels(monkeypatch):
+    """Compiled kernels serve every batch of at least MIN_WORK points (no waiting for LOAD_WORK)."""
+    monkeypatch.setenv("SPLINEKIT_NUMBA", "1")
 
 
 @RATIONAL
 @pytest.mark.parametrize("seed", range(7))
-def test_curve_large_batch_evaluation(seed, rational):
+def test_curve_large_batch_evaluation(seed, rational, eager_kernels):
     rng = make_rng(SALT_BATCH_CURVE, seed, rational)
     p, U, P, W = random_curve_data(rng, rational, degree=curve_degree(seed))
     case = curve_case(seed, SALT_BATCH_CURVE, p, U, P, W)
@@ -857,7 +862,7 @@ def test_curve_large_batch_evaluation(seed, rational):
 
 @RATIONAL
 @pytest.mark.parametrize("seed", range(7))
-def test_surface_large_batch_evaluation(seed, rational):
+def test_surface_large_batch_evaluation(seed, rational, eager_kernels):
     rng = make_rng(SALT_BATCH_SURFACE, seed, rational)
     pu, pv, ku, kv, P, W = random_surface_data(rng, rational, surface_degrees(seed))
     case = surface_case(seed, SALT_BATCH_SURFACE, pu, pv, ku, kv, P, W)
