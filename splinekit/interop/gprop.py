@@ -81,8 +81,10 @@ def topology_counts(shape) -> dict:
 
 
 def occ_euler_characteristic(shape) -> int:
-    """``V - E + F`` of ``shape``'s distinct vertices, edges and faces as OCC counts them (a
-    sphere-like closed shell: 2, a torus-like one: 0)."""
+    """``V - E + F`` of ``shape``'s distinct vertices, edges and faces as OCC counts them, seam
+    and degenerate edges included: ``2 - 2 genus`` for a closed shell whose faces are all
+    disks bounded by proper edges (a box: 2); a face closed on itself counts differently (a
+    one-face NURBS sphere, with a seam and two degenerate pole edges: 2 - 3 + 1 = 0)."""
     counts = topology_counts(shape)
     return counts["VERTEX"] - counts["EDGE"] + counts["FACE"]
 
