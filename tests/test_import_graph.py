@@ -26,10 +26,6 @@ def _load_tool():
 tool = _load_tool()
 
 
-# Until the house issue's refactoring lands (strict: a check that starts to pass must lose its mark)
-_OPEN = pytest.mark.xfail(strict=True, reason="refactoring of the house issue under way")
-
-
 @pytest.fixture(scope="module")
 def graph():
     return tool.build()
@@ -65,21 +61,17 @@ def test_every_module_has_a_layer(graph):
     assert [m for m in graph.modules if tool.layer_of(m) < 0] == []
 
 
-@_OPEN
 def test_no_import_circles(graph):
     assert tool.cycles(graph) == []
 
 
-@_OPEN
 def test_imports_run_down_the_layers(graph):
     assert tool.upward(graph) == []
 
 
-@_OPEN
 def test_project_modules_are_imported_at_module_level(graph):
     assert tool.inner_project_imports(graph) == []
 
 
-@_OPEN
 def test_no_module_over_about_500_lines(graph):
     assert tool.long_modules(graph) == []
