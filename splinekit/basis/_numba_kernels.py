@@ -263,15 +263,16 @@ def grid_rows(R, sv, Nv, q, rational, out):
 
 
 @njit(cache=True, parallel=True)
-def grid_normals4(C, su, Nu, p, sv, Nv, q, rational, out, weak):
+def grid_normals4(C, su, Nu, p, sv, Nv, q, rational, noise, out, weak):
     """Unit normals on a tensor grid for nets with 4 coefficient columns.
 
     ``Nu`` is ``(2, p + 1, mu)`` (values and first derivatives), ``Nv`` likewise.
     Per grid row the net is contracted in u twice (value and u-derivative);
     per point the homogeneous value H and partials Hu, Hv give
     ``Su ~ Hu - wu C`` and ``Sv ~ Hv - wv C`` (positive factors dropped), whose
-    cross product is normalized. Points where ``|Su x Sv| <= 1e-10 (|Su| + |Sv|)^2``
-    are flagged in ``weak`` for the caller's limit-normal rule.
+    cross product is normalized. Points where ``|Su x Sv| <= 1e-10 (|Su| + |Sv|)^2``, or
+    where a partial is no longer than ``noise`` (round-off; times the weight, as the partials
+    here carry it), are flagged in ``weak`` for the caller's limit-normal rule.
     """
     mu = su.shape[0]
     mv = sv.shape[0]
@@ -321,8 +322,10 @@ def grid_normals4(C, su, Nu, p, sv, Nv, q, rational, out, weak):
             n1 = u2 * v0 - u0 * v2
             n2 = u0 * v1 - u1 * v0
             length = np.sqrt(n0 * n0 + n1 * n1 + n2 * n2)
-            size = np.sqrt(u0 * u0 + u1 * u1 + u2 * u2) + np.sqrt(v0 * v0 + v1 * v1 + v2 * v2)
-            if length <= 1e-10 * size * size or length == 0.0:
+            lu = np.sqrt(u0 * u0 + u1 * u1 + u2 * u2)
+            lv = np.sqrt(v0 * v0 + v1 * v1 + v2 * v2)
+            size = lu + lv
+            if length <= 1e-10 * size * size or length == 0.0 or min(lu, lv) <= noise * h3:
                 weak[i, j] = True
                 out[i, j, 0] = 0.0
                 out[i, j, 1] = 0.0

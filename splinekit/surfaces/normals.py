@@ -30,16 +30,32 @@ class SurfaceNormals:
         out[..., 2] = a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]
         return out
 
-    def _normalize(self, n, Su, Sv, u, v, Suv=None):
-        """Unit normals from ``n = Su x Sv`` (any positive multiple of it).
+    def _partial_noise(self) -> float:
+        """Length below which a first partial derivative is round-off, not geometry (model units
+        per parameter unit): a partial sums (degree / span) times control-point differences, each
+        rounded to about ``eps`` of the net's size, so a partial that vanishes exactly (along a
+        collapsed edge, or an iso-line whose control points coincide) comes out at that size."""
+        coefs = self._coefs
+        size = float(np.abs(coefs).max())
+        if self._rational:
+            size /= float(coefs[..., -1].min())
+        rate = max(self._pu / float(np.diff(np.unique(self._ku)).min()),
+                   self._pv / float(np.diff(np.unique(self._kv)).min()))
+        return 64.0 * np.finfo(float).eps * size * rate
+
+    def _normalize(self, n, Su, Sv, u, v, w=1.0):
+        """Unit normals from ``n = Su x Sv`` (any positive multiple of it); ``Su`` and ``Sv``
+        may be scaled by a common positive factor ``w`` per point (the homogeneous weight).
 
         Where ``Su x Sv`` (nearly) vanishes, at a collapsed edge such as the
-        pole of a revolved sphere, the limit direction ``Su x Suv + Suv x Sv``
-        is used, oriented like the normal at a point just inside the domain.
+        pole of a revolved sphere, or where a partial is round-off (:meth:`_partial_noise`),
+        the limit direction ``Su x Suv + Suv x Sv`` is used, oriented like the normal at a
+        point just inside the domain.
         """
         length = np.sqrt(np.einsum("...i,...i->...", n, n))
-        size = np.sqrt(np.einsum("...i,...i->...", Su, Su)) + np.sqrt(np.einsum("...i,...i->...", Sv, Sv))
-        weak = length <= 1e-10 * size**2
+        lu = np.sqrt(np.einsum("...i,...i->...", Su, Su))
+        lv = np.sqrt(np.einsum("...i,...i->...", Sv, Sv))
+        weak = (length <= 1e-10 * (lu + lv) ** 2) | (np.minimum(lu, lv) <= self._partial_noise() * w)
         if weak.any():
             n = n.copy()
             n[weak] = self._limit_normals(u[weak], v[weak])
@@ -98,7 +114,7 @@ class SurfaceNormals:
             out = np.empty((su.size, sv.size, 3))
             weak = np.empty((su.size, sv.size), dtype=np.bool_)
             jit.grid_normals4(self._coefs4(), su, np.ascontiguousarray(Nu), self._pu, sv, np.ascontiguousarray(Nv),
-                              self._pv, self._rational, out, weak)
+                              self._pv, self._rational, self._partial_noise(), out, weak)
             if weak.any():
                 (du, dv) = self.domain
                 U, V = np.meshgrid(as_params(us, du, "us").ravel(), as_params(vs, dv, "vs").ravel(), indexing="ij")
@@ -107,14 +123,16 @@ class SurfaceNormals:
             return out
         Hu = self._grid_contract(su, Nu[1], sv, Nv[0], False)
         Hv = self._grid_contract(su, Nu[0], sv, Nv[1], False)
+        w = 1.0
         if self._rational:
             H = self._grid_contract(su, Nu[0], sv, Nv[0], False)
+            w = H[..., 3]
             C = H[..., :3] / H[..., 3:]
-            Su = Hu[..., :3] - Hu[..., 3:] * C
-            Sv = Hv[..., :3] - Hv[..., 3:] * C
+            Su = Hu[..., :3] - Hu[..., 3:] * C  # w Su
+            Sv = Hv[..., :3] - Hv[..., 3:] * C  # w Sv
         else:
             Su, Sv = Hu, Hv
         (du, dv) = self.domain
         U, V = np.meshgrid(as_params(us, du, "us").ravel(), as_params(vs, dv, "vs").ravel(), indexing="ij", sparse=True)
         U, V = np.broadcast_arrays(U, V)
-        return self._normalize(self._cross(Su, Sv), Su, Sv, U, V)
+        return self._normalize(self._cross(Su, Sv), Su, Sv, U, V, w)
