@@ -325,7 +325,7 @@ def grid_normals4(C, su, Nu, p, sv, Nv, q, rational, noise, out, weak):
             lu = np.sqrt(u0 * u0 + u1 * u1 + u2 * u2)
             lv = np.sqrt(v0 * v0 + v1 * v1 + v2 * v2)
             size = lu + lv
-            if length <= 1e-10 * size * size or length == 0.0 or min(lu, lv) <= noise * h3:
+            if length <= 1e-10 * size * size or length == 0.0 or min(lu, lv) <= noise * (h3 if rational else 1.0):
                 weak[i, j] = True
                 out[i, j, 0] = 0.0
                 out[i, j, 1] = 0.0
