@@ -104,7 +104,10 @@ def __dir__():
 
 __version__ = "0.1.0"
 
-__all__ = [
+# The public names. Not ``__all__``: pydoc writes out every name of ``__all__`` in full, which made
+# help(splinekit) 2,800 lines; without it help shows the overview above and the subpackages, and
+# ``from splinekit import *`` still gives every public name (those without a leading underscore).
+_PUBLIC = [
     "bernstein",
     "design_matrix",
     "BezierCurve",
