@@ -15,6 +15,7 @@ import os
 from splinekit._atomic import atomic_write
 from splinekit.errors import ExportError, FileFormatError, ParameterError
 from splinekit.interop.occ import _compound, _ocp, require_ocp
+from splinekit.tolerances import OCC_CONFUSION
 
 from ._brep_io import ReadResult, items_from_shapes, shapes_for_export
 from ._meshio import _fspath, check_target
@@ -22,7 +23,7 @@ from ._meshio import _fspath, check_target
 __all__ = ["export_brep", "import_brep"]
 
 
-def export_brep(path, objects, *, tolerance: float = 1e-7) -> str:
+def export_brep(path, objects, *, tolerance: float = OCC_CONFUSION) -> str:
     """Write ``objects`` (one object or a list: TrimmedFace, Shell, Solid, curves, surfaces or OCC
     shapes, as :func:`exporters.export_step` takes them) to the OCC ``.brep`` file ``path``;
     returns ``path``. B-rep objects are checked with ``BRepCheck_Analyzer`` first (an invalid one

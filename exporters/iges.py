@@ -17,6 +17,7 @@ from contextlib import contextmanager
 from splinekit._atomic import atomic_write
 from splinekit.errors import ExportError, FileFormatError, ParameterError
 from splinekit.interop.occ import _ocp, require_ocp
+from splinekit.tolerances import OCC_CONFUSION
 
 from ._brep_io import ReadResult, items_from_shapes, shapes_for_export
 from ._meshio import _fspath, check_target
@@ -38,7 +39,7 @@ def _brep_mode():
         static.SetIVal_s("write.iges.brep.mode", saved)
 
 
-def export_iges(path, objects, *, unit: str = "MM", tolerance: float = 1e-7) -> str:
+def export_iges(path, objects, *, unit: str = "MM", tolerance: float = OCC_CONFUSION) -> str:
     """Write ``objects`` (one object or a list, as :func:`exporters.export_step` takes them) to
     the IGES file ``path``; returns ``path``. B-rep objects are checked with
     ``BRepCheck_Analyzer`` first (an invalid one raises BackendError and nothing is written)."""

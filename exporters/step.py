@@ -25,6 +25,7 @@ from splinekit._atomic import atomic_write, write_target
 from splinekit._signals import reraise_interrupt
 from splinekit.errors import ExportError, FileFormatError, ParameterError
 from splinekit.interop.occ import _compound, from_occ, require_ocp, to_shape
+from splinekit.tolerances import OCC_CONFUSION
 
 from ._brep_io import BrepItem, ReadResult, default_names, items_from_shapes
 from ._meshio import _fspath
@@ -253,7 +254,7 @@ def _check_target(path) -> str:
     return path
 
 
-def export_step(path, objects, *, names=None, unit: str = "mm", tolerance: float = 1e-7) -> str:
+def export_step(path, objects, *, names=None, unit: str = "mm", tolerance: float = OCC_CONFUSION) -> str:
     """Write ``objects`` to the STEP (AP214) file ``path``, exactly; returns ``path``.
 
     ``objects`` is one object or a list (or tuple) of objects; each object is

@@ -15,6 +15,7 @@ import numpy as np
 from splinekit.brep import Shell, TrimmedFace
 from splinekit.brep.mass import area_and_volume
 from splinekit.errors import ParameterError
+from splinekit.tolerances import INTEGRAL_RTOL
 
 __all__ = ["INTEGRAL_TOLERANCE", "Model", "Parameter", "gauss_nodes", "resolve_params", "surface_integrals"]
 
@@ -178,7 +179,7 @@ INTEGRAL_TOLERANCE = 1e-9
 cubature at 1e-10 with them) agree with it to about 1e-12."""
 
 
-def surface_integrals(patches, tol: float = 1e-10) -> tuple[float, float]:
+def surface_integrals(patches, tol: float = INTEGRAL_RTOL) -> tuple[float, float]:
     """``(area, signed volume)`` of a patch set by adaptive Gauss-Kronrod quadrature
     (:func:`splinekit.brep.mass.area_and_volume`) to relative tolerance ``tol``.
 

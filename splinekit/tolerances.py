@@ -16,10 +16,29 @@ name                      value      meaning and unit
                                      this are the same knot when a knot is looked up by value
 ``GEOMETRIC_CONFUSION``   1e-9       relative to the model's size (its largest absolute
                                      coordinate, at least 1): two points closer than this are one
-                                     (knot removal, closedness checks)
-``ANGULAR_CONFUSION``     1e-12      radians: two directions closer than this are parallel
-``INTEGRAL_RTOL``         1e-10      relative error of adaptive integrals (lengths, areas,
-                                     volumes) when the caller gives none
+                                     (knot removal, closedness checks; the default stopping
+                                     distance of closest-point searches)
+``ANGULAR_CONFUSION``     1e-12      radians: two directions closer than this are parallel; an
+                                     arc this close to a full turn is a full circle
+``INTEGRAL_RTOL``         1e-10      relative error of adaptive integrals (areas, volumes,
+                                     moments) and of OCC's GProp references when the caller
+                                     gives none
+``ARC_LENGTH_RTOL``       1e-12      relative to a curve's length: accuracy of arc lengths and
+                                     of arc-length parametrizations
+``SAMPLE_COINCIDENCE``    1e-13      relative to a point set's size (its largest absolute
+                                     coordinate): consecutive fit samples closer than this are
+                                     one point when data are parametrized
+``OCC_CONFUSION``         1e-7       model units (absolute): the tolerance of B-rep edges and
+                                     faces and of the shapes handed to OpenCascade and the
+                                     STEP/IGES/BREP writers (OCC's ``Precision::Confusion``)
+``WELD``                  1e-8       relative to the model's bounding-box diagonal: tessellation
+                                     welds vertices and matches edge end points this close
+``DEVIATION_RTOL``        1e-3       relative to the bounding-box diagonal (of the model, or of
+                                     a point cloud): default largest deviation of an
+                                     approximation (tessellation chords, a fitted height field)
+``FD_STEP``               1e-3       relative to a length (a parameter domain's, or the largest
+                                     extent of an implicit's bounds): the step of numeric
+                                     finite-difference derivatives
 ========================  =========  ==========================================================
 
 ``DEFAULT`` carries the first three under their older short names (``DEFAULT.param``,
@@ -43,6 +62,12 @@ __all__ = [
     "GEOMETRIC_CONFUSION",
     "ANGULAR_CONFUSION",
     "INTEGRAL_RTOL",
+    "ARC_LENGTH_RTOL",
+    "SAMPLE_COINCIDENCE",
+    "OCC_CONFUSION",
+    "WELD",
+    "DEVIATION_RTOL",
+    "FD_STEP",
     "DEFAULT",
     "geometric_tolerance",
     "Tolerances",
@@ -53,6 +78,12 @@ KNOT_CONFUSION = 1e-12
 GEOMETRIC_CONFUSION = 1e-9
 ANGULAR_CONFUSION = 1e-12
 INTEGRAL_RTOL = 1e-10
+ARC_LENGTH_RTOL = 1e-12
+SAMPLE_COINCIDENCE = 1e-13
+OCC_CONFUSION = 1e-7
+WELD = 1e-8
+DEVIATION_RTOL = 1e-3
+FD_STEP = 1e-3
 
 
 @dataclass(frozen=True)

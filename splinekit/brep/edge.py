@@ -16,10 +16,11 @@ import numpy as np
 from ..curves import BezierCurve, SplineCurve
 from ..errors import ParameterError
 from .._validate import as_positive
+from ..tolerances import OCC_CONFUSION
 
 __all__ = ["Edge", "as_pcurve"]
 
-DEFAULT_TOLERANCE = 1e-7
+DEFAULT_TOLERANCE = OCC_CONFUSION
 """Default geometric tolerance of edges and faces (model units), OpenCascade's Precision::Confusion."""
 
 

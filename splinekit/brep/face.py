@@ -8,6 +8,7 @@ from ..construct.curves import line
 from ..errors import ParameterError
 from ..surfaces import BezierSurface, SplineSurface
 from .._validate import as_positive
+from ..tolerances import INTEGRAL_RTOL
 from . import mass
 from .check import Checkable, check_face
 from .classify import contains_uv
@@ -176,19 +177,19 @@ class TrimmedFace(TopologyQueries, Checkable):
         return -n if self._reversed else n
 
     # -- mass properties (splinekit.brep.mass) ------------------------------------------------
-    def area(self, tol: float = 1e-10) -> float:
+    def area(self, tol: float = INTEGRAL_RTOL) -> float:
         """Area of the trimmed face to relative tolerance ``tol`` (adaptive quadrature)."""
         return mass.area(self, tol)
 
-    def centroid(self, tol: float = 1e-10) -> np.ndarray:
+    def centroid(self, tol: float = INTEGRAL_RTOL) -> np.ndarray:
         """``(3,)`` centroid of the face's area."""
         return mass.centroid(self, tol)
 
-    def inertia(self, tol: float = 1e-10) -> np.ndarray:
+    def inertia(self, tol: float = INTEGRAL_RTOL) -> np.ndarray:
         """``(3, 3)`` inertia tensor of the face (unit areal density) about its centroid."""
         return mass.inertia(self, tol)
 
-    def mass_properties(self, tol: float = 1e-10):
+    def mass_properties(self, tol: float = INTEGRAL_RTOL):
         """Area, centroid, inertia, principal moments and axes with error estimates
         (:class:`splinekit.brep.mass.MassProperties`)."""
         return mass.mass_properties(self, tol)

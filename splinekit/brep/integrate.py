@@ -36,10 +36,11 @@ from .._validate import as_positive
 from ..basis.bspline import basis_ders_t, find_span
 from ..construct.curves import line
 from ..errors import DomainError, ParameterError
+from ..tolerances import INTEGRAL_RTOL
 
 __all__ = ["Integral", "integrate", "integrate_face", "kronrod15", "DEFAULT_TOLERANCE"]
 
-DEFAULT_TOLERANCE = 1e-10
+DEFAULT_TOLERANCE = INTEGRAL_RTOL
 """Default relative tolerance of the integrals."""
 
 MAX_PASSES = 80

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from ..errors import ParameterError
+from ..tolerances import INTEGRAL_RTOL
 from . import mass
 from .check import Checkable, check_shell, check_solid
 from .classify import contains
@@ -67,23 +68,23 @@ class Shell(TopologyQueries, Checkable):
         return self.topology.edges
 
     # -- mass properties (splinekit.brep.mass) ------------------------------------------------
-    def area(self, tol: float = 1e-10) -> float:
+    def area(self, tol: float = INTEGRAL_RTOL) -> float:
         """Total area of the faces to relative tolerance ``tol``."""
         return mass.area(self, tol)
 
-    def volume(self, tol: float = 1e-10) -> float:
+    def volume(self, tol: float = INTEGRAL_RTOL) -> float:
         """Enclosed volume by the divergence theorem over the oriented faces (meaningful when the shell is closed)."""
         return mass.volume(self, tol)
 
-    def centroid(self, tol: float = 1e-10):
+    def centroid(self, tol: float = INTEGRAL_RTOL):
         """``(3,)`` centroid of the enclosed solid (unit density)."""
         return mass.centroid(self, tol)
 
-    def inertia(self, tol: float = 1e-10):
+    def inertia(self, tol: float = INTEGRAL_RTOL):
         """``(3, 3)`` inertia tensor of the enclosed solid (unit density) about its centroid."""
         return mass.inertia(self, tol)
 
-    def mass_properties(self, tol: float = 1e-10):
+    def mass_properties(self, tol: float = INTEGRAL_RTOL):
         """Area, volume, centroid, inertia, principal moments and axes with error estimates
         (:class:`splinekit.brep.mass.MassProperties`)."""
         return mass.mass_properties(self, tol)
@@ -150,23 +151,23 @@ class Solid(TopologyQueries, Checkable):
         return tuple(g for s in self._shells for g in s.edges)
 
     # -- mass properties (splinekit.brep.mass) ------------------------------------------------
-    def area(self, tol: float = 1e-10) -> float:
+    def area(self, tol: float = INTEGRAL_RTOL) -> float:
         """Total area of the faces to relative tolerance ``tol``."""
         return mass.area(self, tol)
 
-    def volume(self, tol: float = 1e-10) -> float:
+    def volume(self, tol: float = INTEGRAL_RTOL) -> float:
         """Enclosed volume by the divergence theorem over the oriented faces (void shells, pointing into their voids, count negative)."""
         return mass.volume(self, tol)
 
-    def centroid(self, tol: float = 1e-10):
+    def centroid(self, tol: float = INTEGRAL_RTOL):
         """``(3,)`` centroid of the enclosed solid (unit density)."""
         return mass.centroid(self, tol)
 
-    def inertia(self, tol: float = 1e-10):
+    def inertia(self, tol: float = INTEGRAL_RTOL):
         """``(3, 3)`` inertia tensor of the enclosed solid (unit density) about its centroid."""
         return mass.inertia(self, tol)
 
-    def mass_properties(self, tol: float = 1e-10):
+    def mass_properties(self, tol: float = INTEGRAL_RTOL):
         """Area, volume, centroid, inertia, principal moments and axes with error estimates
         (:class:`splinekit.brep.mass.MassProperties`)."""
         return mass.mass_properties(self, tol)

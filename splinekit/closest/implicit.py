@@ -7,6 +7,7 @@ import numpy as np
 
 from .._validate import as_float_array
 from ..errors import ConvergenceError, ParameterError
+from ..tolerances import GEOMETRIC_CONFUSION
 from .queries import Projection, _as_query_points, _positive_tolerance, _readonly
 
 IMPLICIT_ITERATIONS = 100
@@ -35,7 +36,7 @@ class _Implicit:
         lead, dim = P.shape[:-1], P.shape[-1]
         P, _ = _as_query_points(P, dim)
         if tolerance is None:
-            tol = 1e-9 * max(1.0, float(np.abs(P).max(initial=0.0)))
+            tol = GEOMETRIC_CONFUSION * max(1.0, float(np.abs(P).max(initial=0.0)))
         else:
             tol = _positive_tolerance(tolerance)
         if callable(getattr(self.f, "closest_points", None)) and dim == 3:

@@ -15,6 +15,7 @@ import numpy as np
 from .._validate import as_float_array, as_params
 from ..basis.knots import distinct
 from ..errors import ParameterError
+from ..tolerances import GEOMETRIC_CONFUSION
 from .queries import _positive_tolerance
 
 SEEDS_PER_POINT = 3
@@ -126,7 +127,7 @@ class _Parametric:
     def tolerance(self, tolerance) -> float:
         """The stopping distance in search units (model units / ``unit``)."""
         if tolerance is None:
-            return 1e-9 * self.size
+            return GEOMETRIC_CONFUSION * self.size
         return _positive_tolerance(tolerance) / self.unit
 
     def _neighbour_offsets(self):

@@ -23,13 +23,14 @@ import numpy as np
 from .._validate import as_points, as_real
 from ..curves import BSplineCurve, NurbsCurve
 from ..errors import ParameterError
+from ..tolerances import ANGULAR_CONFUSION
 from ._checks import as_positive, as_vector, plane_frame
 
 __all__ = ["line", "polyline", "circle", "arc", "ellipse", "arc_through_points", "unit_arc"]
 
 TWO_PI = 2.0 * math.pi
 # sweeps within this many radians of a full turn count as a full turn
-_ANGLE_SLACK = 1e-12
+_ANGLE_SLACK = ANGULAR_CONFUSION
 
 
 def unit_arc(start_angle: float, end_angle: float):

@@ -38,6 +38,7 @@ from ..basis.bspline import basis_ders_t, basis_funs_t, combine, find_span, span
 from ..basis.knots import clamped_uniform, domain, validate_knots
 from ..basis.rational import rational_curve_derivatives
 from ..errors import KnotRemovalError, ParameterError
+from ..tolerances import ARC_LENGTH_RTOL
 from .knot_algebra import CurveKnotAlgebra, _elevation_step
 from .measures import CurveMeasures
 
@@ -451,7 +452,7 @@ class BezierCurve:
     def tangent(self, t) -> np.ndarray:
         return self._spline.tangent(t)
 
-    def arc_length(self, tol: float = 1e-12) -> float:
+    def arc_length(self, tol: float = ARC_LENGTH_RTOL) -> float:
         return self._spline.arc_length(tol=tol)
 
     # operations

@@ -8,7 +8,7 @@ from __future__ import annotations
 import numpy as np
 
 from .._validate import as_positive
-from ..tolerances import geometric_tolerance
+from ..tolerances import ARC_LENGTH_RTOL, geometric_tolerance
 
 __all__ = ["CurveMeasures"]
 
@@ -22,7 +22,7 @@ class CurveMeasures:
 
     __slots__ = ()
 
-    def arc_length(self, start=None, end=None, tol: float = 1e-12) -> float:
+    def arc_length(self, start=None, end=None, tol: float = ARC_LENGTH_RTOL) -> float:
         """Length of the curve between parameters ``start`` and ``end`` (default: the domain).
 
         Gauss-Legendre quadrature (8 points) on every knot span, with the spans

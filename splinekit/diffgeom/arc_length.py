@@ -13,6 +13,7 @@ import numpy as np
 from .._validate import as_int, as_params, as_real
 from ..curves.differential import _ZERO_DERIVATIVE, _check_curve, _ders, _domain, _dot, _params, _require_regular, _scales
 from ..errors import DomainError, ParameterError
+from ..tolerances import ARC_LENGTH_RTOL
 from .parametric_curve import ParametricCurve
 
 __all__ = [
@@ -124,7 +125,7 @@ def _tolerance(tol) -> float:
     return tol
 
 
-def arc_length(curve, u0=None, u1=None, tol: float = 1e-12):
+def arc_length(curve, u0=None, u1=None, tol: float = ARC_LENGTH_RTOL):
     """Arc length between parameters ``u0`` and ``u1`` (default: the domain ends).
 
     ``u0`` and ``u1`` broadcast against each other; the result has their
@@ -144,7 +145,7 @@ def arc_length(curve, u0=None, u1=None, tol: float = 1e-12):
     return float(out) if out.ndim == 0 else out
 
 
-def arc_length_parameters(curve, s, tol: float = 1e-12) -> np.ndarray:
+def arc_length_parameters(curve, s, tol: float = ARC_LENGTH_RTOL) -> np.ndarray:
     """Parameters ``s.shape`` at which the arc length from the domain start equals ``s``.
 
     ``s`` must lie in ``[0, L]`` (``L`` the total length; values within
@@ -162,7 +163,7 @@ MAX_PARAMETERS = 10**7
 """Most parameters :func:`equal_arc_length_parameters` returns (each costs a Newton solve)."""
 
 
-def equal_arc_length_parameters(curve, n: int, tol: float = 1e-12) -> np.ndarray:
+def equal_arc_length_parameters(curve, n: int, tol: float = ARC_LENGTH_RTOL) -> np.ndarray:
     """``n >= 2`` parameters ``(n,)`` cutting the curve into ``n - 1`` pieces of equal length,
     starting and ending at the domain ends; ``n <= 10**7``."""
     n = as_int(n, "n", minimum=2)
@@ -174,7 +175,7 @@ def equal_arc_length_parameters(curve, n: int, tol: float = 1e-12) -> np.ndarray
     return u
 
 
-def reparametrize_by_arc_length(curve, tol: float = 1e-12) -> ParametricCurve:
+def reparametrize_by_arc_length(curve, tol: float = ARC_LENGTH_RTOL) -> ParametricCurve:
     """The same curve parametrized by arc length, as a :class:`ParametricCurve` on ``[0, L]``.
 
     Evaluation inverts the arc-length table (:func:`arc_length_parameters`,

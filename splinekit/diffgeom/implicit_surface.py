@@ -8,6 +8,7 @@ import numpy as np
 
 from .._validate import as_float_array, as_real
 from ..errors import DomainError, ParameterError, SplineKitError
+from ..tolerances import FD_STEP
 from .differences import _D1, _OFFSETS
 
 __all__ = ["ImplicitSurface"]
@@ -30,7 +31,7 @@ class ImplicitSurface:
     function (negative inside).
     """
 
-    def __init__(self, F, gradient=None, hessian=None, step: float = 1e-3):
+    def __init__(self, F, gradient=None, hessian=None, step: float = FD_STEP):
         for name, g in (("F", F), ("gradient", gradient), ("hessian", hessian)):
             if g is not None and not callable(g):
                 raise ParameterError(f"{name} must be callable, got {type(g).__name__}")

@@ -37,6 +37,7 @@ import numpy as np
 
 from .._validate import as_float_array, as_int, as_real
 from ..errors import DomainError, ParameterError, SplineKitError
+from ..tolerances import FD_STEP
 from .differences import _call_points, numeric_derivatives
 from .implicit_surface import ImplicitSurface, _nonzero_norm  # noqa: F401  (diffgeom.curvature and implicit.base import _nonzero_norm from here)
 
@@ -49,7 +50,8 @@ __all__ = [
     "as_surface",
 ]
 
-DEFAULT_STEP = 1e-3
+DEFAULT_STEP = FD_STEP
+"""Finite-difference step relative to the domain's length in each direction (see above)."""
 
 
 @runtime_checkable

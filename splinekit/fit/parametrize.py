@@ -10,6 +10,7 @@ import numpy as np
 
 from .._validate import as_degree, as_float_array, as_int, as_points
 from ..errors import FittingError, ParameterError
+from ..tolerances import SAMPLE_COINCIDENCE
 
 __all__ = [
     "METHODS",
@@ -22,7 +23,7 @@ __all__ = [
 METHODS = ("uniform", "chord", "centripetal")
 """Accepted parametrization names."""
 
-COINCIDENT = 1e-13
+COINCIDENT = SAMPLE_COINCIDENCE
 """Consecutive points closer than this times the size of the point cloud count as coincident."""
 
 

@@ -58,12 +58,13 @@ import numpy as np
 from .._validate import as_int
 from ..diffgeom.protocol import ImplicitSurface, _nonzero_norm
 from ..errors import ConvergenceError, DomainError, SplineKitError
+from ..tolerances import FD_STEP
 from ._checks import check_bounds, check_points, positive  # noqa: F401 - also part of this module's names
 from .meshing import mesh_implicit
 
 __all__ = ["CLOSEST_MAX_ITER", "RELATIVE_STEP", "Implicit"]
 
-RELATIVE_STEP = 1e-3
+RELATIVE_STEP = FD_STEP
 """Finite-difference step relative to the largest extent of the bounds."""
 
 CLOSEST_MAX_ITER = 50

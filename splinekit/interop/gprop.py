@@ -25,16 +25,17 @@ import numpy as np
 from .._progress import progress
 from ..errors import SplineKitError
 from ..brep.crosscheck import scipy_integrals, singular_patches
+from ..tolerances import INTEGRAL_RTOL
 from .occ import _ocp, _sub_shapes, to_shape
 
 __all__ = ["Reference", "occ_area", "occ_volume", "occ_bbox", "topology_counts", "occ_euler_characteristic",
            "face_kinds", "trimmed_face_count", "is_valid", "point_deviation", "reference_integrals",
            "OCC_PRECISION", "SCIPY_TOLERANCE", "SHAPE_KINDS"]
 
-OCC_PRECISION = 1e-10
+OCC_PRECISION = INTEGRAL_RTOL
 """Precision passed to GProp: matches closed forms to ~1e-13 on parts without collapsed edges."""
 
-SCIPY_TOLERANCE = 1e-10
+SCIPY_TOLERANCE = INTEGRAL_RTOL
 """Relative tolerance asked of scipy's cubature per Bézier span."""
 
 

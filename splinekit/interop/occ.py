@@ -26,6 +26,7 @@ import numpy as np
 
 from .._validate import as_positive
 from ..errors import BackendError, ParameterError
+from ..tolerances import OCC_CONFUSION
 # _ocp, _check_valid, _sub_shapes, _compound, _edge_to_curve are also reached through this module
 # (exporters, the command line, tests): keep them importable here
 from .occ_backend import _MODULES, _missing, _occ_call, _ocp, require_ocp  # noqa: F401  (_MODULES: tests reach it here)
@@ -45,7 +46,7 @@ from .occ_shapes import _check_valid, _compound, _free_edges, _sub_shapes, _type
 __all__ = ["to_occ", "from_occ", "to_shape", "to_build123d", "to_cadquery", "require_ocp"]
 
 
-def to_occ(obj, *, tolerance: float = 1e-7):
+def to_occ(obj, *, tolerance: float = OCC_CONFUSION):
     """An OCP ``Geom_*`` handle for a splinekit curve or surface (3-D only); for a B-rep
     ``TrimmedFace`` / ``Shell`` / ``Solid`` the ``TopoDS_Face`` / ``TopoDS_Shell`` /
     ``TopoDS_Solid`` (see :func:`to_shape`)."""
@@ -214,7 +215,7 @@ def _sewn(patches, tol: float):
     return pieces[0] if len(pieces) == 1 else _compound(pieces)
 
 
-def to_shape(obj, *, tolerance: float = 1e-7):
+def to_shape(obj, *, tolerance: float = OCC_CONFUSION):
     """An OCP ``TopoDS_Shape`` for splinekit geometry.
 
     * a curve -> ``TopoDS_Edge`` (the exact B-spline / Bézier curve);
@@ -258,7 +259,7 @@ def to_shape(obj, *, tolerance: float = 1e-7):
     )
 
 
-def to_build123d(obj, *, tolerance: float = 1e-7):
+def to_build123d(obj, *, tolerance: float = OCC_CONFUSION):
     """A build123d ``Edge`` / ``Face`` / ``Shell`` / ``Solid`` / ``Compound`` for ``obj``.
 
     ``obj`` is anything :func:`to_shape` accepts (a curve, a surface, a list of
@@ -274,7 +275,7 @@ def to_build123d(obj, *, tolerance: float = 1e-7):
     return getattr(build123d, cls)(typed)
 
 
-def to_cadquery(obj, *, workplane: bool = False, tolerance: float = 1e-7):
+def to_cadquery(obj, *, workplane: bool = False, tolerance: float = OCC_CONFUSION):
     """A cadquery ``Shape`` (``Edge``, ``Face``, ``Shell``, ``Solid``...) for ``obj``.
 
     ``obj`` is anything :func:`to_shape` accepts. With ``workplane=True`` the

@@ -17,6 +17,7 @@ import numpy as np
 from ..brep import Shell, Solid, TrimmedFace
 from ..brep.topology import pair_by_samples
 from ..errors import BackendError, ParameterError
+from ..tolerances import OCC_CONFUSION
 from .occ_backend import _ocp
 from .occ_geometry import _curve2d_to_occ, _same_domain, geom_to_occ
 from .occ_shapes import _compound
@@ -106,7 +107,7 @@ def _faces_of(obj):
     raise ParameterError(f"expected a TrimmedFace, Shell or Solid, got {type(obj).__name__}")
 
 
-def brep_to_shape(obj, *, tolerance: float = 1e-7):
+def brep_to_shape(obj, *, tolerance: float = OCC_CONFUSION):
     """An OCC ``TopoDS_Face`` / ``TopoDS_Shell`` / ``TopoDS_Solid`` for a splinekit TrimmedFace,
     Shell or Solid, with every edge shared by its faces built once. No validity check here:
     callers that need one use ``occ._check_valid``."""
@@ -266,6 +267,6 @@ def brep_to_shape(obj, *, tolerance: float = 1e-7):
     return result
 
 
-def brep_list_to_shape(objects, *, tolerance: float = 1e-7):
+def brep_list_to_shape(objects, *, tolerance: float = OCC_CONFUSION):
     """A compound of :func:`brep_to_shape` of each object."""
     return _compound([brep_to_shape(o, tolerance=tolerance) for o in objects])

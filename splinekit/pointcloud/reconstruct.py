@@ -9,12 +9,13 @@ from ..errors import FittingError, ParameterError
 from ..fit import fit_surface
 from ..fit.scattered import plane_parameters
 from ..implicit.base import Implicit
+from ..tolerances import DEVIATION_RTOL
 from ._cloud import as_cloud, as_neighbour_count, kd_tree, neighbours
 from .normals import estimate_normals
 
 __all__ = ["fit_height_field", "mls_distance", "reconstruct_implicit"]
 
-DEFAULT_RELATIVE_TOLERANCE = 1e-3
+DEFAULT_RELATIVE_TOLERANCE = DEVIATION_RTOL
 """Default height-field tolerance, relative to the diagonal of the cloud's bounding box."""
 
 

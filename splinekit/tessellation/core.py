@@ -13,13 +13,14 @@ from ..errors import ParameterError
 from ..mesh import PolyMesh
 from ..subdiv.surface import SubdivisionSurface
 from ..surfaces import BezierSurface, SplineSurface
+from ..tolerances import DEVIATION_RTOL
 from .curves import tessellate_curve
 from .surfaces import tessellate_patches
 from .trimmed import tessellate_faces
 
 __all__ = ["DEFAULT_ANGLE_TOLERANCE", "DEFAULT_RELATIVE_TOLERANCE", "tessellate"]
 
-DEFAULT_RELATIVE_TOLERANCE = 1e-3
+DEFAULT_RELATIVE_TOLERANCE = DEVIATION_RTOL
 """Default chordal tolerance as a fraction of the model's bounding-box diagonal."""
 DEFAULT_ANGLE_TOLERANCE = 0.5
 """Default largest angle (radians) between the exact normals at the two ends of a

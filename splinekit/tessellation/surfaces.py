@@ -54,6 +54,7 @@ import math
 import numpy as np
 
 from .. import _kernels, limits
+from ..tolerances import WELD
 from .assembly import assemble, outward
 from .cells import cells_of_patches
 from .counts import MAX_COUNT, initial_counts, node_groups, propagate
@@ -75,8 +76,8 @@ PILOT = 8
 """Largest per-direction count of the first (pilot) evaluation of a cell."""
 PILOT_TARGET = 0.8
 """Counts predicted from the pilot aim at this fraction of the tolerance."""
-WELD = 1e-8
-"""Weld and edge-matching distance, relative to the model's bounding-box diagonal."""
+# WELD (from splinekit.tolerances): weld and edge-matching distance, relative to the model's
+# bounding-box diagonal.
 
 
 def tessellate_patches(patches, tol: float, angle_tol, weld_scale: float) -> Tessellation:

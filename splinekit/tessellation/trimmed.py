@@ -41,6 +41,7 @@ import numpy as np
 
 from .. import limits
 from ..errors import BackendError, ParameterError
+from ..tolerances import WELD
 from .batch import CurveBatch, SurfaceBatch
 from .cells import second_derivative_bounds
 from .edges import _face_name, check_domains, edge_uses, group_uses, sample_groups
@@ -57,9 +58,8 @@ UV_GAP = 0.25
 """Largest gap (scaled grid steps) between one edge's last (u, v) and the next edge's first."""
 CLEARANCE = 0.5
 """Grid points closer than this (in scaled grid steps) to a trim are dropped."""
-WELD = 1e-8
-"""Weld distance of edge end points, relative to the model's bounding-box diagonal (or the
-edges' own tolerances where larger)."""
+# WELD (from splinekit.tolerances): weld distance of edge end points, relative to the model's
+# bounding-box diagonal (or the edges' own tolerances where larger).
 
 
 def _triangulator():
