@@ -102,6 +102,13 @@ def test_build_render_and_demo_write_into_out_by_default(in_process, capsys, tmp
     assert (tmp_path / "out" / "ball.png").read_bytes().startswith(PNG_MAGIC)
 
 
+def test_render_at_the_smallest_size(in_process, capsys, tmp_path):
+    from matplotlib.image import imread
+
+    assert in_process(["-q", "render", "ball", "--size", "64x64", "-o", "small.png"]) == 0
+    assert imread(tmp_path / "small.png").shape[:2] == (64, 64)
+
+
 def test_gitignore_ignores_the_default_output_folder():
     root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
     with open(os.path.join(root, ".gitignore")) as fh:

@@ -105,6 +105,21 @@ def test_size_and_an_existing_file_is_replaced_atomically(tmp_path):
     assert os.listdir(tmp_path) == ["pic.png"]  # no temporary file left behind
 
 
+@pytest.mark.parametrize("size", [(64, 64), (64, 400), (400, 64), (120, 120)])
+@pytest.mark.parametrize("color", ["curvature", "patch"])
+def test_small_pictures_render_without_bar_or_title(tmp_path, size, color):
+    """Down to the smallest size accepted (64 pixels a side) the object is drawn; the colour bar
+    (135 pixels wide) and a title that would not fit are left out rather than the object."""
+    path = render_patches(sphere(), tmp_path / "small.png", size=size, color=color, title="a sphere " * 4)
+    img = imread(path)[..., :3]
+    assert img.shape[:2] == (size[1], size[0])
+    ink = (img < 0.94).any(axis=-1)
+    assert 0.05 < ink.mean() < 0.9, ink.mean()  # the object, not an empty or smeared frame
+    rows, cols = np.nonzero(ink)
+    # no bar or title beside the object: the ink is one blob about as wide as it is high
+    assert abs(np.ptp(cols) - np.ptp(rows)) <= 0.2 * min(size) + 2
+
+
 def test_unwritable_target_leaves_nothing(tmp_path):
     with pytest.raises(OSError):
         render_patches(sphere(), tmp_path / "missing" / "pic.png", size=SMALL)

@@ -133,7 +133,7 @@ def test_through_hole_shows_the_background(tmp_path):
 
 def test_long_titles_wrap_inside_the_picture(tmp_path):
     title = "bracket (" + ", ".join(f"parameter_{i}={i * 1.5}" for i in range(14)) + "): normal"
-    text, height = picture._wrapped_title(title, 480)
+    text, height = picture._wrapped_title(title, 480, 400)
     assert len(text.splitlines()) >= 3 and height > 3 * 17
     assert max(len(line) for line in text.splitlines()) * 7.5 <= 480 - 20
     path = render_mesh(_crossed_quads(), tmp_path / "t.png", color="mean", size=(480, 400), title=title)

@@ -3,23 +3,12 @@
 from __future__ import annotations
 
 import numpy as np
-from scipy.sparse import coo_matrix
-from scipy.sparse.csgraph import connected_components
 
 from ..errors import ParameterError
 from ..mesh import PolyMesh
+from ..mesh.components import face_components
 from ..mesh.geometry import triangulate
 from . import colors, picture
-
-
-def face_components(mesh) -> np.ndarray:
-    """``(F,)`` connected-component index of each face (faces sharing a vertex are connected)."""
-    idx = np.asarray(mesh.face_indices)
-    face_of_corner = mesh.topology.corner_face
-    n = mesh.n_vertices + mesh.n_faces
-    graph = coo_matrix((np.ones(idx.size), (idx, mesh.n_vertices + face_of_corner)), shape=(n, n))
-    _, labels = connected_components(graph, directed=False)
-    return labels[mesh.n_vertices:]
 
 
 def render_mesh(mesh, path, *, color: str = "curvature", scale: str = "percentile", size=picture.DEFAULT_SIZE,
@@ -49,7 +38,7 @@ def render_mesh(mesh, path, *, color: str = "curvature", scale: str = "percentil
     patch_id = None
     if color == "patch":
         face_patch = getattr(mesh, "face_patch", None)
-        patch_id = (np.asarray(face_patch) if face_patch is not None else face_components(mesh))[source]
+        patch_id = (np.asarray(face_patch) if face_patch is not None else face_components(mesh)[1])[source]
     outward = 0
     if mesh.is_closed:  # closed PolyMeshes are consistently oriented; the volume's sign says which way
         outward = int(np.sign(float(mesh.volume)))

@@ -15,6 +15,7 @@ DEFAULT_SIZE = (1000, 800)
 DPI = 100
 SUPERSAMPLE = 2  # samples per pixel along each axis: edges and outlines are antialiased by averaging
 BAR_PIXELS = 135  # the colour bar and its labels take the rightmost 135 pixels
+BAR_MIN_HEIGHT = 120  # below this the bar's tick labels would overlap: no bar
 TITLE_FONT = 10  # points; at DPI 100 a line takes about 17 pixels and a character at most 7.5
 CREASE_COS = np.cos(np.radians(40.0))  # neighbouring samples whose normals differ more get an outline
 
@@ -63,13 +64,25 @@ def triangle_areas(tris):
     return 0.5 * np.linalg.norm(np.cross(tris[:, 1] - tris[:, 0], tris[:, 2] - tris[:, 0]), axis=1)
 
 
-def _wrapped_title(title, width):
+def _wrapped_title(title, width, height):
     """``(text, height)``: ``title`` broken into lines that fit ``width`` pixels at TITLE_FONT,
-    and the pixels the lines take at the top of the picture (0 without a title)."""
-    if not title:
+    and the pixels the lines take at the top of the picture. No title (``("", 0)``) when
+    there is none, or when it would not fit: lines under 20 characters, or more than a
+    third of ``height``."""
+    chars = int((width - 20) / 7.5)
+    if not title or chars < 20:
         return "", 0
-    lines = textwrap.wrap(str(title), max(20, int((width - 20) / 7.5))) or [""]
-    return "\n".join(lines), 12 + 17 * len(lines)
+    lines = textwrap.wrap(str(title), chars) or [""]
+    pixels = 12 + 17 * len(lines)
+    if pixels > height / 3:
+        return "", 0
+    return "\n".join(lines), pixels
+
+
+def _has_bar(norm, width, height):
+    """Whether the picture gets a colour bar: a curvature mode (``norm`` set) and room for it,
+    that is at least as many pixels left for the object as the bar takes, and BAR_MIN_HEIGHT."""
+    return norm is not None and width >= 2 * BAR_PIXELS and height >= BAR_MIN_HEIGHT
 
 
 def _outlines(fragments, covered, normals, pixel_size):
@@ -108,7 +121,9 @@ def draw(tris, corner_normals, color, scale, size, view, title, path, *, corner_
     (the curvature modes) are interpolated too; ``patch_id`` ``(T,)`` colours the
     ``patch`` mode. ``outward`` is +1 (-1) when the triangles bound a closed,
     consistently oriented surface with the normals pointing out (in): back faces are
-    then left out before rasterizing, which halves the work.
+    then left out before rasterizing, which halves the work. A picture too small for the
+    colour bar or the title (see :func:`_has_bar`, :func:`_wrapped_title`) is drawn
+    without them.
     """
     plt = pyplot()
     from matplotlib import cm
@@ -127,9 +142,11 @@ def draw(tris, corner_normals, color, scale, size, view, title, path, *, corner_
         corner_values = None if corner_values is None else corner_values[front]
         patch_id = None if patch_id is None else np.asarray(patch_id)[front]
 
-    text, title_px = _wrapped_title(title, w)
-    frame_w = w - (BAR_PIXELS if norm is not None else 0)
-    frame_h = max(h - title_px, 16)
+    # a small picture leaves out the colour bar and the title rather than the object
+    text, title_px = _wrapped_title(title, w, h)
+    bar = _has_bar(norm, w, h)
+    frame_w = w - (BAR_PIXELS if bar else 0)
+    frame_h = h - title_px
     s = SUPERSAMPLE
     points = tris.reshape(-1, 3)
     xy, depth, pixels_per_unit = raster.project(points, view, frame_w * s, frame_h * s)
@@ -152,14 +169,14 @@ def draw(tris, corner_normals, color, scale, size, view, title, path, *, corner_
     fig = plt.figure(figsize=(w / DPI, h / DPI), dpi=DPI)
     try:
         fig.figimage(image, xo=0, yo=0, origin="upper")
-        if norm is not None:
+        if bar:
             top = min(0.82, 1.0 - (title_px + 24.0) / h)  # below the title
             cax = fig.add_axes([1.0 - BAR_PIXELS / w, 0.14, 18.0 / w, max(top - 0.14, 0.2)])
-            bar = fig.colorbar(cm.ScalarMappable(norm=norm, cmap=cmap), cax=cax)
-            bar.set_label(colors.colorbar_label(color, scale), fontsize=9)
+            colorbar = fig.colorbar(cm.ScalarMappable(norm=norm, cmap=cmap), cax=cax)
+            colorbar.set_label(colors.colorbar_label(color, scale), fontsize=9)
             if scale == "symlog":
-                bar.set_ticks(colors.symlog_ticks(norm))
-            bar.ax.tick_params(labelsize=8)
+                colorbar.set_ticks(colors.symlog_ticks(norm))
+            colorbar.ax.tick_params(labelsize=8)
         if text:
             fig.text(10.0 / w, 1.0 - 6.0 / h, text, fontsize=TITLE_FONT, va="top")
         return atomic_write(path, lambda tmp: fig.savefig(tmp, format="png", dpi=DPI, facecolor="white"))
