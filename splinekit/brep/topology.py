@@ -24,6 +24,8 @@ from functools import cached_property
 import numpy as np
 from scipy.sparse import coo_matrix
 
+from .links import close_pairs, first_use_labels, link_components
+
 __all__ = [
     "EdgeGroup", "ShellTopology", "TopologyQueries", "edge_points", "pair_by_samples", "shell_topology", "surface_points",
 ]
@@ -299,25 +301,23 @@ def pair_by_samples(points, tol) -> np.ndarray:
     Two uses are one edge when every sample agrees within the larger of their two tolerances, in
     the same order or reversed (the uses run the edge in opposite directions); the labels are the
     connected components of those pairs, numbered in order of their first use. The candidates
-    are the pairs whose middle samples lie within that distance (a k-d tree), so this costs
-    ``O(n log n)``. For keyless uses: uses that carry a ``key`` are paired by it.
+    are the pairs whose middle samples lie within that distance (:func:`.links.close_pairs`: a
+    sort, or a k-d tree where the sort would compare too many), so this costs ``O(n log n)``.
+    For keyless uses: uses that carry a ``key`` are paired by it.
     """
     P = np.asarray(points, dtype=np.float64)
     n = len(P)
     if n == 0:
         return np.zeros(0, dtype=np.intp)
     tol = np.broadcast_to(np.asarray(tol, dtype=np.float64), (n,))
-    from scipy.spatial import cKDTree  # on use: scipy.spatial takes ~0.15 s to import, ten times all of brep
-
-    pairs = cKDTree(P[:, P.shape[1] // 2]).query_pairs(float(tol.max()), output_type="ndarray")
+    pairs = close_pairs(P[:, P.shape[1] // 2], float(tol.max()))
     if len(pairs):
         a, b = pairs[:, 0], pairs[:, 1]
         limit = np.maximum(tol[a], tol[b])[:, None]
         same = (np.linalg.norm(P[a] - P[b], axis=-1) <= limit).all(axis=1)
         flip = (np.linalg.norm(P[a] - P[b][:, ::-1], axis=-1) <= limit).all(axis=1)
         pairs = pairs[same | flip]
-    graph = coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(n, n))
-    return _components(graph)
+    return first_use_labels(link_components(n, pairs[:, 0], pairs[:, 1]))
 
 
 def _clusters(points: np.ndarray, tol: np.ndarray) -> np.ndarray:
