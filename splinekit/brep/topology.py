@@ -4,7 +4,8 @@ characteristic, genus and closedness.
 Two uses of an edge are paired by their ``key`` when both carry one; a use without a key is paired
 geometrically with any use whose 3-D end points match (either way round) within the tolerance and
 whose arc-length mid points agree. Vertices are the uses' 3-D end points clustered within the
-tolerance. Candidates are found with KD-trees, so pairing costs ``O(n log n)`` in the number of
+tolerance. Candidates are found with a k-d tree (end points) or a sort (:mod:`.links`), and the
+links joined by whole-array component labelling, so pairing costs ``O(n log n)`` in the number of
 uses; only the per-use sampling is a Python loop over uses.
 
 Counting follows the Euler-Poincaré formula of B-reps with inner loops::
@@ -22,7 +23,6 @@ from dataclasses import dataclass
 from functools import cached_property
 
 import numpy as np
-from scipy.sparse import coo_matrix
 
 from .links import close_pairs, first_use_labels, link_components
 
@@ -54,14 +54,6 @@ def edge_points(face, edge, t) -> np.ndarray:
     if edge.curve is not None:
         return edge.curve.evaluate(t)
     return surface_points(face, edge.pcurve.evaluate(t))
-
-
-def _components(graph) -> np.ndarray:
-    """Connected-component labels ``(n,)`` of the undirected sparse ``(n, n)`` graph."""
-    # on use: scipy.sparse.csgraph loads scipy.sparse.linalg and scipy.linalg, ~0.1 s, more than all of brep
-    from scipy.sparse.csgraph import connected_components
-
-    return connected_components(graph, directed=False)[1]
 
 
 @dataclass(frozen=True)
@@ -167,8 +159,7 @@ class ShellTopology:
         g = self.use_group
         # face -> edge-group incidence; faces sharing a group are connected
         n = self.n_faces + len(self.edges)
-        graph = coo_matrix((np.ones(len(f)), (f, self.n_faces + g)), shape=(n, n))
-        labels = _components(graph)
+        labels = link_components(n, f, self.n_faces + g)
         return len(np.unique(labels[: self.n_faces]))
 
     @cached_property
@@ -178,8 +169,7 @@ class ShellTopology:
         if not free:
             return 0
         ends = np.array([g.vertices for g in free])
-        labels = _components(coo_matrix((np.ones(len(ends)), (ends[:, 0], ends[:, 1])),
-                                        shape=(len(self.vertices),) * 2))
+        labels = link_components(len(self.vertices), ends[:, 0], ends[:, 1])
         return len(np.unique(labels[ends[:, 0]]))
 
     @cached_property
@@ -276,8 +266,7 @@ def shell_topology(faces, tolerance: float | None = None) -> ShellTopology:
             rows += i[keep].tolist()
             cols += j[keep].tolist()
     if m:
-        graph = coo_matrix((np.ones(len(rows)), (rows, cols)), shape=(m, m))
-        parent = _components(graph)
+        parent = link_components(m, rows, cols)
     # degenerate uses stay single edges (each its own group)
     groups = {}
     for i in range(m):
@@ -325,14 +314,11 @@ def _clusters(points: np.ndarray, tol: np.ndarray) -> np.ndarray:
     n = len(points)
     if n == 0:
         return np.zeros(0, dtype=np.intp)
-    from scipy.spatial import cKDTree  # on use: scipy.spatial takes ~0.15 s to import, ten times all of brep
-    pairs = cKDTree(points).query_pairs(2.0 * float(tol.max()), output_type="ndarray")
+    pairs = close_pairs(points, 2.0 * float(tol.max()))
     if len(pairs):
         d = np.linalg.norm(points[pairs[:, 0]] - points[pairs[:, 1]], axis=1)
         pairs = pairs[d <= tol[pairs[:, 0]] + tol[pairs[:, 1]]]
-    graph = coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(n, n))
-    labels = _components(graph)
-    return labels
+    return first_use_labels(link_components(n, pairs[:, 0], pairs[:, 1]))
 
 
 class TopologyQueries:
