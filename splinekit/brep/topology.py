@@ -301,10 +301,12 @@ def pair_by_samples(points, tol) -> np.ndarray:
     tol = np.broadcast_to(np.asarray(tol, dtype=np.float64), (n,))
     pairs = close_pairs(P[:, P.shape[1] // 2], float(tol.max()))
     if len(pairs):
-        a, b = pairs[:, 0], pairs[:, 1]
-        limit = np.maximum(tol[a], tol[b])[:, None]
-        same = (np.linalg.norm(P[a] - P[b], axis=-1) <= limit).all(axis=1)
-        flip = (np.linalg.norm(P[a] - P[b][:, ::-1], axis=-1) <= limit).all(axis=1)
+        A, B = P[pairs[:, 0]], P[pairs[:, 1]]
+        limit2 = np.square(np.maximum(tol[pairs[:, 0]], tol[pairs[:, 1]]))[:, None]
+        d = A - B
+        same = (np.einsum("ijk,ijk->ij", d, d) <= limit2).all(axis=1)
+        d = A - B[:, ::-1]
+        flip = (np.einsum("ijk,ijk->ij", d, d) <= limit2).all(axis=1)
         pairs = pairs[same | flip]
     return first_use_labels(link_components(n, pairs[:, 0], pairs[:, 1]))
 
