@@ -103,7 +103,7 @@ def group_uses(uses, weld: float, pcurves, surfaces):
     Uses with equal keys form a group; keyless, non-degenerate uses are paired geometrically
     (:func:`splinekit.brep.topology.pair_by_samples` on the five points of
     :data:`EDGE_FRACTIONS`: all within ``weld`` of each other, in the same or the opposite
-    direction); degenerate uses stay alone. This is the tessellator's own pairing
+    direction); degenerate uses stay alone. The samples come from the tessellator's evaluators
     (``pcurves``, ``surfaces``: :mod:`.batch` evaluators of the uses' pcurves and the faces'
     surfaces); :mod:`splinekit.brep` topology may supply the pairing of a shell instead.
     """

@@ -4,7 +4,8 @@ The tessellator welds grid-border vertices that lie within the weld distance (th
 patches' shared edges, collapsed edges) and links cell edges that coincide; both need
 the close pairs of a point set (:func:`close_pairs`) and the connected components of
 the resulting links (:func:`components`). Compiled kernels serve both once loaded
-(:mod:`splinekit._kernels`); the numpy path gives the same results.
+(:mod:`splinekit._kernels`); else the numpy versions in :mod:`splinekit.brep.links` (the same
+results), which brep's own edge pairing and vertex clustering use.
 """
 
 from __future__ import annotations
