@@ -4,7 +4,8 @@ characteristic, genus and closedness.
 Two uses of an edge are paired by their ``key`` when both carry one; a use without a key is paired
 geometrically with any use whose 3-D end points match (either way round) within the tolerance and
 whose arc-length mid points agree. Vertices are the uses' 3-D end points clustered within the
-tolerance. Candidates are found with KD-trees, so pairing costs ``O(n log n)`` in the number of
+tolerance. Candidates are found with a k-d tree (end points) or a sort (:mod:`.links`), and the
+links joined by whole-array component labelling, so pairing costs ``O(n log n)`` in the number of
 uses; only the per-use sampling is a Python loop over uses.
 
 Counting follows the Euler-Poincaré formula of B-reps with inner loops::
@@ -22,7 +23,8 @@ from dataclasses import dataclass
 from functools import cached_property
 
 import numpy as np
-from scipy.sparse import coo_matrix
+
+from .links import close_pairs, first_use_labels, link_components
 
 __all__ = [
     "EdgeGroup", "ShellTopology", "TopologyQueries", "edge_points", "pair_by_samples", "shell_topology", "surface_points",
@@ -52,14 +54,6 @@ def edge_points(face, edge, t) -> np.ndarray:
     if edge.curve is not None:
         return edge.curve.evaluate(t)
     return surface_points(face, edge.pcurve.evaluate(t))
-
-
-def _components(graph) -> np.ndarray:
-    """Connected-component labels ``(n,)`` of the undirected sparse ``(n, n)`` graph."""
-    # on use: scipy.sparse.csgraph loads scipy.sparse.linalg and scipy.linalg, ~0.1 s, more than all of brep
-    from scipy.sparse.csgraph import connected_components
-
-    return connected_components(graph, directed=False)[1]
 
 
 @dataclass(frozen=True)
@@ -165,8 +159,7 @@ class ShellTopology:
         g = self.use_group
         # face -> edge-group incidence; faces sharing a group are connected
         n = self.n_faces + len(self.edges)
-        graph = coo_matrix((np.ones(len(f)), (f, self.n_faces + g)), shape=(n, n))
-        labels = _components(graph)
+        labels = link_components(n, f, self.n_faces + g)
         return len(np.unique(labels[: self.n_faces]))
 
     @cached_property
@@ -176,8 +169,7 @@ class ShellTopology:
         if not free:
             return 0
         ends = np.array([g.vertices for g in free])
-        labels = _components(coo_matrix((np.ones(len(ends)), (ends[:, 0], ends[:, 1])),
-                                        shape=(len(self.vertices),) * 2))
+        labels = link_components(len(self.vertices), ends[:, 0], ends[:, 1])
         return len(np.unique(labels[ends[:, 0]]))
 
     @cached_property
@@ -274,8 +266,7 @@ def shell_topology(faces, tolerance: float | None = None) -> ShellTopology:
             rows += i[keep].tolist()
             cols += j[keep].tolist()
     if m:
-        graph = coo_matrix((np.ones(len(rows)), (rows, cols)), shape=(m, m))
-        parent = _components(graph)
+        parent = link_components(m, rows, cols)
     # degenerate uses stay single edges (each its own group)
     groups = {}
     for i in range(m):
@@ -299,25 +290,25 @@ def pair_by_samples(points, tol) -> np.ndarray:
     Two uses are one edge when every sample agrees within the larger of their two tolerances, in
     the same order or reversed (the uses run the edge in opposite directions); the labels are the
     connected components of those pairs, numbered in order of their first use. The candidates
-    are the pairs whose middle samples lie within that distance (a k-d tree), so this costs
-    ``O(n log n)``. For keyless uses: uses that carry a ``key`` are paired by it.
+    are the pairs whose middle samples lie within that distance (:func:`.links.close_pairs`: a
+    sort, or a k-d tree where the sort would compare too many), so this costs ``O(n log n)``.
+    For keyless uses: uses that carry a ``key`` are paired by it.
     """
     P = np.asarray(points, dtype=np.float64)
     n = len(P)
     if n == 0:
         return np.zeros(0, dtype=np.intp)
     tol = np.broadcast_to(np.asarray(tol, dtype=np.float64), (n,))
-    from scipy.spatial import cKDTree  # on use: scipy.spatial takes ~0.15 s to import, ten times all of brep
-
-    pairs = cKDTree(P[:, P.shape[1] // 2]).query_pairs(float(tol.max()), output_type="ndarray")
+    pairs = close_pairs(P[:, P.shape[1] // 2], float(tol.max()))
     if len(pairs):
-        a, b = pairs[:, 0], pairs[:, 1]
-        limit = np.maximum(tol[a], tol[b])[:, None]
-        same = (np.linalg.norm(P[a] - P[b], axis=-1) <= limit).all(axis=1)
-        flip = (np.linalg.norm(P[a] - P[b][:, ::-1], axis=-1) <= limit).all(axis=1)
+        A, B = P[pairs[:, 0]], P[pairs[:, 1]]
+        limit2 = np.square(np.maximum(tol[pairs[:, 0]], tol[pairs[:, 1]]))[:, None]
+        d = A - B
+        same = (np.einsum("ijk,ijk->ij", d, d) <= limit2).all(axis=1)
+        d = A - B[:, ::-1]
+        flip = (np.einsum("ijk,ijk->ij", d, d) <= limit2).all(axis=1)
         pairs = pairs[same | flip]
-    graph = coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(n, n))
-    return _components(graph)
+    return first_use_labels(link_components(n, pairs[:, 0], pairs[:, 1]))
 
 
 def _clusters(points: np.ndarray, tol: np.ndarray) -> np.ndarray:
@@ -325,14 +316,11 @@ def _clusters(points: np.ndarray, tol: np.ndarray) -> np.ndarray:
     n = len(points)
     if n == 0:
         return np.zeros(0, dtype=np.intp)
-    from scipy.spatial import cKDTree  # on use: scipy.spatial takes ~0.15 s to import, ten times all of brep
-    pairs = cKDTree(points).query_pairs(2.0 * float(tol.max()), output_type="ndarray")
+    pairs = close_pairs(points, 2.0 * float(tol.max()))
     if len(pairs):
         d = np.linalg.norm(points[pairs[:, 0]] - points[pairs[:, 1]], axis=1)
         pairs = pairs[d <= tol[pairs[:, 0]] + tol[pairs[:, 1]]]
-    graph = coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(n, n))
-    labels = _components(graph)
-    return labels
+    return first_use_labels(link_components(n, pairs[:, 0], pairs[:, 1]))
 
 
 class TopologyQueries:

@@ -27,11 +27,11 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..brep.topology import pair_by_samples
 from ..errors import ParameterError
 from ..mesh.topology import ranges
 from .batch import CurveBatch
 from .curves import _span_bounds
-from .welding import close_pairs, components
 
 __all__ = ["EdgeUse", "check_domains", "edge_uses", "group_uses", "sample_groups"]
 
@@ -101,8 +101,9 @@ def group_uses(uses, weld: float, pcurves, surfaces):
     """Groups of the uses that are one edge: lists of use indices.
 
     Uses with equal keys form a group; keyless, non-degenerate uses are paired geometrically
-    (the five points of :data:`EDGE_FRACTIONS` within ``weld`` of each other, in the same or the
-    opposite direction); degenerate uses stay alone. This is the tessellator's own pairing
+    (:func:`splinekit.brep.topology.pair_by_samples` on the five points of
+    :data:`EDGE_FRACTIONS`: all within ``weld`` of each other, in the same or the opposite
+    direction); degenerate uses stay alone. The samples come from the tessellator's evaluators
     (``pcurves``, ``surfaces``: :mod:`.batch` evaluators of the uses' pcurves and the faces'
     surfaces); :mod:`splinekit.brep` topology may supply the pairing of a shell instead.
     """
@@ -125,14 +126,7 @@ def group_uses(uses, weld: float, pcurves, surfaces):
         uv = pcurves.evaluate(k, t)
         face = np.array([uses[i].f for i in loose])
         pts = surfaces.evaluate(np.repeat(face, EDGE_FRACTIONS.size), uv[:, 0], uv[:, 1]).reshape(len(loose), -1, 3)
-        lab = np.arange(len(loose))
-        pairs = close_pairs(pts[:, 2], weld)
-        if len(pairs):
-            A, B = pts[pairs[:, 0]], pts[pairs[:, 1]]
-            same = (np.linalg.norm(A - B, axis=-1) <= weld).all(axis=1)
-            flip = (np.linalg.norm(A - B[:, ::-1], axis=-1) <= weld).all(axis=1)
-            ok = pairs[same | flip]
-            lab = components(len(loose), ok[:, 0], ok[:, 1])
+        lab = pair_by_samples(pts, weld)
         order = np.argsort(lab, kind="stable")
         cuts = np.flatnonzero(np.diff(lab[order])) + 1
         groups += [[loose[j] for j in part] for part in np.split(order, cuts)]
