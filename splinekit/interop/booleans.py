@@ -50,6 +50,7 @@ import weakref
 
 import numpy as np
 
+from .._signals import reraise_interrupt
 from .._validate import as_positive
 from ..errors import (
     BackendError,
@@ -76,6 +77,7 @@ def _require_manifold3d():
     try:
         import manifold3d
     except ImportError as exc:
+        reraise_interrupt(exc)  # Ctrl-C during the import is an interrupt, not a missing package
         raise MissingDependencyError(
             f"mesh booleans need manifold3d: install it with pip install manifold3d; the import failed with: {exc}"
         ) from None

@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from .._signals import reraise_interrupt
 from .._validate import as_positive
 from ..errors import BackendError, ParameterError
 from ..tolerances import OCC_CONFUSION
@@ -269,6 +270,7 @@ def to_build123d(obj, *, tolerance: float = OCC_CONFUSION):
     try:
         import build123d
     except ImportError as exc:
+        reraise_interrupt(exc)
         raise _missing("build123d", exc) from None
     typed, name = _typed(shape)
     cls = {"Compsolid": "Compound"}.get(name, name)
@@ -288,6 +290,7 @@ def to_cadquery(obj, *, workplane: bool = False, tolerance: float = OCC_CONFUSIO
     try:
         import cadquery
     except ImportError as exc:
+        reraise_interrupt(exc)
         raise _missing("cadquery", exc) from None
     typed, _ = _typed(shape)
     cq_shape = cadquery.Shape.cast(typed)

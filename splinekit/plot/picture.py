@@ -8,6 +8,7 @@ import textwrap
 import numpy as np
 
 from .._atomic import atomic_write
+from .._signals import reraise_interrupt
 from ..errors import MissingDependencyError, ParameterError
 from . import colors, raster
 
@@ -28,6 +29,7 @@ def pyplot():
         matplotlib.use("Agg")
         import matplotlib.pyplot as plt
     except ImportError as exc:  # pragma: no cover - matplotlib is a dependency
+        reraise_interrupt(exc)  # Ctrl-C during the import is an interrupt, not a missing package
         raise MissingDependencyError(f"rendering needs matplotlib: pip install matplotlib ({exc})") from None
     return plt
 

@@ -40,6 +40,7 @@ from __future__ import annotations
 import numpy as np
 
 from .. import limits
+from .._signals import reraise_interrupt
 from ..errors import BackendError, ParameterError
 from ..tolerances import WELD
 from .batch import CurveBatch, SurfaceBatch
@@ -66,6 +67,7 @@ def _triangulator():
     try:
         import triangle
     except ImportError as exc:  # pragma: no cover - a core dependency
+        reraise_interrupt(exc)
         raise BackendError("tessellating trimmed faces needs the 'triangle' package: pip install triangle") from exc
     return triangle
 
