@@ -29,6 +29,7 @@ from __future__ import annotations
 
 import collections
 import concurrent.futures
+import ctypes
 import os
 import re
 import signal
@@ -289,6 +290,35 @@ def test_main_in_process_ends_on_a_signal_with_one_line_and_restores_the_handler
     assert err.splitlines() == [MESSAGES[signum]]
     assert time.monotonic() - t0 < 15  # not the 20 s sleep: interrupted
     assert {s: signal.getsignal(s) for s in before} == before and sys.unraisablehook is hook
+
+
+def test_a_signal_inside_the_unraisable_hook_is_raised_later_not_printed(monkeypatch, capsys):
+    """Under load the resent signal can land while ``sys.unraisablehook`` still runs (it once
+    printed "Exception ignored in sys.unraisablehook" and a traceback); here the hook is made to
+    meet a signal every time, deterministically: the interrupt must still end the sleep below
+    as an Interrupted, and nothing may be printed."""
+    from splinekit import _signals
+
+    real, sent = _signals._again_soon, []
+
+    def again_soon_meeting_a_signal():
+        if not sent:  # the first call comes from the hook: a signal lands while it runs
+            sent.append(True)
+            os.kill(os.getpid(), signal.SIGTERM)
+            for _ in range(10000):  # many chances for the handler to run inside the hook
+                pass
+        real()
+
+    monkeypatch.setattr(_signals, "_again_soon", again_soon_meeting_a_signal)
+    callback = ctypes.CFUNCTYPE(None)(lambda: (os.kill(os.getpid(), signal.SIGTERM), sum(range(1000))))
+    t0 = time.monotonic()
+    with _signals.running():
+        with pytest.raises(_signals.Interrupted) as info:
+            callback()  # ctypes discards the Interrupted raised inside: the hook gets it
+            time.sleep(20)
+    assert sent and info.value.signum == signal.SIGTERM and time.monotonic() - t0 < 15
+    captured = capsys.readouterr()
+    assert captured.err == "" and captured.out == ""
 
 
 def test_a_signal_inside_a_deferred_block_is_raised_when_it_ends(tmp_path):
