@@ -18,7 +18,8 @@ Python runs a handler only between bytecodes of the main thread, so a signal tha
 OpenCascade's C++ code (or numba's compiler) runs takes effect when control is back in Python.
 If that first Python code is a callback from C whose exceptions C discards ("Exception ignored
 on calling ctypes callback function", as numba's compiler callbacks do), the discarded interrupt
-is caught by our ``sys.unraisablehook`` and raised again a moment later in ordinary code. An
+is caught by our ``sys.unraisablehook`` and raised again a moment later in ordinary code (the
+signal is resent until it lands outside the hook, where raising prints no traceback). An
 interrupt that a library swallows outright still counts: ``main`` asks :func:`received` when
 the command ends. A second signal while the first one is being handled ends the command's
 process at once.
