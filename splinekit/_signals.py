@@ -177,6 +177,8 @@ def _resend() -> None:
         with _lock:  # running.__exit__ takes it too: no signal is sent after the phase ended
             if _state.phase != _RUNNING or _state.in_flight or _state.received is None:
                 return
+            if _state.pending is not None:  # a deferred block holds it and raises it at its end
+                return
             if hasattr(signal, "pthread_kill"):
                 signal.pthread_kill(threading.main_thread().ident, _state.received)
             else:  # pragma: no cover - Windows: the handler runs, a blocking call is not interrupted
