@@ -18,7 +18,8 @@ Python runs a handler only between bytecodes of the main thread, so a signal tha
 OpenCascade's C++ code (or numba's compiler) runs takes effect when control is back in Python.
 If that first Python code is a callback from C whose exceptions C discards ("Exception ignored
 on calling ctypes callback function", as numba's compiler callbacks do), the discarded interrupt
-is caught by our ``sys.unraisablehook`` and raised again a moment later in ordinary code. An
+is caught by our ``sys.unraisablehook`` and raised again a moment later in ordinary code (the
+signal is resent until it lands outside the hook, where raising prints no traceback). An
 interrupt that a library swallows outright still counts: ``main`` asks :func:`received` when
 the command ends. A second signal while the first one is being handled ends the command's
 process at once.
@@ -34,6 +35,7 @@ import os
 import signal
 import sys
 import threading
+import time
 
 __all__ = ["Interrupted", "STATUS", "deferred", "finish", "interruptible", "install_for_command", "message",
            "received", "reraise_interrupt", "running"]
@@ -65,9 +67,13 @@ class _State:
     pending: int | None = None  # held by a deferred block
     deferred = 0  # depth of deferred blocks (interruptible sets it to 0 inside)
     previous_hook = None  # sys.unraisablehook before running()
+    resender = None  # the thread that sends a discarded interrupt again (see _again_soon)
 
 
 _state = _State()
+# the resender's check-and-send against the end of the running phase; reentrant because the
+# handler may take it while the main thread holds it (in _again_soon)
+_lock = threading.RLock()
 
 
 def message(signum: int) -> str:
@@ -115,6 +121,9 @@ def _handler(signum, frame) -> None:
         _state.received = signum
     if _state.phase != _RUNNING:
         _exit_now(signum)
+    if _in_hook(frame):  # an exception raised here would be printed as a traceback, not raised
+        _again_soon()
+        return
     if _state.deferred or _state.pending is not None:  # held until the deferred block ends
         if _state.pending is None:
             _state.pending = signum
@@ -132,21 +141,48 @@ def _unraisable(unraisable) -> None:
     exc = unraisable.exc_value
     if isinstance(exc, Interrupted) and _state.phase == _RUNNING:
         _state.in_flight = False
-        timer = threading.Timer(_AGAIN_AFTER, _again, (exc.signum,))
-        timer.daemon = True
-        timer.start()
+        _again_soon()
         return
     (_state.previous_hook or sys.__unraisablehook__)(unraisable)
 
 
-def _again(signum: int) -> None:
-    """Send ``signum`` to the main thread again (a real signal, so that a blocking call such as
-    a sleep is interrupted too)."""
-    if _state.phase == _RUNNING and not _state.in_flight:
-        if hasattr(signal, "pthread_kill"):
-            signal.pthread_kill(threading.main_thread().ident, signum)
-        else:  # pragma: no cover - Windows: the handler runs, a blocking call is not interrupted
-            _thread.interrupt_main(signum)
+def _in_hook(frame) -> bool:
+    """Whether ``frame`` (where the main thread was when a signal came) runs inside
+    :func:`_unraisable`, whose exceptions Python prints as "Exception ignored in
+    sys.unraisablehook" with a traceback instead of raising them."""
+    while frame is not None:
+        if frame.f_code is _unraisable.__code__:
+            return True
+        frame = frame.f_back
+    return False
+
+
+def _again_soon() -> None:
+    """Start (once) the thread that sends the first signal to the main thread again until the
+    interrupt is raised in ordinary code. A resent signal that lands inside the hook again is
+    dropped by the handler and sent once more ``_AGAIN_AFTER`` later, so under any load one of
+    them lands where it can be raised."""
+    with _lock:
+        if _state.resender is not None and _state.resender.is_alive():
+            return
+        _state.resender = threading.Thread(target=_resend, name="splinekit-signal-again", daemon=True)
+        _state.resender.start()
+
+
+def _resend() -> None:
+    """Send the run's first signal to the main thread every ``_AGAIN_AFTER`` seconds until it is
+    raised (a real signal, so that a blocking call such as a sleep is interrupted too)."""
+    while True:
+        time.sleep(_AGAIN_AFTER)
+        with _lock:  # running.__exit__ takes it too: no signal is sent after the phase ended
+            if _state.phase != _RUNNING or _state.in_flight or _state.received is None:
+                return
+            if _state.pending is not None:  # a deferred block holds it and raises it at its end
+                return
+            if hasattr(signal, "pthread_kill"):
+                signal.pthread_kill(threading.main_thread().ident, _state.received)
+            else:  # pragma: no cover - Windows: the handler runs, a blocking call is not interrupted
+                _thread.interrupt_main(_state.received)
 
 
 def _in_main_thread() -> bool:
@@ -200,10 +236,13 @@ class running:
     def __exit__(self, *exc) -> None:
         if not self.active:
             return
+        _state.in_flight = True  # main has reported any signal by now: one more is not resent
         if self.own:
-            _state.phase = _FINISHED
+            with _lock:
+                _state.phase = _FINISHED
             return
-        _state.phase, _state.received, _state.in_flight, _state.pending, _state.deferred = _OFF, None, False, None, 0
+        with _lock:
+            _state.phase, _state.received, _state.in_flight, _state.pending, _state.deferred = _OFF, None, False, None, 0
         sys.unraisablehook = _state.previous_hook
         for signum, handler in self.previous.items():
             signal.signal(signum, handler if handler is not None else signal.SIG_DFL)

@@ -28,6 +28,7 @@ from hypothesis import strategies as st
 
 import exporters
 from exporters import _stepscan
+from exporters.step import read_step_shape
 from splinekit import limits
 from splinekit.errors import FileFormatError, ResourceLimitError
 from splinekit.mesh import primitives
@@ -196,7 +197,6 @@ def test_real_step_files_pass_the_scan_and_still_read(capsys):
     """Files from thirteen CAD systems nest at most 4 levels; the scan passes them and OCC reads them
     through `splinekit info`'s reader (the scan is on its path)."""
     pytest.importorskip("OCP")
-    from splinekit.cli import read_step_shape
 
     total_bytes, total_s = 0, 0.0
     for path in STEP_FILES:
