@@ -122,6 +122,7 @@ def transfer(path: str, mode: str, metres: float = 0.001) -> list:
     """
     seconds = BASE_SECONDS + SECONDS_PER_MB * os.path.getsize(path) / 2**20
     budget = limits.current_budget()
+    budget_text = f"{budget / 2**20:.0f} MiB" if budget != float("inf") else "(none set)"
     with _lock, tempfile.TemporaryDirectory(prefix="splinekit-step-") as out:
         proc = _running()
         request = {"path": os.path.abspath(path), "mode": mode, "metres": float(metres), "out": out,
@@ -140,12 +141,12 @@ def transfer(path: str, mode: str, metres: float = 0.001) -> list:
             raise FileFormatError(
                 f"OpenCascade crashed translating the STEP file {path!r} (exit status {proc.returncode}): its "
                 "entities are inconsistent (e.g. a reference to an entity of the wrong type) or it needs "
-                f"more than the memory budget of {budget / 2**20:.0f} MiB"
+                f"more than the memory budget of {budget_text}"
             )
         if "error" in result:
             message = result["message"]
             if message == "MemoryError":
                 message = (f"translating the STEP file {path!r} needs more than the memory budget of "
-                           f"{budget / 2**20:.0f} MiB; raise it with {limits.ENV_VAR}=<bytes>")
+                           f"{budget_text}; raise it with {limits.ENV_VAR}=<bytes>")
             raise _ERRORS.get(result["error"], FileFormatError)(message)
         return [(name, read_brep_shape(os.path.join(out, f"{i}.brep"))) for i, name in enumerate(result["names"])]

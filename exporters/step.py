@@ -375,10 +375,11 @@ def import_step(path, *, unit: str = "mm", strict: bool = True, surfaces: bool =
     ``surfaces=True`` gives the former reading instead: one item per face holding the plain
     B-spline form of its surface over the face's UV box (trims dropped).
 
-    ``isolated=True`` (default): OCC's translation runs in a child process (see
+    ``isolated=True`` (default): OCC's translation runs in a worker process (see
     :mod:`exporters._step_isolated`), so a file that crashes or hangs OCC raises FileFormatError
-    instead of ending this process; it costs about a second per file (starting the child).
-    ``isolated=False`` translates in this process: for files from a trusted writer only.
+    instead of ending this process. The worker starts once per process (a few seconds: it
+    imports OCP); after that a file costs what it costs in-process. ``isolated=False``
+    translates in this process: for files from a trusted writer only.
 
     Raises FileFormatError if ``path`` is missing, unreadable or not STEP, or
     holds no geometry, or nests parentheses deeper than OCC's parser survives

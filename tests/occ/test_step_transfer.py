@@ -146,3 +146,16 @@ def test_the_worker_is_held_to_the_memory_budget(tmp_path):
         _step_isolated.transfer(base_step, "named")
     with limits.budget("off"):
         assert len(_step_isolated.transfer(base_step, "named")) == 1
+
+
+def test_a_transfer_over_its_time_limit_is_refused(base_step, monkeypatch):
+    from exporters import _step_isolated
+    from splinekit.errors import FileFormatError
+
+    _step_isolated.start()  # the limit is on the transfer, not on the worker's start
+    monkeypatch.setattr(_step_isolated, "BASE_SECONDS", 0.0)
+    monkeypatch.setattr(_step_isolated, "SECONDS_PER_MB", 0.0)
+    with pytest.raises(FileFormatError, match="did not finish translating the STEP file .*base.step"):
+        _step_isolated.transfer(base_step, "named")
+    monkeypatch.undo()
+    assert len(_step_isolated.transfer(base_step, "named")) == 1  # a new worker took over
