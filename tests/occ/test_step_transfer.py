@@ -2,7 +2,7 @@
 worker process (exporters._step_isolated), each gives a SplineKitError naming the file.
 
 The crashers are mutations of a file build123d writes (a box minus a cylinder), one per class
-found by mutating references (see the closing note of the reliability issue): a reference to an
+found by replacing one reference at a time in such a file (150 tries per kind): a reference to an
 entity of the wrong type, an entity referring to itself, and two entities referring to each
 other. Each test first shows that the file crashes an in-process read (the test would fail if the
 file were harmless), then that the default, isolated read refuses it. Both run in subprocesses
