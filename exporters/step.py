@@ -29,6 +29,7 @@ from splinekit.tolerances import OCC_CONFUSION
 
 from ._brep_io import BrepItem, ReadResult, default_names, items_from_shapes
 from ._meshio import _fspath
+from ._step_isolated import transfer
 from ._stepscan import scan_step, syntax_errors
 
 __all__ = ["export_step", "import_step", "StepItem", "ReadResult", "STEP_UNITS"]
@@ -353,7 +354,8 @@ def _named_shapes(tool, label, inherited, parent_loc, mods):
     return [(name, tool.GetShape_s(label).Moved(parent_loc))]
 
 
-def import_step(path, *, unit: str = "mm", strict: bool = True, surfaces: bool = False) -> ReadResult:
+def import_step(path, *, unit: str = "mm", strict: bool = True, surfaces: bool = False,
+                isolated: bool = True) -> ReadResult:
     """The solids, shells and faces of the STEP file ``path`` as splinekit B-rep objects, in file order.
 
     Returns a :class:`ReadResult` (a list) of :class:`StepItem` ``(name, geometry)``: one item
@@ -374,6 +376,12 @@ def import_step(path, *, unit: str = "mm", strict: bool = True, surfaces: bool =
     ``surfaces=True`` gives the former reading instead: one item per face holding the plain
     B-spline form of its surface over the face's UV box (trims dropped).
 
+    ``isolated=True`` (default): OCC's translation runs in a worker process (see
+    :mod:`exporters._step_isolated`), so a file that crashes or hangs OCC raises FileFormatError
+    instead of ending this process. The worker starts once per process (a few seconds: it
+    imports OCP); after that a file costs what it costs in-process. ``isolated=False``
+    translates in this process: for files from a trusted writer only.
+
     Raises FileFormatError if ``path`` is missing, unreadable or not STEP, or
     holds no geometry, or nests parentheses deeper than OCC's parser survives
     (see :mod:`exporters._stepscan`); ResourceLimitError if OCC's model of the
@@ -384,11 +392,12 @@ def import_step(path, *, unit: str = "mm", strict: bool = True, surfaces: bool =
     _, metres = _unit(unit)
     if not os.path.isfile(path):
         raise FileFormatError(f"STEP file {path!r} does not exist or is not a file")
-    for flag, value in (("strict", strict), ("surfaces", surfaces)):
+    for flag, value in (("strict", strict), ("surfaces", surfaces), ("isolated", isolated)):
         if not isinstance(value, bool):
             raise ParameterError(f"{flag} must be True or False, got {value!r}")
     scan_step(path)  # OCC's parser crashes the process on some inputs: refuse them first
-    named = _read_named_shapes(path, metres)
+    # and its transfer on others (entities of the wrong type, cycles): run it in a child
+    named = transfer(path, "named", metres) if isolated else _read_named_shapes(path, metres)
     if surfaces:
         items = ReadResult()
         for name, shape in named:
@@ -402,9 +411,10 @@ def import_step(path, *, unit: str = "mm", strict: bool = True, surfaces: bool =
     return items
 
 
-def read_step_shape(path):
+def read_step_shape(path, *, isolated: bool = True):
     """The OCC shape of all roots of the STEP file ``path``, as OCC reads it (coordinates in
     millimetres), for measuring the file with OCC (:mod:`splinekit.interop.gprop`).
+    ``isolated``: translate in a child process, as :func:`import_step` does.
 
     Raises FileFormatError if ``path`` is missing, unreadable, not STEP, holds no shapes or
     nests parentheses deeper than OCC's parser survives (see :mod:`exporters._stepscan`).
@@ -414,6 +424,8 @@ def read_step_shape(path):
     if not os.path.isfile(path):
         raise FileFormatError(f"STEP file {path!r} does not exist or is not a file")
     scan_step(path)  # OCC's parser crashes the process on some inputs: refuse them first
+    if isolated:
+        return transfer(path, "shape")[0][1]
     with _occ_settings():
         reader = STEPControl.STEPControl_Reader()
         status = reader.ReadFile(path)

@@ -135,6 +135,21 @@ BOMBS = {
         "from splinekit.pointcloud import sample_curve\nsample_curve(splinekit.BezierCurve(np.eye(3)), 40_000_000)"
     ),
     "poisson_disk radius 0.003": "from splinekit.pointcloud import poisson_disk\npoisson_disk(primitives.icosphere(3), 0.003)",
+    # a cloud crowded within the radius: 2e10 neighbour pairs, counted before the pair list exists
+    "poisson_disk on a crowded cloud": (
+        "from splinekit.pointcloud import poisson_disk\n"
+        "poisson_disk(np.random.default_rng(0).random((200_000, 3)) * 1e-3, 0.1)"
+    ),
+    # grid_mesh refuses in each of its rounds: the grid (a broadcast view, 8e9 samples), the
+    # straddling cells (a checkerboard: every cell straddles) and the triangles
+    "grid_mesh of a broadcast 2000^3 grid": (
+        "from splinekit.implicit.marching import grid_mesh\ngrid_mesh(np.broadcast_to(1.0, (2000, 2000, 2000)), (0, 0, 0), 1.0)"
+    ),
+    "grid_mesh of a 200^3 checkerboard": (
+        "from splinekit.implicit.marching import grid_mesh\nr = np.arange(200)\n"
+        "v = ((r[:, None, None] + r[None, :, None] + r) % 2).astype(np.float64) - 0.5\n"
+        "grid_mesh(v, (0, 0, 0), 1.0)"
+    ),
 }
 
 
@@ -160,6 +175,30 @@ def test_teapot_at_1e_4_is_refused_under_a_small_budget():
     out = run_fresh(["from models import teapot\nsplinekit.tessellate(teapot.build().bodies[0], 1e-4)"], budget="256M")[0]
     assert out["error"] == "ResourceLimitError" and "256 MiB" in out["message"], out
     assert out["peak_mb"] < PEAK_MB, out
+
+
+def test_grid_mesh_is_charged_in_each_round():
+    # a 40^3 checkerboard: about 69,000 straddling cells (83 MB charged) but 768,000 triangles
+    # (460 MB): under 200 MB the cell round passes and the triangle round refuses; each round's
+    # message names what it counts, so the three rounds are told apart
+    checker = ("from splinekit.implicit.marching import grid_mesh\nr = np.arange({n})\n"
+               "v = ((r[:, None, None] + r[None, :, None] + r) % 2).astype(np.float64) - 0.5\n"
+               "m = grid_mesh(v, (0, 0, 0), 1.0)")
+    small, big, crowded = run_fresh([checker.format(n=12), checker.format(n=40), BOMBS["poisson_disk on a crowded cloud"]],
+                                    budget="200M")
+    assert small["error"] is None, small
+    assert big["error"] == "ResourceLimitError" and "triangles" in big["message"], big
+    assert crowded["error"] == "ResourceLimitError" and "neighbour pairs" in crowded["message"], crowded
+    assert big["peak_mb"] < PEAK_MB and crowded["peak_mb"] < PEAK_MB
+    assert "cells that straddle" in run_fresh([BOMBS["grid_mesh of a 200^3 checkerboard"]])[0]["message"]
+    assert "grid of shape" in run_fresh([BOMBS["grid_mesh of a broadcast 2000^3 grid"]])[0]["message"]
+
+
+def test_poisson_disk_on_a_cloud_under_a_budget_keeps_working():
+    # a sparse cloud's neighbour pairs fit a small budget: the count does not refuse real work
+    code = ("from splinekit.pointcloud import poisson_disk\n"
+            "P = np.random.default_rng(0).random((20_000, 3))\nassert 0 < len(poisson_disk(P, 0.05, 1)) < 20_000")
+    assert run_fresh([code], budget="64M")[0]["error"] is None
 
 
 def test_refused_under_the_default_budget():

@@ -101,7 +101,8 @@ def build_and_export(reg, name, sets, formats, tolerance, out_dir, strict, conso
             if fmt == "step":
                 names = list(model.body_names) + [s.name or model.name for s in solids]
                 exporters.export_step(path, [list(b) for b in model.bodies] + solids, names=names or None)
-                step_shape = read_step_shape(path)  # what the file holds, as a reader sees it
+                # what the file holds, as a reader sees it; the file is ours, so read in-process
+                step_shape = read_step_shape(path, isolated=False)
                 holds = step_file_text(topology_counts(step_shape))
             else:
                 exporters.export_mesh(path, mesh, format=fmt)

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from .. import limits
 from .._validate import as_float_array, as_real
 from ..errors import ParameterError
 from ..mesh.polymesh import PolyMesh
@@ -17,6 +18,20 @@ from ..mesh.topology import Topology
 from ._checks import origin3, spacing3
 
 __all__ = ["grid_mesh"]
+
+# Peak memory charged to the memory budget (:mod:`splinekit.limits`) in the three rounds of
+# :func:`grid_mesh`, each before it allocates; measured with tracemalloc on spheres and on a
+# checkerboard (every cell straddling), with a margin; each round is checked on its own.
+BYTES_PER_SAMPLE = 32
+"""Per (padded) grid sample: the shifted values, their padded copy, the inside mask, the
+int8 inside-corner count per cell and the straddle masks (measured 12 without padding)."""
+BYTES_PER_CELL = 1200
+"""Per cell that straddles the level: its corner and tetrahedron sample indices, the
+corner values and the case masks (about 1000 by the sizes of those arrays)."""
+BYTES_PER_TRIANGLE = 600
+"""Per output triangle: edge keys, their sort and inverse, the vertices and the
+PolyMesh/Topology built from them (measured peak 430-460 per triangle on spheres
+and a checkerboard, everything included)."""
 
 # -- meshing straight from the samples ------------------------------------------------------------------------
 # Kuhn triangulation of the unit cube: 6 tetrahedra sharing the diagonal 0 -> 7
@@ -73,6 +88,7 @@ def _case_table():
 
 
 _CASES = _case_table()
+_CASE_TRIANGLES = (_CASES[:, :, 0] >= 0).sum(axis=1)  # triangles per inside-mask: 0, 1 or 2
 
 
 def grid_mesh(values, origin, spacing, level: float = 0.0):
@@ -98,6 +114,9 @@ def grid_mesh(values, origin, spacing, level: float = 0.0):
         Empty (no faces) when no sample is inside or none is outside.
     """
     vals = as_float_array(values, "values")
+    if vals.ndim == 3:
+        padded = float(np.prod(np.asarray(vals.shape, dtype=np.float64) + 2.0))
+        limits.check(padded * BYTES_PER_SAMPLE, f"meshing a grid of shape {vals.shape}")
     if vals.ndim != 3 or min(vals.shape) < 2:
         raise ParameterError(f"values must be an (nx, ny, nz) array with every axis >= 2, got shape {vals.shape}")
     if not np.isfinite(vals).all():
@@ -115,19 +134,26 @@ def grid_mesh(values, origin, spacing, level: float = 0.0):
         origin = origin - spacing
     nx, ny, nz = v.shape
     inside = v < 0
-    cube_in = np.zeros((nx - 1, ny - 1, nz - 1), dtype=np.int64)
+    cube_in = np.zeros((nx - 1, ny - 1, nz - 1), dtype=np.int8)  # 0..8 inside corners
     for c in range(8):
         o = _CORNER[c]
         cube_in += inside[o[0] : nx - 1 + o[0], o[1] : ny - 1 + o[1], o[2] : nz - 1 + o[2]]
-    cells = np.argwhere((cube_in > 0) & (cube_in < 8))
-    if cells.size == 0:
+    straddle = (cube_in > 0) & (cube_in < 8)
+    del cube_in
+    count = int(np.count_nonzero(straddle))
+    if count == 0:
         return PolyMesh(np.zeros((0, 3)), np.zeros((0, 3), dtype=np.int64))
+    limits.check(count * BYTES_PER_CELL, f"meshing {count:,} cells that straddle the level")
+    cells = np.argwhere(straddle)
+    del straddle
     strides = np.array([ny * nz, nz, 1], dtype=np.int64)
     base = cells @ strides  # flat index of each cell's corner 0
     corner_flat = base[:, None] + _CORNER @ strides  # (C, 8)
     vflat = v.ravel()
     tv = corner_flat[:, _TETS]  # (C, 6, 4) flat sample indices per tet vertex
     mask = ((vflat[tv] < 0) * (1 << np.arange(4))).sum(axis=2)  # (C, 6)
+    n_tris = int(_CASE_TRIANGLES[mask].sum())
+    limits.check(n_tris * BYTES_PER_TRIANGLE, f"an iso-surface of {n_tris:,} triangles")
     tris = _CASES[mask]  # (C, 6, 2, 3) local edges
     use = tris[..., 0] >= 0
     ci, ti, _ = np.nonzero(use)

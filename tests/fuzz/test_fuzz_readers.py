@@ -295,6 +295,8 @@ def finite(g):
     return True
 
 import OCP.STEPCAFControl  # noqa: F401 - loaded before the first case is timed
+import exporters._step_isolated
+exporters._step_isolated.start()  # the reader's own worker process, also before the first case
 print(json.dumps("ready"), flush=True)
 for line in sys.stdin:
     try:
