@@ -611,21 +611,3 @@ def test_project_uses_the_implicits_own_closest_points_across_csg_seams():
     assert abs(f(r.points)[0]) <= 1e-9
     assert np.allclose(r.points, f.closest_points(p))
     assert r.distances[0] == pytest.approx(np.linalg.norm(r.points[0] - p[0]))
-
-
-def test_implicit_pointcloud_levelset_convert_have_no_import_circles_or_in_function_imports():
-    # the import graph drawn by tools/import_graph.py, restricted to these modules
-    import importlib.util
-    import sys
-    from pathlib import Path
-
-    path = Path(__file__).resolve().parent.parent / "tools" / "import_graph.py"
-    spec = importlib.util.spec_from_file_location("import_graph", path)
-    graph_tool = importlib.util.module_from_spec(spec)
-    sys.modules.setdefault("import_graph", graph_tool)  # its dataclasses look their module up
-    spec.loader.exec_module(graph_tool)
-    mine = ("splinekit.implicit", "splinekit.pointcloud", "splinekit.levelset", "splinekit.convert")
-    g = graph_tool.build()
-    assert not [c for c in graph_tool.cycles(g) if any(m.startswith(mine) for m in c)]
-    assert not [e for e in graph_tool.upward(g) if e[0].startswith(mine)]
-    assert not [e for e in graph_tool.inner_project_imports(g) if e[0].startswith(mine)]

@@ -10,9 +10,6 @@ child edges located by vertex pairs.
 from __future__ import annotations
 
 import dataclasses
-import importlib.util
-import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -22,7 +19,6 @@ from splinekit.mesh.primitives import box, icosphere, torus
 from splinekit.subdiv import SCHEMES, Level, Refinement, RefinementStep, catmull_clark, doo_sabin, loop
 from splinekit.subdiv.creases import edge_sharpness, vertex_sharpness
 
-ROOT = Path(__file__).resolve().parent.parent
 
 
 def _level(mesh, scheme, creases=None):
@@ -144,27 +140,3 @@ def test_regular_faces_keeps_its_former_signature():
         old = regular_faces(lv.topology, lv.edge_sharpness, lv.vertex_sharpness)
     np.testing.assert_array_equal(old, regular_faces(lv))
     assert old.all()  # a torus of quads with valence-4 vertices only
-
-
-# -- structure ---------------------------------------------------------------------------------------
-def _import_graph():
-    spec = importlib.util.spec_from_file_location("_import_graph", ROOT / "tools" / "import_graph.py")
-    module = importlib.util.module_from_spec(spec)
-    sys.modules[spec.name] = module  # dataclasses look their module up while the class is built
-    spec.loader.exec_module(module)
-    return module
-
-
-def test_subdiv_has_no_import_circles_upward_or_in_function_project_imports():
-    ig = _import_graph()
-    g = ig.build()
-    mine = [m for m in g.modules if m.startswith("splinekit.subdiv")]
-    assert len(mine) > 10
-    assert not [c for c in ig.cycles(g) if any(m.startswith("splinekit.subdiv") for m in c)]
-    assert not [u for u in ig.upward(g) if u[0].startswith("splinekit.subdiv")]
-    assert not [i for i in ig.inner_project_imports(g) if i[0].startswith("splinekit.subdiv")]
-
-
-def test_subdiv_modules_stay_small():
-    sizes = {p.name: len(p.read_text().splitlines()) for p in (ROOT / "splinekit" / "subdiv").glob("*.py")}
-    assert max(sizes.values()) <= 500, sizes
