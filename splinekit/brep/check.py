@@ -137,7 +137,6 @@ def check_face(face) -> list:
     problems = []
     tol = face.tolerance
     tol_uv = uv_tolerance(face)
-    s = face.surface
     (u0, u1), (v0, v1) = face.domain
     loops = face.boundary_loops()
     explicit = face.is_trimmed
@@ -169,7 +168,6 @@ def check_face(face) -> list:
         return problems
 
     polys = _loop_polylines(face)
-    span = max(u1 - u0, v1 - v0)
     # inside the surface's domain: the excursion's length in 3-D, mapped by the derivatives at the
     # nearest domain point (so a step in u at a pole, which has no length, is forgiven), within
     # twice the edge's tolerance (the clamped point and the true one each within it)
