@@ -24,9 +24,10 @@ Where things are (``help(sk.<name>)`` for each):
 * measuring: ``curvature``, ``geodesic``, ``project``, ``distance``;
 * meshes and subdivision: ``PolyMesh``, ``subdivide``, ``SubdivisionSurface``,
   ``tessellate``; booleans of closed bodies: ``union``, ``difference``, ``intersection``;
-* subpackages loaded on first use: ``sk.brep`` (trimmed faces, shells, solids),
-  ``sk.implicit`` (SDFs), ``sk.pointcloud``, ``sk.levelset``, ``sk.convert``,
-  ``sk.plot`` (PNG pictures); ``sk.occ`` is the OpenCascade bridge;
+* B-rep: ``sk.brep`` (trimmed faces, shells, solids, their mass properties);
+* subpackages loaded on first use: ``sk.implicit`` (SDFs), ``sk.pointcloud``,
+  ``sk.levelset``, ``sk.convert``, ``sk.plot`` (PNG pictures); ``sk.occ`` is the
+  OpenCascade bridge;
 * files: ``from exporters import export_step, export_stl, export_mesh``;
   parametric models: ``from models import build_model``.
 
@@ -86,6 +87,7 @@ _siblings.install()  # splinekit's own imports of models/exporters refuse anothe
 
 # Subpackages imported on first attribute access, keeping ``import splinekit`` fast; ``splinekit.occ``
 # (the OpenCascade bridge, splinekit.interop.occ under its short name) loads the B-rep layer with it
+# (brep comes with the tessellation, which pairs the edges of trimmed faces with its helpers)
 _LAZY_SUBMODULES = ("brep", "convert", "implicit", "levelset", "occ", "plot", "pointcloud")
 
 

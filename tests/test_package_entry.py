@@ -17,7 +17,7 @@ import splinekit as sk
 from splinekit.errors import ShadowedPackageError, SplineKitError
 
 ROOT = Path(__file__).resolve().parents[1]
-LAZY = ("brep", "convert", "implicit", "levelset", "plot", "pointcloud")
+LAZY = ("convert", "implicit", "levelset", "plot", "pointcloud")  # brep comes with the tessellation
 
 
 def test_docstring_example_runs():
