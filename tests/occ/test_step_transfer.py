@@ -134,14 +134,15 @@ def test_the_worker_is_held_to_the_memory_budget(tmp_path):
     from splinekit import limits
     from splinekit.errors import SplineKitError
 
-    plate = bd.Box(20, 20, 1)
-    for x in range(-8, 9, 2):
-        for y in range(-8, 9, 2):
-            plate -= bd.Pos(x, y, 0) * bd.Cylinder(0.4, 3)
-    base_step = str(tmp_path / "plate.step")  # 81 holes: enough faces to need new memory
+    plate = bd.Box(40, 40, 1)
+    holes = [bd.Pos(x, y, 0) * bd.Cylinder(0.3, 3) for x in range(-19, 20, 2) for y in range(-19, 20, 2)]
+    plate -= bd.Compound(children=holes)
+    base_step = str(tmp_path / "plate.step")  # 400 holes, 1.6 MB: OCC needs tens of MB to read it
     bd.export_step(plate, base_step)
-    # 1 MiB of address space beyond the idle worker's: OCC's first large allocation fails and the
-    # worker dies; this process gets the error and a new worker reads the file under no limit
+    # 1 MiB of address space beyond a fresh worker's (a worker that read larger files before has
+    # room in its heap): OCC's first large allocation fails and the worker dies; this process gets
+    # the error and a new worker reads the file under no limit
+    _step_isolated._stop()
     with limits.budget("1M"), pytest.raises(SplineKitError, match="memory budget of 1 MiB"):
         _step_isolated.transfer(base_step, "named")
     with limits.budget("off"):
