@@ -345,7 +345,9 @@ def _budget_and_paths(draw):
     if which == "budget":
         with limits.budget(draw(st.one_of(nasty_float, junk, st.sampled_from(["1G", "12Q", "-1M", "off", "nanG", "1e400"])))):
             return limits.current_budget() > 0
-    path = draw(st.one_of(st.text(max_size=8).map(lambda t: os.path.join("/nonexistent-dir", t)), st.sampled_from(["a\0b", b"\0", ""]), junk))
+    # junk's plain strings (such as "x") would be written in the working folder: keep them out of it
+    elsewhere = junk.map(lambda j: os.path.join("/nonexistent-dir", j) if isinstance(j, str) and j else j)
+    path = draw(st.one_of(st.text(max_size=8).map(lambda t: os.path.join("/nonexistent-dir", t)), st.sampled_from(["a\0b", b"\0", ""]), elsewhere))
     return atomic_write(path, lambda tmp: None)
 
 
