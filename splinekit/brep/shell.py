@@ -13,7 +13,36 @@ from .topology import TopologyQueries, shell_topology
 __all__ = ["Shell", "Solid"]
 
 
-class Shell(TopologyQueries, Checkable):
+class MassQueries:
+    """Mass properties of a shell or solid (a mixin; :mod:`splinekit.brep.mass` does the work).
+    A shell's volume is meaningful when it is closed; in a solid, void shells (pointing into
+    their voids) count negative."""
+
+    __slots__ = ()
+
+    def area(self, tol: float = INTEGRAL_RTOL) -> float:
+        """Total area of the faces to relative tolerance ``tol``."""
+        return mass.area(self, tol)
+
+    def volume(self, tol: float = INTEGRAL_RTOL) -> float:
+        """Enclosed volume by the divergence theorem over the oriented faces."""
+        return mass.volume(self, tol)
+
+    def centroid(self, tol: float = INTEGRAL_RTOL):
+        """``(3,)`` centroid of the enclosed solid (unit density)."""
+        return mass.centroid(self, tol)
+
+    def inertia(self, tol: float = INTEGRAL_RTOL):
+        """``(3, 3)`` inertia tensor of the enclosed solid (unit density) about its centroid."""
+        return mass.inertia(self, tol)
+
+    def mass_properties(self, tol: float = INTEGRAL_RTOL):
+        """Area, volume, centroid, inertia, principal moments and axes with error estimates
+        (:class:`splinekit.brep.mass.MassProperties`)."""
+        return mass.mass_properties(self, tol)
+
+
+class Shell(TopologyQueries, Checkable, MassQueries):
     """Connected trimmed faces that share edges.
 
     Parameters
@@ -67,33 +96,11 @@ class Shell(TopologyQueries, Checkable):
         """The shell's edges as :class:`~splinekit.brep.topology.EdgeGroup` (the uses that are one edge)."""
         return self.topology.edges
 
-    # -- mass properties (splinekit.brep.mass) ------------------------------------------------
-    def area(self, tol: float = INTEGRAL_RTOL) -> float:
-        """Total area of the faces to relative tolerance ``tol``."""
-        return mass.area(self, tol)
-
-    def volume(self, tol: float = INTEGRAL_RTOL) -> float:
-        """Enclosed volume by the divergence theorem over the oriented faces (meaningful when the shell is closed)."""
-        return mass.volume(self, tol)
-
-    def centroid(self, tol: float = INTEGRAL_RTOL):
-        """``(3,)`` centroid of the enclosed solid (unit density)."""
-        return mass.centroid(self, tol)
-
-    def inertia(self, tol: float = INTEGRAL_RTOL):
-        """``(3, 3)`` inertia tensor of the enclosed solid (unit density) about its centroid."""
-        return mass.inertia(self, tol)
-
-    def mass_properties(self, tol: float = INTEGRAL_RTOL):
-        """Area, volume, centroid, inertia, principal moments and axes with error estimates
-        (:class:`splinekit.brep.mass.MassProperties`)."""
-        return mass.mass_properties(self, tol)
-
     def __repr__(self):
         return f"Shell({len(self._faces)} faces{f', name={self._name!r}' if self._name else ''})"
 
 
-class Solid(TopologyQueries, Checkable):
+class Solid(TopologyQueries, Checkable, MassQueries):
     """A solid bounded by closed shells: the outer shell first, then the voids' shells.
 
     Parameters
@@ -149,28 +156,6 @@ class Solid(TopologyQueries, Checkable):
     def edges(self) -> tuple:
         """Every shell's edges (:class:`~splinekit.brep.topology.EdgeGroup`, face indices per shell)."""
         return tuple(g for s in self._shells for g in s.edges)
-
-    # -- mass properties (splinekit.brep.mass) ------------------------------------------------
-    def area(self, tol: float = INTEGRAL_RTOL) -> float:
-        """Total area of the faces to relative tolerance ``tol``."""
-        return mass.area(self, tol)
-
-    def volume(self, tol: float = INTEGRAL_RTOL) -> float:
-        """Enclosed volume by the divergence theorem over the oriented faces (void shells, pointing into their voids, count negative)."""
-        return mass.volume(self, tol)
-
-    def centroid(self, tol: float = INTEGRAL_RTOL):
-        """``(3,)`` centroid of the enclosed solid (unit density)."""
-        return mass.centroid(self, tol)
-
-    def inertia(self, tol: float = INTEGRAL_RTOL):
-        """``(3, 3)`` inertia tensor of the enclosed solid (unit density) about its centroid."""
-        return mass.inertia(self, tol)
-
-    def mass_properties(self, tol: float = INTEGRAL_RTOL):
-        """Area, volume, centroid, inertia, principal moments and axes with error estimates
-        (:class:`splinekit.brep.mass.MassProperties`)."""
-        return mass.mass_properties(self, tol)
 
     def __repr__(self):
         return f"Solid({len(self._shells)} shell(s), {len(self.faces)} faces{f', name={self._name!r}' if self._name else ''})"
