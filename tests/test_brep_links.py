@@ -5,6 +5,7 @@ uses them through splinekit.brep.topology.pair_by_samples (checked against the e
 from __future__ import annotations
 
 import numpy as np
+import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy.sparse import coo_matrix
@@ -14,6 +15,8 @@ import splinekit as sk
 from splinekit.brep import Shell, Solid, TrimmedFace, box_with_hole, plate_with_holes
 from splinekit.brep import links
 from splinekit.brep.links import close_pairs, first_use_labels, kd_pairs, link_components
+from splinekit.brep.topology import pair_by_samples
+from splinekit.errors import ParameterError
 from splinekit.tessellation.batch import CurveBatch, SurfaceBatch
 from splinekit.tessellation.edges import edge_uses, group_uses
 
@@ -79,3 +82,16 @@ def test_tessellator_pairs_keyless_uses_into_the_keyed_edges():
         assert sorted(map(sorted, loose)) == sorted(map(sorted, keyed))
         mesh = sk.tessellate(Solid(Shell(_keyless(faces))), 1e-2)
         assert mesh.is_closed and abs(mesh.volume - solid.volume()) < 1e-2 * solid.volume()
+
+
+@pytest.mark.parametrize("points, tol, match", [
+    (np.full((4, 3, 3), np.nan), 1e-6, "finite"),
+    (np.zeros((4, 3, 3)), -1.0, "tol"),
+    (np.zeros((4, 3, 3)), np.inf, "tol"),
+    (np.zeros((4, 3, 3)), np.ones(3), "tol"),
+    (np.zeros((4,)), 1e-6, r"\(n, k, 3\)"),
+    (np.zeros((4, 2, 3)), 1e-6, "k odd"),
+])
+def test_pair_by_samples_refuses_bad_input(points, tol, match):
+    with pytest.raises(ParameterError, match=match):
+        pair_by_samples(points, tol)

@@ -88,3 +88,9 @@ def test_genus_and_pieces_add_up_over_joined_meshes(names):
     mesh = concatenate([SHAPES[n][0]() for n in names])
     assert face_components(mesh)[0] == len(names)
     assert genus(mesh) == sum(SHAPES[n][1] for n in names)
+
+
+@pytest.mark.parametrize("function", [face_components, genus])
+def test_components_refuse_what_is_not_a_mesh(function):
+    with pytest.raises(ParameterError, match="needs a PolyMesh"):
+        function("not a mesh")

@@ -24,6 +24,8 @@ from functools import cached_property
 
 import numpy as np
 
+from .._validate import as_float_array
+from ..errors import ParameterError
 from .links import close_pairs, first_use_labels, link_components
 
 __all__ = [
@@ -294,11 +296,18 @@ def pair_by_samples(points, tol) -> np.ndarray:
     sort, or a k-d tree where the sort would compare too many), so this costs ``O(n log n)``.
     For keyless uses: uses that carry a ``key`` are paired by it.
     """
-    P = np.asarray(points, dtype=np.float64)
-    n = len(P)
-    if n == 0:
+    P = as_float_array(points, "points")
+    if P.size == 0:
         return np.zeros(0, dtype=np.intp)
-    tol = np.broadcast_to(np.asarray(tol, dtype=np.float64), (n,))
+    if P.ndim != 3 or P.shape[2] != 3 or P.shape[1] % 2 != 1:
+        raise ParameterError(f"points must be (n, k, 3) with k odd (samples per edge use), got shape {P.shape}")
+    if not np.isfinite(P).all():
+        raise ParameterError("points must be finite")
+    n = len(P)
+    tol = as_float_array(tol, "tol")
+    if not (tol.ndim == 0 or tol.shape == (n,)) or not (np.isfinite(tol) & (tol >= 0)).all():
+        raise ParameterError(f"tol must be one finite tolerance >= 0 or one per use ({n}), got {tol!r}")
+    tol = np.broadcast_to(tol, (n,))
     pairs = close_pairs(P[:, P.shape[1] // 2], float(tol.max()))
     if len(pairs):
         A, B = P[pairs[:, 0]], P[pairs[:, 1]]

@@ -41,6 +41,7 @@ def concatenate(meshes) -> PolyMesh:
 def face_components(mesh) -> tuple[int, np.ndarray]:
     """``(count, labels (F,))``: the connected pieces of ``mesh``'s faces, faces sharing a
     vertex in one piece, labelled ``0 .. count-1``. Isolated vertices belong to no piece."""
+    _require_mesh(mesh, "face_components")
     idx = np.asarray(mesh.face_indices)
     n_vertices, n_faces = mesh.n_vertices, mesh.n_faces
     face_of_corner = np.repeat(np.arange(n_faces), np.diff(np.asarray(mesh.face_offsets)))
@@ -59,8 +60,14 @@ def genus(mesh) -> float | None:
     only vertices used by a face: ``G = (2 C - chi) / 2``. A closed orientable 2-manifold
     gives a whole number; a half-integer flags a non-orientable or non-manifold mesh.
     """
+    _require_mesh(mesh, "genus")
     if not mesh.is_closed:
         return None
     pieces, _ = face_components(mesh)
     chi = mesh.euler_characteristic - int(mesh.topology.isolated_vertices.sum())
     return (2 * pieces - chi) / 2
+
+
+def _require_mesh(mesh, what: str) -> None:
+    if not isinstance(mesh, PolyMesh):
+        raise ParameterError(f"{what} needs a PolyMesh, got {type(mesh).__name__}")
