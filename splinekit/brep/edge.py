@@ -9,6 +9,7 @@ it geometrically), and :class:`~splinekit.brep.Shell` pairs them.
 
 from __future__ import annotations
 
+from functools import partial
 from typing import Hashable
 
 import numpy as np
@@ -72,6 +73,12 @@ class Edge:
 
     def __setattr__(self, name, value):
         raise AttributeError("Edge is immutable")
+
+    def __reduce__(self):
+        # pickling (worker processes, caches): rebuild through the constructor, which the
+        # immutable __setattr__ would otherwise block
+        return (partial(Edge, key=self._key, degenerate=self._degenerate, tolerance=self._tolerance),
+                (self._pcurve, self._curve))
 
     pcurve = property(lambda self: self._pcurve, doc="2-D trimming curve in the face's (u, v) plane.")
     curve = property(lambda self: self._curve, doc="3-D curve (same parameter as the pcurve) or None.")

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from functools import partial
+
 import numpy as np
 
 from ..construct.curves import line
@@ -93,6 +95,11 @@ class TrimmedFace(TopologyQueries, Checkable):
 
     def __setattr__(self, name, value):
         raise AttributeError("TrimmedFace is immutable; operations return new faces")
+
+    def __reduce__(self):
+        # pickling rebuilds through the constructor (the cache is not kept)
+        return (partial(TrimmedFace, tolerance=self._tolerance, name=self._name),
+                (self._surface, self._loops, self._reversed))
 
     surface = property(lambda self: self._surface, doc="The underlying (untrimmed) surface.")
     loops = property(lambda self: self._loops, doc="Tuple of loops (tuples of Edge), outer first; empty: natural domain.")

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from functools import partial
+
 from ..errors import ParameterError
 from ..tolerances import INTEGRAL_RTOL
 from . import mass
@@ -77,6 +79,9 @@ class Shell(TopologyQueries, Checkable, MassQueries):
     def __setattr__(self, name, value):
         raise AttributeError("Shell is immutable")
 
+    def __reduce__(self):
+        return (partial(Shell, name=self._name), (self._faces,))
+
     faces = property(lambda self: self._faces, doc="Tuple of TrimmedFace.")
     name = property(lambda self: self._name, doc="Optional label.")
 
@@ -131,6 +136,9 @@ class Solid(TopologyQueries, Checkable, MassQueries):
 
     def __setattr__(self, name, value):
         raise AttributeError("Solid is immutable")
+
+    def __reduce__(self):
+        return (partial(Solid, name=self._name), (self._shells,))
 
     shells = property(lambda self: self._shells, doc="Tuple of Shell, outer first.")
     outer_shell = property(lambda self: self._shells[0], doc="The outer shell.")
