@@ -259,3 +259,29 @@ def test_cached_preparation_reused_only_for_the_same_face_set():
     assert shuffled.is_closed and measured_deviation(shuffled, order) <= 0.05 * (1 + 1e-9)
     _, volume, area, _ = SOLIDS["box_with_hole"]
     assert abs(shuffled.volume - volume) <= area * 0.05 and abs(first.volume - volume) <= area * 0.05
+
+
+@pytest.mark.parametrize("lift", [0.0, 0.004, 0.009])
+def test_edges_off_their_face_by_their_tolerance_do_not_blow_up_the_mesh(lift):
+    """Some CAD exports give edges a tolerance of 1e-2 and 3-D curves that far off the face (the
+    NX part in the shared STEP set). The mesh cannot come closer to the surface than its boundary,
+    so such edges must not be refined round after round (they made 50,000 samples and 2.7 million
+    triangles on one cylinder face at 1e-3): the triangle count stays that of exact edges, and
+    every interior sample still meets the tolerance plus the boundary's own offset."""
+    a, b = 10.0, 6.0
+    corners = np.array([[0.0, 0.0], [a, 0.0], [a, b], [0.0, b]])
+    plane = sk.BSplineSurface(1, 1, [0, 0, 1, 1], [0, 0, 1, 1],
+                              np.array([[[0, 0, 0], [0, b, 0]], [[a, 0, 0], [a, b, 0]]], dtype=float))
+    edges = []
+    for k in range(4):
+        p, q = corners[k], corners[(k + 1) % 4]
+        # the 3-D curve is lifted off the plane z = 0 by `lift` in its middle (ends on the corners)
+        mid = np.append(0.5 * (p + q), lift)
+        curve = sk.BSplineCurve(2, [0, 0, 0, 1, 1, 1], np.array([np.append(p, 0.0), 2 * mid - 0.5 * np.append(p + q, 0.0), np.append(q, 0.0)]))
+        edges.append(Edge(line(p / [a, b], q / [a, b]), curve, tolerance=0.01))
+    face = TrimmedFace(plane, [edges], tolerance=0.01)
+    mesh = sk.tessellate(face, 1e-3)
+    assert len(mesh.faces) <= 400
+    # the exact plane and its mesh: interior vertices lie on z = 0, boundary ones at most `lift` off
+    assert np.abs(mesh.vertices[:, 2]).max() <= lift + 1e-12
+    assert mesh.area == pytest.approx(a * b, rel=1e-3 + 2 * lift)

@@ -284,7 +284,13 @@ def sample_groups(uses, groups, scales, tol, angle_tol, surfaces, pc, memo=None)
                 uv[sel] = uses[lu[o]].edge.pcurve.evaluate(s[sel])
             mid = 0.5 * (uv[useg] + uv[useg + 1])
             Pm = surfaces.evaluate(fu[useg], mid[:, 0], mid[:, 1])
-        dev = np.linalg.norm(Pm - 0.5 * (X[idx[useg]] + X[idx[useg + 1]]), axis=1)
+            on = surfaces.evaluate(fu, uv[:, 0], uv[:, 1])
+        # A sloppy file's 3-D curve lies off the face by up to its edge tolerance: a chord cannot
+        # come closer to the surface than its ends, so the allowance is the tolerance plus the
+        # ends' gap (against the bare tolerance, every round split these edges: 50,000 samples).
+        gap = np.linalg.norm(on - X[idx], axis=1)
+        allowed = tol + np.maximum(gap[useg], gap[useg + 1])
+        dev = np.linalg.norm(Pm - 0.5 * (X[idx[useg]] + X[idx[useg + 1]]), axis=1) * (tol / allowed)
         step = (uv[useg + 1] - uv[useg]) * scales[fu[useg]]
         # the scaled-length criterion is linear in the step, the chordal one quadratic
         np.maximum.at(factor, idx[useg], np.maximum(dev / tol, (np.hypot(step[:, 0], step[:, 1]) / MAX_SCALED_STEP) ** 2))

@@ -356,6 +356,12 @@ def tessellate_faces(faces, tol: float, angle_tol, size: float) -> Tessellation:
     if bad >= 0:
         f = int(pface[segs[bad, 0]])
         raise ParameterError(f"{_face_name(faces[f], f)}: its trimming loops cross or touch each other (or themselves)")
+    # How far each boundary point lies off its face (edges of a sloppy file are off by up to their
+    # own tolerance, 1e-2 in some CAD exports): the flat mesh cannot come closer to the surface than
+    # its corners, so a sample may deviate by the tolerance plus its corners' offset. Measuring
+    # against the bare tolerance there refined every round without end (millions of triangles).
+    poff = np.zeros(len(pface))
+    poff[:nb] = np.linalg.norm(pxyz[:nb] - batch.evaluate(pface[:nb], puv[:nb, 0], puv[:nb, 1]), axis=1)
     max_dev = 0.0
     for round_ in range(MAX_ROUNDS):
         nP = len(pface)
@@ -400,13 +406,13 @@ def tessellate_faces(faces, tol: float, angle_tol, size: float) -> Tessellation:
         dev = np.linalg.norm(exact - flat, axis=1)
         max_dev = float(dev.max()) if dev.size else 0.0
         ne = len(ea)
-        bad_edge = (dev[:ne] > tol) & ~along[et, ek]
+        bad_edge = (dev[:ne] > tol + np.maximum(poff[ea], poff[eb])) & ~along[et, ek]
         # a triangle's centre is added only when none of its edges is split
         split = np.zeros(len(T), dtype=bool)
         split[et[bad_edge]] = True
         nb_t = N[et[bad_edge], ek[bad_edge]]
         split[nb_t[nb_t >= 0]] = True
-        bad_tri = (dev[ne:] > tol) & ~split[tl]
+        bad_tri = (dev[ne:] > tol + poff[Tl].max(axis=1)) & ~split[tl]
         new = np.concatenate([np.flatnonzero(bad_edge), ne + np.flatnonzero(bad_tri)])
         if new.size == 0 or round_ == MAX_ROUNDS - 1:
             break
@@ -414,6 +420,7 @@ def tessellate_faces(faces, tol: float, angle_tol, size: float) -> Tessellation:
         puv = np.concatenate([puv, uv[new]])
         pxyz = np.concatenate([pxyz, exact[new]])
         pvid = np.concatenate([pvid, np.arange(n_vid, n_vid + new.size)])
+        poff = np.concatenate([poff, np.zeros(new.size)])
         n_vid += new.size
     return _assemble(faces, batch, T[live], pface, puv, pxyz, pvid, n_vid, max_dev, tol)
 
