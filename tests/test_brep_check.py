@@ -156,3 +156,23 @@ def test_pcurve_deviation_tells_a_parameter_mismatch_from_a_wrong_curve():
     (p,) = TrimmedFace(plane_face.surface, [[Edge(e.pcurve, moved, key=e.key)] + loop[1:]]).check()
     assert p.kind == "pcurve-deviation" and "only the parameters" not in p.message
     assert p.value == pytest.approx(0.01)
+
+
+@pytest.mark.parametrize("clearance, touches", [(0.07, False), (0.01, False), (-0.01, True)])
+def test_a_hole_near_a_large_arc_is_judged_on_the_arcs_not_their_chords(clearance, touches):
+    """The NX plate of the shared STEP set has a slot 0.07 inside its outer circle of radius
+    47.5; the check's polyline of that circle (24 chords per quarter arc) cuts inside it by up to
+    0.1, so the slot seemed to cross the outline. The distance is the circle's: the slot's bottom
+    edge, over x in [-7, -4], at y = -(sqrt(R^2 - 7^2) - clearance)."""
+    R = 47.5
+    plane = BSplineSurface(1, 1, [0, 0, 1, 1], [0, 0, 1, 1],
+                           np.array([[[-50, -50, 0], [-50, 50, 0]], [[50, -50, 0], [50, 50, 0]]], float))
+    # the surface maps (u, v) in [0, 1]^2 onto [-50, 50]^2: loops in (u, v)
+    to_uv = lambda p: (np.asarray(p, float) + 50.0) / 100.0  # noqa: E731
+    outer = circle(to_uv((0.0, 0.0)), None, R / 100.0)
+    # the circle comes nearest to the slot's bottom at its corner x = -7 (where |x| is largest)
+    y = -(np.sqrt(R ** 2 - 7.0 ** 2) - clearance)
+    slot = [(-4.0, y), (-7.0, y), (-7.0, y + 4.0), (-4.0, y + 4.0)]  # clockwise: a hole
+    face = TrimmedFace(plane, [[outer], [line(to_uv(slot[k]), to_uv(slot[(k + 1) % 4])) for k in range(4)]])
+    kinds = {p.kind for p in face.check()}
+    assert ("crossing-loops" in kinds) == touches, kinds

@@ -204,3 +204,31 @@ def test_trims_outside_the_domain_are_refused():
                for loop in face.loops]  # every trim moved up by one period in v
     with pytest.raises(DomainError, match="past the surface's domain"):
         TrimmedFace(face.surface, shifted).area()
+
+
+@pytest.mark.parametrize("edge_tolerance, accepted", [(1e-2, True), (1e-7, False)])
+def test_trims_a_little_past_the_domain_within_their_edge_tolerance_are_integrated(edge_tolerance, accepted):
+    """CAD exports (the Inventor part of the shared STEP set) give B-spline faces trims that leave
+    the surface's domain by 2e-3 of its width, 1.2e-2 in 3-D, with edge tolerances of 5.5e-3. Within
+    a few edge tolerances the face is integrated over the surface's polynomial extension (as
+    OpenCascade evaluates it); on a plane that extension is the plane itself, so the area is the
+    trim polygon's, exactly. Far past the edges' tolerance it is refused."""
+    from splinekit.construct import line
+    from splinekit.brep import Edge
+    from splinekit.errors import DomainError
+    from splinekit.surfaces import BSplineSurface
+
+    a = 10.0
+    plane = BSplineSurface(1, 1, [0, 0, 1, 1], [0, 0, 1, 1], np.array([[[0, 0, 0], [0, a, 0]], [[a, 0, 0], [a, a, 0]]], float))
+    over = 1.002  # 0.02 past u = 1 in 3-D: two edge tolerances of 1e-2
+    # a rectangle (the tensor rule) and a pentagon (Green's theorem along the trims)
+    for pts in ([(0.1, 0.1), (over, 0.1), (over, 0.9), (0.1, 0.9)], [(0.1, 0.1), (over, 0.1), (over, 0.9), (0.5, 0.95), (0.1, 0.9)]):
+        loop = [Edge(line(pts[k], pts[(k + 1) % len(pts)]), tolerance=edge_tolerance) for k in range(len(pts))]
+        face = TrimmedFace(plane, [loop], tolerance=min(edge_tolerance, 1e-3))
+        x, y = np.array(pts).T
+        exact = 0.5 * float(np.sum(x * np.roll(y, -1) - np.roll(x, -1) * y)) * a * a  # shoelace
+        if accepted:
+            assert face.area() == pytest.approx(exact, rel=1e-13)
+        else:
+            with pytest.raises(DomainError, match="past the surface's domain"):
+                face.area()

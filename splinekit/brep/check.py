@@ -34,7 +34,7 @@ import numpy as np
 from ..closest import project
 from ..errors import BRepError, TrimError
 from .coarse_mesh import face_mesh
-from .trims import OUTSIDE, classify_uv, sample_trims, segment_distance, trim_pieces, uv_tolerance
+from .trims import OUTSIDE, classify_uv, sample_trims, segment_distance, trim_arcs, trim_pieces, uv_tolerance
 from .topology import surface_points
 
 __all__ = ["Problem", "Checkable", "check_face", "check_shell", "check_solid", "FACE_KINDS"]
@@ -83,26 +83,82 @@ def _face_label(face, index=None) -> str:
 
 # -- faces ----------------------------------------------------------------------------------------
 def _loop_polylines(face):
-    """Per loop: ``(points (k, 2), edge index of each segment (k,))``; segment ``i`` runs from
-    point ``i`` to point ``i + 1`` (cyclically)."""
-    return _split_long_segments([(p, e) for p, e, _ in sample_trims(face, _PER_PIECE)])
+    """Per loop: ``(points (k, 2), edge index of each segment (k,), arc (k, 3))``; segment ``i``
+    runs from point ``i`` to point ``i + 1`` (cyclically) and is a chord of the trim arc
+    ``[piece, t0, t1]`` (see :func:`~.trims.trim_arcs`)."""
+    polys = []
+    for p, e, j, piece in sample_trims(face, _PER_PIECE, pieces=True):
+        per = np.bincount(piece)[piece]  # points (= segments) of each point's piece
+        polys.append((p, e, np.column_stack([piece, j / per, (j + 1) / per])))
+    return _split_long_segments(polys)
 
 
 def _split_long_segments(polys):
     """Cut segments longer than twice the median into equal parts (exactly on them), so that a
-    KD-tree radius of the longest segment pairs each segment with its neighbours only."""
-    lengths = np.concatenate([np.linalg.norm(np.roll(p, -1, axis=0) - p, axis=1) for p, _ in polys])
+    KD-tree radius of the longest segment pairs each segment with its neighbours only. The parts
+    keep their segment's owner and arc."""
+    lengths = np.concatenate([np.linalg.norm(np.roll(p, -1, axis=0) - p, axis=1) for p, _, _ in polys])
     h = 2.0 * float(np.median(lengths))
     if not h > 0:
         return polys
     out = []
-    for p, owner in polys:
+    for p, owner, arc in polys:
         q = np.roll(p, -1, axis=0)
         k = np.maximum(1, np.ceil(np.linalg.norm(q - p, axis=1) / h)).astype(np.intp)
         seg = np.repeat(np.arange(len(p)), k)
         frac = (np.arange(k.sum()) - np.repeat(np.cumsum(k) - k, k)) / np.repeat(k, k)
-        out.append((p[seg] + frac[:, None] * (q[seg] - p[seg]), owner[seg]))
+        # each part's arc: the same fraction of its segment's parameter interval (parts of one
+        # arc stay disjoint, so only truly adjacent parts share an end)
+        t0, t1 = arc[seg, 1], arc[seg, 2]
+        step = (t1 - t0) / np.repeat(k, k)
+        parts = np.column_stack([arc[seg, 0], t0 + frac * (t1 - t0), t0 + frac * (t1 - t0) + step])
+        out.append((p[seg] + frac[:, None] * (q[seg] - p[seg]), owner[seg], parts))
     return out
+
+
+def _sagittas(face, P0, P1, arcs):
+    """``(n,)`` distance of each chord ``P0 P1`` from its arc's middle point (0 on straight arcs)."""
+    mid = trim_arcs(face, arcs[:, 0].astype(np.intp), arcs[:, 1], arcs[:, 2], 2)[:, 1]
+    return segment_distance(P0, P1, mid)
+
+
+_CONFIRM_STEPS = 8
+"""Chords per trim arc in each zoom that confirms a touching found on the polylines."""
+_CONFIRM_ZOOMS = 8
+"""Zooms: each keeps 3 of the 8 chords around the closest pair, so eight leave 1/2600 of the arc
+and a sagitta 1/7,000,000 of the polyline's."""
+_CONFIRM_CHUNK = 1024
+
+
+def _arc_distances(face, arc_a, arc_b):
+    """Distances ``(h,)`` between the trim arcs ``arc_a`` and ``arc_b`` (``(h, 3)`` rows
+    ``[piece, t0, t1]``), found on the polylines of chords: a polyline of a curved arc cuts its
+    corners by up to its sagitta (0.1 on a hole of radius 47 in 24 chords), so two loops a little
+    closer than that seem to touch. Each arc pair is cut into chords again and again, each time
+    around the closest chords of the last (see :data:`_CONFIRM_ZOOMS`)."""
+    if len(arc_a) > _CONFIRM_CHUNK:  # bounded memory: h n^2 chord pairs at a time
+        return np.concatenate([_arc_distances(face, arc_a[k : k + _CONFIRM_CHUNK], arc_b[k : k + _CONFIRM_CHUNK])
+                               for k in range(0, len(arc_a), _CONFIRM_CHUNK)])
+    a, b = arc_a.astype(float).copy(), arc_b.astype(float).copy()
+    n = _CONFIRM_STEPS
+    h = len(a)
+    d = np.zeros(h)
+    for _ in range(_CONFIRM_ZOOMS):
+        A = trim_arcs(face, a[:, 0].astype(np.intp), a[:, 1], a[:, 2], n)  # (h, n + 1, 2)
+        B = trim_arcs(face, b[:, 0].astype(np.intp), b[:, 1], b[:, 2], n)
+        i, j = np.meshgrid(np.arange(n), np.arange(n), indexing="ij")
+        i, j = i.ravel(), j.ravel()
+        dist = _segment_distances(A[:, i].reshape(-1, 2), A[:, i + 1].reshape(-1, 2),
+                                  B[:, j].reshape(-1, 2), B[:, j + 1].reshape(-1, 2)).reshape(h, -1)
+        best = dist.argmin(axis=1)
+        d = dist[np.arange(h), best]
+        # zoom on the closest chords (with a neighbour on each side, inside the arc)
+        for arc, k in ((a, i[best]), (b, j[best])):
+            step = (arc[:, 2] - arc[:, 1]) / n
+            lo = arc[:, 1] + np.maximum(k - 1, 0) * step
+            hi = arc[:, 1] + np.minimum(k + 2, n) * step
+            arc[:, 1], arc[:, 2] = lo, hi
+    return d
 
 
 def _surface_derivatives(face, uv):
@@ -172,7 +228,7 @@ def check_face(face) -> list:
     # nearest domain point (so a step in u at a pole, which has no length, is forgiven), within
     # twice the edge's tolerance (the clamped point and the true one each within it)
     etols = [np.array([e.tolerance for e in lp]) for lp in loops]
-    for li, (p, owner) in enumerate(polys):
+    for li, (p, owner, _) in enumerate(polys):
         clamped = np.stack([np.clip(p[:, 0], u0, u1), np.clip(p[:, 1], v0, v1)], axis=1)
         out_of = np.flatnonzero(np.any(clamped != p, axis=1))
         if out_of.size == 0:
@@ -190,7 +246,7 @@ def check_face(face) -> list:
                                     face=index, loop=li, edge=int(owner[k])))
 
     # orientation by signed area: outer counter-clockwise, inner clockwise
-    areas = [_signed_area(p) for p, _ in polys]
+    areas = [_signed_area(p) for p, _, _ in polys]
     for li, a in enumerate(areas):
         if (li == 0 and a <= 0) or (li > 0 and a >= 0):
             want = "counter-clockwise (outer loop)" if li == 0 else "clockwise (inner loop)"
@@ -201,19 +257,21 @@ def check_face(face) -> list:
     # degenerate edges (a pole's side, or a point) are left out: the loop steps over them, since
     # their ends are one point in space whatever their (u, v)
     kept = []
-    for li, (p, owner) in enumerate(polys):
+    for li, (p, owner, arc) in enumerate(polys):
         solid = ~np.array([loops[li][k].degenerate for k in owner], dtype=bool) if len(owner) else np.zeros(0, bool)
-        kept.append((p[solid], owner[solid]) if solid.sum() >= 2 else (p, owner))
-    P0 = np.concatenate([p for p, _ in kept])
-    P1 = np.concatenate([np.roll(p, -1, axis=0) for p, _ in kept])
-    loop_of = np.concatenate([np.full(len(p), li) for li, (p, _) in enumerate(kept)])
-    pos = np.concatenate([np.arange(len(p)) for p, _ in kept])
-    length = np.array([len(p) for p, _ in kept])[loop_of]
-    edge_of = np.concatenate([o for _, o in kept])
+        kept.append((p[solid], owner[solid], arc[solid]) if solid.sum() >= 2 else (p, owner, arc))
+    P0 = np.concatenate([p for p, _, _ in kept])
+    P1 = np.concatenate([np.roll(p, -1, axis=0) for p, _, _ in kept])
+    arcs = np.concatenate([arc for _, _, arc in kept])
+    loop_of = np.concatenate([np.full(len(p), li) for li, (p, _, _) in enumerate(kept)])
+    pos = np.concatenate([np.arange(len(p)) for p, _, _ in kept])
+    length = np.array([len(p) for p, _, _ in kept])[loop_of]
+    edge_of = np.concatenate([o for _, o, _ in kept])
     mid = 0.5 * (P0 + P1)
     half = 0.5 * np.linalg.norm(P1 - P0, axis=1)
+    sag = _sagittas(face, P0, P1, arcs)
     from scipy.spatial import cKDTree  # on use: scipy.spatial takes ~0.15 s to import, ten times all of brep
-    pairs = cKDTree(mid).query_pairs(2.0 * float(half.max()) + tol_uv, output_type="ndarray")
+    pairs = cKDTree(mid).query_pairs(2.0 * float(half.max() + sag.max()) + tol_uv, output_type="ndarray")
     if len(pairs):
         i, j = pairs[:, 0], pairs[:, 1]
         same = loop_of[i] == loop_of[j]
@@ -221,6 +279,11 @@ def check_face(face) -> list:
         adjacent = same & ((gap == 1) | (gap == length[i] - 1))
         i, j, same = i[~adjacent], j[~adjacent], same[~adjacent]
         d = _segment_distances(P0[i], P1[i], P0[j], P1[j])
+        # the chords of curved arcs cut corners by up to their sagitta: pairs closer than the
+        # tolerance plus (twice) their sagittas are measured again on the arcs themselves
+        near = np.flatnonzero((d <= tol_uv + 2.0 * (sag[i] + sag[j])) & (np.maximum(sag[i], sag[j]) > tol_uv))
+        if near.size:
+            d[near] = _arc_distances(face, arcs[i[near]], arcs[j[near]])
         hit = d <= tol_uv
         reported = set()
         for k in np.flatnonzero(hit):
@@ -240,15 +303,15 @@ def check_face(face) -> list:
     # holes inside the outer loop (all their points, by winding) and not inside one another (a
     # hole's first point, tested only against the holes whose box holds it)
     if len(polys) > 1:
-        holes = np.concatenate([p for p, _ in polys[1:]])
-        owner = np.concatenate([np.full(len(p), li) for li, (p, _) in enumerate(polys) if li > 0])
+        holes = np.concatenate([p for p, _, _ in polys[1:]])
+        owner = np.concatenate([np.full(len(p), li) for li, (p, _, _) in enumerate(polys) if li > 0])
         outer = classify_uv(trim_pieces(face, 0), holes, tol_uv)
         for li in np.unique(owner[outer == OUTSIDE]):
             problems.append(Problem("inner-loop-outside", f"{label}: inner loop {li} is not inside the outer loop",
                                     float(np.mean(outer[owner == li] == OUTSIDE)), face=index, loop=int(li)))
-        lo = np.array([p.min(axis=0) for p, _ in polys[1:]])
-        hi = np.array([p.max(axis=0) for p, _ in polys[1:]])
-        first = np.array([p[0] for p, _ in polys[1:]])
+        lo = np.array([p.min(axis=0) for p, _, _ in polys[1:]])
+        hi = np.array([p.max(axis=0) for p, _, _ in polys[1:]])
+        first = np.array([p[0] for p, _, _ in polys[1:]])
         inbox = np.all((first[:, None] >= lo[None]) & (first[:, None] <= hi[None]), axis=2)
         np.fill_diagonal(inbox, False)
         for i, k in zip(*np.nonzero(inbox)):

@@ -145,6 +145,11 @@ class _TensorRule:
         self.sign = -1.0 if face.reversed else 1.0
         self.integrand = integrand
         self.rect = rect
+        if rect is not None:  # the rectangle's sides: the same domain check as Green's trims
+            u0, u1, v0, v1 = rect
+            t = np.linspace(0.0, 1.0, 33)[:, None]
+            _check_in_domain(face, [np.hstack([u0 + (u1 - u0) * t, np.full_like(t, v)]) for v in (v0, v1)]
+                             + [np.hstack([np.full_like(t, u), v0 + (v1 - v0) * t]) for u in (u0, u1)])
 
     def initial(self):
         bu, bv = self.surface.bezier_breakpoints()
@@ -199,13 +204,18 @@ class _GreenRule:
         samples = [_samples(c) for c in self.pcurves]
         _check_in_domain(face, samples)
         # G is integrated from the trims' leftmost u (any constant u_ref will do): no work on
-        # the part of the surface left of the face
+        # the part of the surface left of the face. Trims a little past the domain (within
+        # _check_in_domain's allowance) take the surface's polynomial extension with them, as
+        # OpenCascade does: clipping them there would cut a sliver off the face and open a gap
+        # to its neighbours, which share those edges.
         lo = min(float(x[:, 0].min()) for x in samples)
-        self.u_ref = min(max(lo, ua), ub)
-        self.u_end = ub
-        self.width = max(ub - self.u_ref, np.finfo(float).tiny)
+        hi = max(float(x[:, 0].max()) for x in samples)
+        self.u_ref = lo
+        self.u_end = max(ub, hi)
+        self.v_range = (min([v0] + [float(x[:, 1].min()) for x in samples]), max([v1] + [float(x[:, 1].max()) for x in samples]))
+        self.width = max(self.u_end - self.u_ref, np.finfo(float).tiny)
         bu = self.surface.bezier_breakpoints()[0]
-        self.u_breaks = np.concatenate([[self.u_ref], bu[(bu > self.u_ref) & (bu < ub)], [ub]])
+        self.u_breaks = np.concatenate([[self.u_ref], bu[(bu > self.u_ref) & (bu < self.u_end)], [self.u_end]])
         # total variation of v along the loops: bounds how inner errors add up in the outer sum
         total = 0.0
         for c in self.pcurves:
@@ -270,9 +280,9 @@ class _GreenRule:
         pass (``tol`` None) the tolerance is ``1e-13`` times the largest ``|g|`` seen times the length.
         """
         n = u.size
-        # a pcurve may stray past the domain by rounding: its G is the edge's value
+        # rounding of the pcurves' evaluation: stay within the range the trims span
         u = np.clip(u, self.u_ref, self.u_end)
-        v = np.clip(v, *self.surface.domain[1])
+        v = np.clip(v, *self.v_range)
         interior = self.u_breaks[1:-1]
         # intervals [u_ref, b1], [b1, b2], ..., [b_j, u] for the breaks b below u
         count = np.searchsorted(interior, u, side="left")  # breaks strictly below u (u > b)
@@ -326,7 +336,9 @@ _GL16 = np.polynomial.legendre.leggauss(16)
 
 OUTSIDE_DOMAIN = 1e-3
 """How far (a fraction of the domain's width) trims may stray past the surface's domain before
-the face is refused: approximated trims overshoot by 1e-4, trims of another period by 1."""
+the face is checked in 3-D: approximated trims overshoot by 1e-4, trims of another period by 1."""
+OUTSIDE_EDGE_TOLERANCES = 4.0
+"""Past that fraction, how far (in edge tolerances, measured in 3-D) trims may stray past the domain."""
 
 
 def _samples(curve, per_piece: int = 33):
@@ -338,17 +350,32 @@ def _samples(curve, per_piece: int = 33):
 
 def _check_in_domain(face, samples):
     """Raise DomainError when a trim (its ``samples``, one ``(n, 2)`` array per pcurve) leaves
-    the surface's domain by more than :data:`OUTSIDE_DOMAIN` of its width: the integrand there
-    would be the surface's polynomial extension, not the face, and the result silently wrong."""
-    for k, (a, b) in enumerate(face.surface.domain):
+    the surface's domain by more than :data:`OUTSIDE_DOMAIN` of its width and, in 3-D, by more
+    than :data:`OUTSIDE_EDGE_TOLERANCES` times the face's largest edge tolerance: within that, the
+    integrand over the excursion is the surface's polynomial extension, which is how OpenCascade
+    evaluates such a face too (files with 5e-3 edge tolerances overshoot by 1e-2); beyond it the
+    trim belongs to something else (another period of a periodic surface) and the result would
+    be silently wrong."""
+    surface = face.surface
+    limit = OUTSIDE_EDGE_TOLERANCES * max([face.tolerance] + [e.tolerance for lp in face.loops for e in lp])
+    (u0, u1), (v0, v1) = surface.domain
+    for k, (a, b) in enumerate(surface.domain):
         slack = OUTSIDE_DOMAIN * (b - a)
         for i, pts in enumerate(samples):
             x = pts[:, k]
             lo, hi = float(x.min()), float(x.max())
-            if lo < a - slack or hi > b + slack:
+            if lo >= a - slack and hi <= b + slack:
+                continue
+            out = pts[(x < a) | (x > b)]
+            near = np.column_stack([np.clip(out[:, 0], u0, u1), np.clip(out[:, 1], v0, v1)])
+            d = surface.derivatives(near[:, 0], near[:, 1], 1)
+            step = out - near
+            over = float(np.linalg.norm(d[1, 0] * step[:, :1] + d[0, 1] * step[:, 1:], axis=1).max())
+            if over > limit:
                 raise DomainError(
                     f"face{f' {face.name!r}' if face.name else ''}: trim {i} spans {'uv'[k]} in [{lo:.10g}, {hi:.10g}], "
-                    f"past the surface's domain [{a:.10g}, {b:.10g}] (trims of another period of a periodic surface?); "
+                    f"past the surface's domain [{a:.10g}, {b:.10g}] by {over:.3g} in 3-D (more than {limit:.3g}, "
+                    f"{OUTSIDE_EDGE_TOLERANCES:g} edge tolerances: trims of another period of a periodic surface?); "
                     "cannot integrate over it")
 
 

@@ -26,7 +26,7 @@ import numpy as np
 from .. import limits
 from ..basis.bernstein import all_bernstein
 
-__all__ = ["Location", "INSIDE", "ON", "OUTSIDE", "uv_tolerance", "trim_pieces", "sample_trims", "classify_uv"]
+__all__ = ["Location", "INSIDE", "ON", "OUTSIDE", "uv_tolerance", "trim_pieces", "sample_trims", "trim_arcs", "classify_uv"]
 
 
 class Location(IntEnum):
@@ -114,11 +114,12 @@ def trim_pieces(face, loop: int | None = None) -> dict:
     return {p: t[0][t[1] == loop] for p, t in table.items() if np.any(t[1] == loop)}
 
 
-def sample_trims(face, per_piece: int) -> list:
+def sample_trims(face, per_piece: int, pieces: bool = False) -> list:
     """Polylines of the face's loops: per loop ``(points (k, 2), edge (k,), j (k,))``, point ``i``
     starting segment ``i`` (cyclically), ``j`` its index within its piece. Curved pieces give
     ``per_piece`` points each (``t = j / per_piece``), straight ones their start point only;
-    evaluated for all pieces of a degree at once (Bernstein matrix)."""
+    evaluated for all pieces of a degree at once (Bernstein matrix). ``pieces=True`` adds a fourth
+    array, the piece of each point (its position along the loops, for :func:`trim_arcs`)."""
     table = _trim_table(face)
     n_pieces = sum(len(t[0]) for t in table.values())
     counts = np.zeros(n_pieces, dtype=np.intp)
@@ -138,7 +139,29 @@ def sample_trims(face, per_piece: int) -> list:
         loop_of[where] = np.repeat(loops, k)
         edge_of[where] = np.repeat(edges, k)
         local[where] = np.tile(np.arange(k), len(H))
-    return [(pts[loop_of == li], edge_of[loop_of == li], local[loop_of == li]) for li in range(len(face.boundary_loops()))]
+    piece_of = np.repeat(np.arange(n_pieces), counts)
+    return [(pts[loop_of == li], edge_of[loop_of == li], local[loop_of == li]) + ((piece_of[loop_of == li],) if pieces else ())
+            for li in range(len(face.boundary_loops()))]
+
+
+def trim_arcs(face, piece, t0, t1, n: int) -> np.ndarray:
+    """Points ``(h, n + 1, 2)`` of the trims' Bézier pieces ``piece`` ``(h,)`` (positions along
+    the loops, as :func:`sample_trims` gives them) at ``n + 1`` parameters evenly from ``t0`` to
+    ``t1`` ``(h,)`` (piece parameters in ``[0, 1]``)."""
+    table = _trim_table(face)
+    piece = np.asarray(piece, dtype=np.intp)
+    t = np.asarray(t0, float)[:, None] + (np.asarray(t1, float) - np.asarray(t0, float))[:, None] * np.linspace(0.0, 1.0, n + 1)
+    out = np.empty(t.shape + (2,))
+    for p, (H, _, _, order) in table.items():
+        row_of = np.full(max(int(order.max()), int(piece.max(initial=0))) + 1, -1, dtype=np.intp)
+        row_of[order] = np.arange(len(order))
+        sel = np.flatnonzero(row_of[piece] >= 0) if piece.size else piece
+        if sel.size == 0:
+            continue
+        B = all_bernstein(p, t[sel].ravel())  # (p + 1, h n)
+        X = np.einsum("ik,kid->kd", B, np.repeat(H[row_of[piece[sel]]], n + 1, axis=0))
+        out[sel] = (X[:, :2] / X[:, 2:]).reshape(sel.size, n + 1, 2)
+    return out
 
 
 def _halve(H: np.ndarray):
