@@ -146,10 +146,7 @@ class _TensorRule:
         self.integrand = integrand
         self.rect = rect
         if rect is not None:  # the rectangle's sides: the same domain check as Green's trims
-            u0, u1, v0, v1 = rect
-            t = np.linspace(0.0, 1.0, 33)[:, None]
-            _check_in_domain(face, [np.hstack([u0 + (u1 - u0) * t, np.full_like(t, v)]) for v in (v0, v1)]
-                             + [np.hstack([np.full_like(t, u), v0 + (v1 - v0) * t]) for u in (u0, u1)])
+            _check_in_domain(face, [_samples(e.pcurve) for e in face.loops[0]])
 
     def initial(self):
         bu, bv = self.surface.bezier_breakpoints()
@@ -203,16 +200,12 @@ class _GreenRule:
         self.pcurves = _closed_pcurves(face.loops, 1e-14 * max(ub - ua, v1 - v0))
         samples = [_samples(c) for c in self.pcurves]
         _check_in_domain(face, samples)
-        # G is integrated from the trims' leftmost u (any constant u_ref will do): no work on
-        # the part of the surface left of the face. Trims a little past the domain (within
-        # _check_in_domain's allowance) take the surface's polynomial extension with them, as
-        # OpenCascade does: clipping them there would cut a sliver off the face and open a gap
-        # to its neighbours, which share those edges.
-        lo = min(float(x[:, 0].min()) for x in samples)
-        hi = max(float(x[:, 0].max()) for x in samples)
-        self.u_ref = lo
-        self.u_end = max(ub, hi)
-        self.v_range = (min([v0] + [float(x[:, 1].min()) for x in samples]), max([v1] + [float(x[:, 1].max()) for x in samples]))
+        # G is integrated from the trims' leftmost u (any constant u_ref will do). Trims a little
+        # past the domain take the surface's polynomial extension (as OCC does; clipping them
+        # would open a gap to the neighbours that share those edges)
+        lo, hi = np.min([x.min(axis=0) for x in samples], axis=0), np.max([x.max(axis=0) for x in samples], axis=0)
+        self.u_ref, self.u_end = float(lo[0]), max(ub, float(hi[0]))
+        self.v_range = (min(v0, float(lo[1])), max(v1, float(hi[1])))
         self.width = max(self.u_end - self.u_ref, np.finfo(float).tiny)
         bu = self.surface.bezier_breakpoints()[0]
         self.u_breaks = np.concatenate([[self.u_ref], bu[(bu > self.u_ref) & (bu < self.u_end)], [self.u_end]])
