@@ -232,3 +232,19 @@ def test_trims_a_little_past_the_domain_within_their_edge_tolerance_are_integrat
         else:
             with pytest.raises(DomainError, match="past the surface's domain"):
                 face.area()
+
+
+@pytest.mark.parametrize("tol", [1e-6, 1e-10, 1e-12])
+def test_a_disc_tangent_to_the_domain_sides_has_its_exact_area_at_every_tolerance(tol):
+    """The Inventor part's annular plane faces: a circle trim touching all four sides of the
+    plane's domain, its extremes between samples. Green's inner integral started at the leftmost
+    sample and clipped the nodes beyond it, which cut 6e-6 off the disc, and only at tight
+    tolerances (where nodes come near the extremes): the area must be pi R^2 at every tolerance."""
+    from splinekit.construct import arc
+    from splinekit.surfaces import BSplineSurface
+
+    R = 48.41875
+    plane = BSplineSurface(1, 1, [-R, -R, R, R], [-R, -R, R, R],
+                           np.array([[[-R, -R, 0], [-R, R, 0]], [[R, -R, 0], [R, R, 0]]], float))
+    disc = TrimmedFace(plane, [[arc((0.0, 0.0), None, R, 0.3, 0.3 + 2 * np.pi)]])
+    assert disc.area(tol) == pytest.approx(np.pi * R * R, rel=max(tol, 1e-13))

@@ -200,12 +200,14 @@ class _GreenRule:
         self.pcurves = _closed_pcurves(face.loops, 1e-14 * max(ub - ua, v1 - v0))
         samples = [_samples(c) for c in self.pcurves]
         _check_in_domain(face, samples)
-        # G is integrated from the trims' leftmost u (any constant u_ref will do). Trims a little
-        # past the domain take the surface's polynomial extension (as OCC does; clipping them
-        # would open a gap to the neighbours that share those edges)
+        # G is integrated from the left of the trims (any constant u_ref will do); trims a little
+        # past the domain take the surface's polynomial extension, as OCC does. The margin keeps
+        # nodes past the samples' extremes unclipped (clipping cut 5e-6 off a disc tangent to
+        # the domain's sides at tolerances below 1e-8).
         lo, hi = np.min([x.min(axis=0) for x in samples], axis=0), np.max([x.max(axis=0) for x in samples], axis=0)
-        self.u_ref, self.u_end = float(lo[0]), max(ub, float(hi[0]))
-        self.v_range = (min(v0, float(lo[1])), max(v1, float(hi[1])))
+        mu, mv = OUTSIDE_DOMAIN * (ub - ua), OUTSIDE_DOMAIN * (v1 - v0)
+        self.u_ref, self.u_end = min(ua, float(lo[0])) - mu, max(ub, float(hi[0])) + mu
+        self.v_range = (min(v0, float(lo[1])) - mv, max(v1, float(hi[1])) + mv)
         self.width = max(self.u_end - self.u_ref, np.finfo(float).tiny)
         bu = self.surface.bezier_breakpoints()[0]
         self.u_breaks = np.concatenate([[self.u_ref], bu[(bu > self.u_ref) & (bu < self.u_end)], [self.u_end]])
@@ -328,10 +330,9 @@ _GL16 = np.polynomial.legendre.leggauss(16)
 
 
 OUTSIDE_DOMAIN = 1e-3
-"""How far (a fraction of the domain's width) trims may stray past the surface's domain before
-the face is checked in 3-D: approximated trims overshoot by 1e-4, trims of another period by 1."""
-OUTSIDE_EDGE_TOLERANCES = 4.0
-"""Past that fraction, how far (in edge tolerances, measured in 3-D) trims may stray past the domain."""
+"""Trims past the domain by more than this fraction of its width are checked in 3-D (approximated
+trims overshoot by 1e-4, trims of another period by 1)."""
+OUTSIDE_EDGE_TOLERANCES = 4.0  # and then by at most this many edge tolerances, measured in 3-D
 
 
 def _samples(curve, per_piece: int = 33):
