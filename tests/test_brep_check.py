@@ -176,3 +176,22 @@ def test_a_hole_near_a_large_arc_is_judged_on_the_arcs_not_their_chords(clearanc
     face = TrimmedFace(plane, [[outer], [line(to_uv(slot[k]), to_uv(slot[(k + 1) % 4])) for k in range(4)]])
     kinds = {p.kind for p in face.check()}
     assert ("crossing-loops" in kinds) == touches, kinds
+
+
+@pytest.mark.parametrize("spike, touches", [(2e-7, False), (1e-2, True)])
+def test_a_spike_back_along_the_previous_edge_within_its_tolerance_is_no_self_touching(spike, touches):
+    """The Inventor part of the shared STEP set has a pcurve that starts with a 2e-7 run back
+    along the previous edge (a seam) before it turns away; its edges' tolerance is 5e-4. Within
+    twice the edges' tolerance that is the shared corner, not the loop touching itself; a run
+    of 1e-2 back along the edge is."""
+    from splinekit.construct import polyline
+
+    x0, x1, y0, y1 = 0.1, 0.9, 0.1, 0.9
+    loop = [Edge(line((x0, y0), (x1, y0)), tolerance=5e-4),
+            Edge(line((x1, y0), (x1, y1)), tolerance=5e-4),
+            # back down along the right side by `spike`, then across and down the left side
+            Edge(polyline([(x1, y1), (x1, y1 - spike), (x0, y1 - spike)]), tolerance=5e-4),
+            Edge(line((x0, y1 - spike), (x0, y0)), tolerance=5e-4)]
+    face = TrimmedFace(PLANE, [loop], tolerance=1e-7)
+    kinds = {p.kind for p in face.check()}
+    assert ("self-intersecting-loop" in kinds) == touches, kinds

@@ -268,7 +268,13 @@ def check_face(face) -> list:
     length = np.array([len(p) for p, _, _ in kept])[loop_of]
     edge_of = np.concatenate([o for _, o, _ in kept])
     mid = 0.5 * (P0 + P1)
-    half = 0.5 * np.linalg.norm(P1 - P0, axis=1)
+    seg_len = np.linalg.norm(P1 - P0, axis=1)
+    half = 0.5 * seg_len
+    first = np.concatenate([[0], np.cumsum([len(p) for p, _, _ in kept])[:-1]])
+    cum = np.cumsum(seg_len)
+    start_len = cum - seg_len - (cum - seg_len)[first][loop_of]  # arc length before each segment, in its loop
+    loop_len = np.bincount(loop_of, seg_len)[loop_of]
+    seg_tol = np.concatenate([etols[li][o] for li, (_, o, _) in enumerate(kept)])
     sag = _sagittas(face, P0, P1, arcs)
     from scipy.spatial import cKDTree  # on use: scipy.spatial takes ~0.15 s to import, ten times all of brep
     pairs = cKDTree(mid).query_pairs(2.0 * float(half.max() + sag.max()) + tol_uv, output_type="ndarray")
@@ -276,7 +282,14 @@ def check_face(face) -> list:
         i, j = pairs[:, 0], pairs[:, 1]
         same = loop_of[i] == loop_of[j]
         gap = np.abs(pos[i] - pos[j])
-        adjacent = same & ((gap == 1) | (gap == length[i] - 1))
+        # neighbours along the loop: adjacent segments, or segments joined by a chain shorter
+        # than twice their edges' tolerance (a pcurve that starts with a 2e-7 spike back along the
+        # previous edge, within its 5e-4 tolerance, is not the loop touching itself)
+        a, b = np.minimum(i, j), np.maximum(i, j)
+        between = start_len[b] - start_len[a] - seg_len[a]
+        around = loop_len[a] - (start_len[b] - start_len[a]) - seg_len[b]
+        reach = 2.0 * tol_uv * np.maximum(1.0, np.maximum(seg_tol[a], seg_tol[b]) / tol)
+        adjacent = same & ((gap == 1) | (gap == length[i] - 1) | (np.minimum(between, around) <= reach))
         i, j, same = i[~adjacent], j[~adjacent], same[~adjacent]
         d = _segment_distances(P0[i], P1[i], P0[j], P1[j])
         # the chords of curved arcs cut corners by up to their sagitta: pairs closer than the
