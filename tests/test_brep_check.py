@@ -195,3 +195,27 @@ def test_a_spike_back_along_the_previous_edge_within_its_tolerance_is_no_self_to
     face = TrimmedFace(PLANE, [loop], tolerance=1e-7)
     kinds = {p.kind for p in face.check()}
     assert ("self-intersecting-loop" in kinds) == touches, kinds
+
+
+def test_a_sliver_face_is_checked_without_millions_of_segments():
+    """The SolidWorks part of the shared STEP set has a face 4e-4 wide in u and 1 long in v whose
+    short sides are trims of 45 cubic pieces: the check's polyline split its long sides into
+    pieces as short as the short sides' chords (2.6 million segments, 15 GB in query pairs). Parts
+    are now at most four per segment on average, and the face is still valid."""
+    from splinekit.brep.check import _loop_polylines
+    from splinekit.brep.trims import sample_trims
+    from splinekit.curves import BSplineCurve
+
+    w = 4e-4
+    plane = BSplineSurface(1, 1, [0, 0, w, w], [0, 0, 1, 1], np.array([[[0, 0, 0], [0, 1, 0]], [[1, 0, 0], [1, 1, 0]]], float))
+    inner = np.linspace(0.0, 1.0, 46)[1:-1]
+
+    def wiggle(v, forward):  # a cubic trim of 45 pieces across the short side, at v
+        x = np.linspace(0.0, w, 48) if forward else np.linspace(w, 0.0, 48)
+        return BSplineCurve(3, np.concatenate([[0] * 4, inner, [1] * 4]), np.column_stack([x, np.full(48, v)]))
+
+    loop = [wiggle(0.0, True), line((w, 0.0), (w, 1.0)), wiggle(1.0, False), line((0.0, 1.0), (0.0, 0.0))]
+    face = TrimmedFace(plane, [loop])
+    raw = sum(len(p) for p, _, _ in sample_trims(face, 24))
+    assert sum(len(p) for p, _, _ in _loop_polylines(face)) <= 5 * raw
+    assert face.check() == []

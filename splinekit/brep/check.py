@@ -98,7 +98,9 @@ def _split_long_segments(polys):
     KD-tree radius of the longest segment pairs each segment with its neighbours only. The parts
     keep their segment's owner and arc."""
     lengths = np.concatenate([np.linalg.norm(np.roll(p, -1, axis=0) - p, axis=1) for p, _, _ in polys])
-    h = 2.0 * float(np.median(lengths))
+    # at most four parts per segment on average: on a sliver face (u range 4e-4, v range 1, the
+    # SolidWorks part) the median is a short side's chord and the long sides made 2.6 million parts
+    h = max(2.0 * float(np.median(lengths)), float(lengths.sum()) / (4.0 * lengths.size))
     if not h > 0:
         return polys
     out = []
