@@ -8,6 +8,7 @@ when a batch runs, so ``import splinekit`` never loads them.
 from __future__ import annotations
 
 import contextlib
+import logging
 import os
 
 from .. import _signals
@@ -72,7 +73,8 @@ def cluster_client(client=None, scheduler=None, *, n_workers=None, timeout: floa
         raise ParameterError(f"n_workers must be a positive integer, got {n_workers!r}")
     # the dashboard on a free port: the fixed default (8787) collides with other clusters on the machine
     with distributed.LocalCluster(n_workers=n_workers, threads_per_worker=1, processes=True,
-                                  dashboard_address=":0") as cluster, distributed.Client(cluster) as local:
+                                  dashboard_address=":0",
+                                  silence_logs=logging.ERROR) as cluster, distributed.Client(cluster) as local:
         yield local
 
 
