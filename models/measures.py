@@ -32,10 +32,11 @@ from splinekit.brep import Shell, TrimmedFace
 from splinekit.errors import ParameterError
 from splinekit.tessellation.bodies import model_mesh, solids_of
 
-__all__ = ["MEASURES", "measure", "user_columns"]
+__all__ = ["MEASURES", "MESH_MEASURES", "measure", "user_columns"]
 
 MEASURES = ("area", "volume", "centroid", "bbox", "faces", "triangles", "valid", "checks")
-_NEEDS_MESH = {"bbox", "triangles", "checks"}  # checks: the Euler characteristic is the mesh's
+MESH_MEASURES = frozenset({"bbox", "triangles", "checks"})
+"""Measures that need the tessellation (checks: the Euler characteristic is the mesh's)."""
 _NAN = float("nan")
 
 
@@ -99,7 +100,7 @@ def measure(model, names=MEASURES, *, tolerance=None, mesh=None) -> dict:
         out.update(_mass(model, pieces, mesh))
     if "faces" in wanted:
         out["faces"] = sum(len(p.faces) for p in pieces) if pieces else int(model.mesh.n_faces)
-    if wanted & _NEEDS_MESH:
+    if wanted & MESH_MEASURES:
         if mesh is None:
             mesh, _ = model_mesh(model, tolerance)
         if "triangles" in wanted:

@@ -6,12 +6,18 @@ builds them and writes their files through ``exporters``, which the splinekit li
 may not import; splinekit finds it through the model registry (:func:`models.sweep`, which looks
 a model name up and calls :func:`sweep` here).
 
-Example::
+Example (in a script, under ``if __name__ == "__main__":``: the local cluster's workers are
+spawned processes that import the script's main module again)::
 
     import splinekit as sk
 
     table = sk.sweep("vase", {"height": [100, 200, 300], "wall": [2, 3]},
                      measures=["volume", "area"], formats=["step", "stl"], out="sweep")
+
+On a cluster: start ``dask scheduler --port 8786`` on one machine and ``dask worker
+tcp://HOST:8786 --nthreads 1 --nworkers N`` on every machine that has splinekit installed, then
+pass ``scheduler="tcp://HOST:8786"`` (``--scheduler``) and ``files=`` a folder every worker can
+write (a shared one, to collect the files in one place).
 """
 
 from __future__ import annotations
@@ -31,7 +37,7 @@ from splinekit.errors import ParameterError, SplineKitError
 from splinekit.tessellation.bodies import model_mesh, solids_of
 
 from ._base import resolve_params
-from .measures import MEASURES, measure, user_columns
+from .measures import MEASURES, MESH_MEASURES, measure, user_columns
 
 __all__ = ["FORMATS", "MEASURES", "VariantTask", "model_version", "sweep"]
 
@@ -115,8 +121,8 @@ class VariantTask:
         model = self.build(**params)
         figures = {"build_time": time.perf_counter() - start}
         mesh = None
-        if any(f != "step" for f in self.formats) or set(self.measures) & {"bbox", "triangles", "checks"}:
-            mesh, _ = model_mesh(model, self.tolerance)
+        if any(f != "step" for f in self.formats) or MESH_MEASURES.intersection(self.measures):
+            mesh, _ = model_mesh(model, self.tolerance)  # made once, for the measures and the mesh files
         figures.update(measure(model, self.measures, tolerance=self.tolerance, mesh=mesh))
         for name, func in self.user:
             figures.update(user_columns(name, func(model)))
@@ -211,9 +217,8 @@ def sweep(model, parameters, *, measures=None, formats=None, out="sweep", client
     recipe = json.dumps({"measures": builtin, "user": [n for n, _ in user], "formats": wanted_formats,
                          "tolerance": tolerance, "files": files_dir})
     keys = [variant_key(name, version, row) for row in rows]
-    frame = run(task, rows, keys=keys, out=out, recipe=recipe, client=client, scheduler=scheduler,
-                n_workers=n_workers, force=force, timeout=timeout, label=f"sweep {name}")
-    frame.insert(0, "model", name)
+    frame = run(task, rows, keys=keys, out=out, recipe=recipe, leading={"model": name}, client=client,
+                scheduler=scheduler, n_workers=n_workers, force=force, timeout=timeout, label=f"sweep {name}")
     frame.attrs["plot"] = None
     if plot_spec is not None and (frame["status"] != "failed").any():
         picture = os.path.join(out, f"{plot_spec[0]}.png")

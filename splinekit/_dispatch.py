@@ -19,7 +19,7 @@ def _is_model(first) -> bool:
     return isinstance(first, str) or (hasattr(first, "PARAMETERS") and callable(getattr(first, "build", None)))
 
 
-def sweep(first, *args, **kwargs):
+def sweep(*args, **kwargs):
     """Sweep a profile along a path, or sweep a model's parameters.
 
     ``sweep(profile, path, *, n_sections=None, tolerance=None, normal=None, degree=3)``
@@ -39,6 +39,7 @@ def sweep(first, *args, **kwargs):
         surface = sk.sweep(sk.line([0.0, 0.0], [1.0, 0.0]), sk.line([0, 0, 0], [0, 0, 5.0]))
         table = sk.sweep("vase", {"height": [100, 200, 300]}, measures=["volume"], out="sweep")
     """
-    if _is_model(first):
-        return _registry.registry(_registry.REGISTRY_INTERFACE + ("sweep",)).sweep(first, *args, **kwargs)
-    return sweep_surface(first, *args, **kwargs)
+    first = args[0] if args else kwargs.get("model", kwargs.get("profile"))
+    if "profile" not in kwargs and _is_model(first):
+        return _registry.registry(_registry.REGISTRY_INTERFACE + ("sweep",)).sweep(*args, **kwargs)
+    return sweep_surface(*args, **kwargs)

@@ -10,7 +10,6 @@ its rim at z = height, and the STL files read back by trimesh.
 from __future__ import annotations
 
 import json
-import logging
 import math
 import os
 import subprocess
@@ -28,7 +27,7 @@ import trimesh
 import splinekit as sk
 from models import build_model
 from models.measures import MEASURES, measure
-from splinekit.batch import run, variant_key
+from splinekit.batch import cluster_client, run, variant_key
 
 ROOT = Path(__file__).resolve().parent.parent
 GRID = {"height": [120.0, 250.0], "radius": [15.0, 40.0], "wall": [4.0]}
@@ -38,8 +37,10 @@ radius): two failed rows beside two built."""
 
 @pytest.fixture(scope="module")
 def client():
-    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=":0",
-                                  silence_logs=logging.ERROR) as cluster, distributed.Client(cluster) as c:
+    """The local cluster a sweep starts without a client (2 worker processes), started once here
+    and then passed to the sweeps as a client of the caller's."""
+    with cluster_client(n_workers=2) as c:
+        assert isinstance(c.cluster, distributed.LocalCluster) and len(c.scheduler_info()["workers"]) == 2
         yield c
 
 
@@ -93,7 +94,7 @@ def test_results_files_hold_the_returned_table(swept):
     out, frame = swept
     parquet = pd.read_parquet(out / "results.parquet")
     csv = pd.read_csv(out / "results.csv")
-    assert list(parquet.columns) == list(frame.columns[1:])  # all but the model name
+    assert list(parquet.columns) == list(frame.columns)
     assert list(parquet["key"]) == list(frame["key"]) == list(csv["key"])
     np.testing.assert_array_equal(parquet["volume"].to_numpy(), frame["volume"].to_numpy())
     assert list(frame.columns[:8]) == ["model", "key", "height", "radius", "neck", "wall", "base", "status"]

@@ -70,6 +70,8 @@ def test_sweep_dispatches_a_curve_to_the_surface_sweep():
     ours, theirs = sk.sweep(profile, path), construct_sweep(profile, path)
     assert type(ours) is type(theirs)
     np.testing.assert_array_equal(ours.control_points, theirs.control_points)
+    by_name = sk.sweep(profile=profile, path=path, degree=2)
+    np.testing.assert_array_equal(by_name.control_points, construct_sweep(profile, path, degree=2).control_points)
     with pytest.raises(SplineKitError):
         sk.sweep(42, path)  # neither a curve nor a model: construct.sweep's own error
 

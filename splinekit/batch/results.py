@@ -1,7 +1,7 @@
 """The results table of a batch: one row per variant, read back to resume, written atomically as
 ``results.parquet`` (pyarrow) and ``results.csv``.
 
-Columns, in this order: ``key`` (:func:`~splinekit.batch.grid.variant_key`), the parameters,
+Columns, in this order: the constant columns the caller puts first (a sweep's ``model``), ``key`` (:func:`~splinekit.batch.grid.variant_key`), the parameters,
 ``status`` (``ok``, ``failed``: the task raised, its message in ``error``; ``skipped``: not run
 again, its figures taken from the results already in the folder), ``error``, then what the task
 returned (measures, output paths), then ``recipe`` (what was asked of each variant: a row is
@@ -55,12 +55,14 @@ def previous_rows(out: str) -> dict:
     return {row["key"]: row for row in old.to_dict("records")}
 
 
-def table(rows: list, param_names: list):
+def table(rows: list, param_names: list, leading: dict | None = None):
     """The results DataFrame of ``rows`` (dicts with ``key``, the parameters, ``status``,
-    ``error``, ``recipe`` and the task's columns), columns in the documented order."""
+    ``error``, ``recipe`` and the task's columns), columns in the documented order, after the
+    columns ``leading`` (name -> the value of every row)."""
     pandas = pandas_module()
-    frame = pandas.DataFrame.from_records(rows)
-    first = ["key", *param_names, "status", "error"]
+    leading = dict(leading or {})
+    frame = pandas.DataFrame.from_records([{**leading, **row} for row in rows])
+    first = [*leading, "key", *param_names, "status", "error"]
     rest = [c for c in frame.columns if c not in first and c != "recipe"]
     return frame.reindex(columns=[*first, *rest, "recipe"])
 

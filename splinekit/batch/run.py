@@ -37,7 +37,7 @@ def _error_text(exc: BaseException) -> str:
     return f"{type(exc).__name__}: {exc}".splitlines()[0]
 
 
-def run(task, rows: list, *, keys: list, out, recipe: str = "", client=None, scheduler=None,
+def run(task, rows: list, *, keys: list, out, recipe: str = "", leading=None, client=None, scheduler=None,
         n_workers=None, force: bool = False, timeout: float = CONNECT_TIMEOUT, label: str = "sweep"):
     """Run ``task`` on every row of ``rows`` and return the results as a pandas DataFrame.
 
@@ -54,6 +54,8 @@ def run(task, rows: list, *, keys: list, out, recipe: str = "", client=None, sch
         with status ``skipped``, unless ``force``.
     out : path
         Folder of ``results.parquet`` and ``results.csv`` (created if missing).
+    leading : dict, optional
+        Columns of the same value in every row, put first (the model's name).
     client, scheduler, n_workers, timeout
         The cluster, see :func:`splinekit.batch.cluster_client`.
 
@@ -82,7 +84,7 @@ def run(task, rows: list, *, keys: list, out, recipe: str = "", client=None, sch
     if todo:
         _compute(task, rows, keys, todo, table_rows, recipe, label,
                  dict(client=client, scheduler=scheduler, n_workers=n_workers, timeout=timeout))
-    frame = results.table(table_rows, names)
+    frame = results.table(table_rows, names, leading or {})
     counts = frame["status"].value_counts()
     frame.attrs["summary"] = {"variants": len(rows), **{s: int(counts.get(s, 0)) for s in results.STATUSES},
                               "seconds": time.perf_counter() - start}

@@ -88,6 +88,8 @@ def build_parser() -> argparse.ArgumentParser:
     model_options(s)
     s.add_argument("-o", "--output", metavar="DIR", help=f"results folder, created if missing (default: {SWEEP_OUTPUT})")
     s.add_argument("--format", metavar="LIST", help=f"files to write per variant, among {','.join(FORMATS)} (default: none)")
+    s.add_argument("--files", metavar="DIR",
+                   help="folder the workers write the files into: their own disk or a shared one (default: DIR/files)")
     s.add_argument("--measure", metavar="LIST",
                    help="measures among area,volume,centroid,bbox,faces,triangles,valid,checks (default: all)")
     s.add_argument("--plot", metavar="MEASURE[:X[,Y]]",

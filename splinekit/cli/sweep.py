@@ -55,7 +55,8 @@ def cmd_sweep(args, console: Console) -> int:
     out = args.output or DEFAULT_OUTPUT
     frame = reg.sweep(args.model, grid, measures=args.measure, formats=args.format, out=out,
                       scheduler=args.scheduler, n_workers=args.workers, force=args.force,
-                      max_variants=args.max_variants, plot=parse_plot(args.plot), timeout=args.timeout)
+                      max_variants=args.max_variants, plot=parse_plot(args.plot), timeout=args.timeout,
+                      files=args.files)
     console.out(f"{args.model}: {summary_text(frame.attrs['summary'])}")
     console.out(f"  wrote {os.path.join(out, RESULTS_PARQUET)} and {os.path.join(out, RESULTS_CSV)}")
     if frame.attrs.get("plot"):
