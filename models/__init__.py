@@ -23,7 +23,7 @@ from __future__ import annotations
 
 from splinekit.errors import ParameterError
 
-from . import block, bracket, mug, teapot, vase, wing
+from . import block, bracket, mug, parameter_sweep, teapot, vase, wing
 from ._base import INTEGRAL_TOLERANCE, Model, Parameter, resolve_params, surface_integrals
 
 __all__ = [
@@ -34,6 +34,7 @@ __all__ = [
     "build_model",
     "get_model",
     "resolve_params",
+    "sweep",
     "surface_integrals",
     "INTEGRAL_TOLERANCE",
 ]
@@ -61,3 +62,10 @@ def get_model(name: str):
 def build_model(name: str, **params) -> Model:
     """``get_model(name).build(**params)``."""
     return get_model(name).build(**params)
+
+
+def sweep(model, parameters, **options):
+    """Parameter sweep of model ``model`` (a registry name or a model module) on Dask: see
+    :func:`models.parameter_sweep.sweep` for ``parameters`` and the options; returns the results
+    as a pandas DataFrame. ``splinekit.sweep(name, parameters, ...)`` comes here."""
+    return parameter_sweep.sweep(get_model(model) if isinstance(model, str) else model, parameters, **options)

@@ -21,6 +21,8 @@ Where things are (``help(sk.<name>)`` for each):
   ``BezierSurface``, ``BSplineSurface``, ``NurbsSurface``, ``bernstein``;
 * construction and fitting: ``line``, ``circle``, ``arc``, ``revolve``,
   ``loft``, ``sweep``, ``coons``, ``interpolate_curve``, ``approximate_surface``...;
+* parameter sweeps of a model on Dask: ``sweep("vase", {"height": [...]})`` (the same
+  ``sweep``, told apart by its first argument; ``sk.batch`` is the engine);
 * measuring: ``curvature``, ``geodesic``, ``project``, ``distance``;
 * meshes and subdivision: ``PolyMesh``, ``subdivide``, ``SubdivisionSurface``,
   ``tessellate``; booleans of closed bodies: ``union``, ``difference``, ``intersection``;
@@ -61,8 +63,8 @@ from .construct import (
     polyline,
     revolve,
     ruled,
-    sweep,
 )
+from ._dispatch import sweep
 from .diffgeom import (
     ExplicitSurface,
     ImplicitSurface,
@@ -88,12 +90,12 @@ _siblings.install()  # splinekit's own imports of models/exporters refuse anothe
 # Subpackages imported on first attribute access, keeping ``import splinekit`` fast; ``splinekit.occ``
 # (the OpenCascade bridge, splinekit.interop.occ under its short name) loads the B-rep layer with it
 # (brep comes with the tessellation, which pairs the edges of trimmed faces with its helpers)
-_LAZY_SUBMODULES = ("brep", "convert", "implicit", "levelset", "occ", "plot", "pointcloud")
+_LAZY_SUBMODULES = ("batch", "brep", "convert", "implicit", "levelset", "occ", "plot", "pointcloud")
 
 
 def __getattr__(name):
-    """``splinekit.brep``, ``.implicit``, ``.pointcloud``, ``.levelset``, ``.convert``, ``.occ``
-    and ``.plot`` are imported on first use."""
+    """``splinekit.brep``, ``.implicit``, ``.pointcloud``, ``.levelset``, ``.convert``, ``.occ``,
+    ``.plot`` and ``.batch`` are imported on first use."""
     if name in _LAZY_SUBMODULES:
         return _importlib.import_module(f"{__name__}.{name}")
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -27,7 +27,7 @@ PACKAGES = ("splinekit", "exporters", "models")
 LAYERS: tuple[tuple[str, tuple[str, ...]], ...] = (
     ("base", ("splinekit.errors", "splinekit._validate", "splinekit.tolerances", "splinekit.limits",
               "splinekit._atomic", "splinekit._progress", "splinekit._signals", "splinekit._kernels",
-              "splinekit._siblings")),
+              "splinekit._siblings", "splinekit._registry")),
     ("basis", ("splinekit.basis",)),
     ("curves/surfaces", ("splinekit.curves", "splinekit.surfaces")),
     ("construct/fit/project", ("splinekit.construct", "splinekit.fit", "splinekit.closest")),
@@ -39,7 +39,7 @@ LAYERS: tuple[tuple[str, tuple[str, ...]], ...] = (
     ("tessellation", ("splinekit.tessellation",)),
     ("convert/analysis/plot", ("splinekit.convert", "splinekit.analysis", "splinekit.plot")),
     ("interop", ("splinekit.interop",)),
-    ("optional", ("splinekit.neural", "splinekit.sweep", "splinekit.compare")),
+    ("optional", ("splinekit.neural", "splinekit.batch", "splinekit.compare")),
     ("package", ("splinekit",)),
     ("exporters", ("exporters",)),
     ("models", ("models",)),

@@ -20,8 +20,11 @@ from .demo import DEFAULT_PICTURE, cmd_demo
 from .info import cmd_info
 from .listing import cmd_list
 from .render import PICTURE_SUFFIXES, cmd_render
+from .sweep import DEFAULT_OUTPUT as SWEEP_OUTPUT
+from .sweep import cmd_sweep
 
-COMMANDS = {"list": cmd_list, "build": cmd_build, "info": cmd_info, "render": cmd_render, "check": cmd_check, "demo": cmd_demo}
+COMMANDS = {"list": cmd_list, "build": cmd_build, "info": cmd_info, "render": cmd_render, "check": cmd_check, "demo": cmd_demo,
+            "sweep": cmd_sweep}
 """Command name -> ``function(args, console) -> exit status``."""
 
 
@@ -77,6 +80,26 @@ def build_parser() -> argparse.ArgumentParser:
     c.add_argument("model", nargs="?", help="model name (default: the registry's default model)")
     c.add_argument("--all", action="store_true", help="check every model (with its defaults)")
     model_options(c)
+
+    s = sub.add_parser("sweep", parents=[common], help="build, measure and export every variant of a parameter grid on Dask")
+    s.add_argument("model", help="model name (see 'splinekit list')")
+    s.add_argument("--grid", action="append", metavar="NAME=A:B:N|NAME=V1,V2", default=[],
+                   help="a swept parameter: N values from A to B, or a list (repeatable; full factorial)")
+    model_options(s)
+    s.add_argument("-o", "--output", metavar="DIR", help=f"results folder, created if missing (default: {SWEEP_OUTPUT})")
+    s.add_argument("--format", metavar="LIST", help=f"files to write per variant, among {','.join(FORMATS)} (default: none)")
+    s.add_argument("--files", metavar="DIR",
+                   help="folder the workers write the files into: their own disk or a shared one (default: DIR/files)")
+    s.add_argument("--measure", metavar="LIST",
+                   help="measures among area,volume,centroid,bbox,faces,triangles,valid,checks (default: all)")
+    s.add_argument("--plot", metavar="MEASURE[:X[,Y]]",
+                   help="PNG of a measure against one or two parameters, or none (default: the first measure)")
+    s.add_argument("--scheduler", metavar="ADDRESS",
+                   help="a running Dask scheduler (tcp://host:8786 or a scheduler file); default: a local cluster")
+    s.add_argument("--workers", type=int, metavar="N", help="workers of the local cluster (default: one per core)")
+    s.add_argument("--timeout", type=float, default=5.0, metavar="S", help="seconds to reach --scheduler (default: %(default)s)")
+    s.add_argument("--max-variants", type=int, default=100_000, metavar="N", help="budget of variants (default: %(default)s)")
+    s.add_argument("--force", action="store_true", help="rebuild variants already in the results folder")
 
     d = sub.add_parser("demo", parents=[common], help="build a NURBS surface, print what was computed and draw it")
     d.add_argument("-o", "--output", metavar="PICTURE", help=f"picture to write, {pictures} (default: {DEFAULT_PICTURE})")

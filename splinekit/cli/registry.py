@@ -8,32 +8,15 @@ The registry is the ``models`` package, or the module named by the environment v
 
 from __future__ import annotations
 
-import importlib
-import os
 import time
 
-from .. import _signals
-from .._progress import progress
-from ..errors import MissingDependencyError, ParameterError, SplineKitError
-from ..mesh.components import concatenate
-from ..tessellation import tessellate
+from .._registry import REGISTRY_INTERFACE, registry
+from ..errors import ParameterError, SplineKitError
+from ..tessellation.bodies import model_mesh, patches_of, solids_of
 from .console import Console, first_line, number_text
 
-REGISTRY_INTERFACE = ("MODELS", "DEFAULT_MODEL", "get_model", "build_model")
-
-
-def registry():
-    """The model registry module: ``models``, or the module named by ``SPLINEKIT_MODELS``."""
-    name = os.environ.get("SPLINEKIT_MODELS", "").strip() or "models"
-    try:
-        module = importlib.import_module(name)
-    except ImportError as exc:
-        _signals.reraise_interrupt(exc)
-        raise MissingDependencyError(f"cannot import the model registry {name!r}: {exc}") from None
-    missing = [attr for attr in REGISTRY_INTERFACE if not hasattr(module, attr)]
-    if missing:
-        raise MissingDependencyError(f"the model registry {name!r} has no {', '.join(missing)} (its models are not installed yet?)")
-    return module
+__all__ = ["REGISTRY_INTERFACE", "build_model", "doc_line", "model_mesh", "model_names", "params_text",
+           "parse_sets", "patches_of", "registry", "solids_of"]
 
 
 def doc_line(module) -> str:
@@ -84,41 +67,5 @@ def model_names(reg, args) -> list:
     return [name]
 
 
-def solids_of(model) -> list:
-    """The model's exact B-rep solids (none for a model of patches or a mesh)."""
-    return list(getattr(model, "solids", None) or [])
-
-
-def patches_of(model) -> list:
-    """Every exact patch of every body of the model."""
-    return [p for body in model.bodies for p in body]
-
-
 def params_text(model) -> str:
     return ", ".join(f"{k}={number_text(v)}" for k, v in (model.params or {}).items())
-
-
-def model_mesh(model, tolerance=None, label: str = "tessellating"):
-    """``(mesh, max_deviation or None)``: the model's own mesh, or its bodies and solids
-    tessellated (:func:`splinekit.tessellate`) and joined into one mesh.
-
-    ``tolerance`` is the absolute chordal tolerance (model units); None takes the tolerance a
-    B-rep model states in its parameters, else :func:`splinekit.tessellate`'s default (1e-3 of
-    the model size). ``max_deviation`` is the largest deviation of any piece's triangles from
-    the exact surfaces (None for a model that is only a mesh).
-    """
-    solids = solids_of(model)
-    if not model.bodies and not solids:
-        if model.mesh is None:
-            raise ParameterError(f"model '{model.name}' has neither exact bodies nor a mesh")
-        return model.mesh, None
-    if tolerance is None and solids:  # a B-rep model states the tolerance of its meshes
-        tolerance = (model.params or {}).get("tolerance")
-    meshes = []
-    items = [list(body) for body in model.bodies] + solids
-    with progress(len(items), label) as bar:
-        for item in items:
-            meshes.append(tessellate(item, tolerance))
-            bar.advance()
-    deviation = max(float(getattr(m, "max_deviation", 0.0)) for m in meshes)
-    return concatenate(meshes), deviation
