@@ -6,6 +6,5 @@ combs, continuity between consecutive curves and inflection points.
 ``curvature_comb``, ``curve_continuity`` and ``inflections`` analyse curves.
 """
 
-from .continuity import EdgeContinuity, edge_continuity
-from .curves import CurvatureComb, CurveContinuity, curvature_comb, curve_continuity, inflections
+from .continuity import EdgeContinuity, NoSharedEdgeError, edge_continuity
 from .shell import ShellContinuity, shell_continuity
