@@ -23,12 +23,13 @@ edge (its worst sample): ``"G2"``, ``"G1"``, ``"G0"``, ``"none"`` under the tole
 ``gap_tol`` (model units), ``angle_tol`` (radians) and ``curvature_tol`` (relative: the jump over
 the larger of the two ``|k|`` and ``1 / edge length``).
 
-Where a surface's parametrization degenerates (a pole, a collapsed side: ``Su x Sv = 0``; a
-Catmull-Clark extraordinary vertex, where its derivatives shrink to zero) the normal and curvatures
-are the limits :func:`splinekit.curvature` extrapolates (the exact limit normal of the
-extraordinary vertex), ``singular``
-flags the sample and its level is at most G1 (curvature there depends on the direction of
-approach); nothing is NaN.
+Where a surface's parametrization degenerates (a pole, a collapsed side: ``Su x Sv = 0``) the
+normal and curvatures are the limits :func:`splinekit.curvature` extrapolates and ``singular``
+flags the sample; nothing is NaN. At a Catmull-Clark extraordinary vertex the patch's derivatives
+shrink to zero without vanishing exactly: the exact limit normal of the vertex replaces the
+evaluator's approximate one, and since the curvature there depends on the direction of approach
+(the limit surface is G1, not G2, at the vertex) the sample is flagged ``extraordinary`` (and
+``singular``) and is at most G1.
 """
 
 from __future__ import annotations
@@ -45,7 +46,8 @@ from ..tolerances import CONTINUITY_ANGLE, CONTINUITY_CURVATURE, CONTINUITY_GAP,
 from .matching import POLYLINE, NoSharedEdgeError, lies_on, polyline, shared_edge
 from .sides import SIDE_NAMES, Side, Trace, as_patch, extraordinary_corners, sides_of
 
-__all__ = ["LEVELS", "EdgeContinuity", "NoSharedEdgeError", "edge_continuity", "measure", "tolerance_value"]
+__all__ = ["LEVELS", "EdgeContinuity", "Frame", "NoSharedEdgeError", "compare", "edge_continuity", "edge_tangent", "frame",
+           "measure", "tolerance_value"]
 
 LEVELS = ("none", "G0", "G1", "G2")
 """Continuity levels from worst to best."""
@@ -60,7 +62,8 @@ class EdgeContinuity:
     parameters on side a (``[:, 0]``) and b (``[:, 1]``); ``points`` ``(n, 3)``: the points on a;
     ``normals`` ``(n, 2, 3)``: the oriented unit normals; ``gap``, ``angle`` (radians),
     ``normal_curvature`` ``(n, 2)``, ``curvature_jump``, ``curvature_vector_jump`` (module
-    docstring); ``singular``: a normal is degenerate there (limit values); ``sample_levels``:
+    docstring); ``singular``: a normal is degenerate there (limit values); ``extraordinary``: at a
+    Catmull-Clark extraordinary vertex (also singular; at most G1); ``sample_levels``:
     the level of each sample; ``level``: the edge's (worst sample's). ``sides``: the names of the
     two uses (``"u0"``... for natural sides); ``patches``: indices of the two faces in the caller's
     list; ``flipped``: b's normal was turned to match a's orientation; ``gap_tol``, ``angle_tol``,
@@ -77,6 +80,7 @@ class EdgeContinuity:
     curvature_jump: np.ndarray
     curvature_vector_jump: np.ndarray
     singular: np.ndarray
+    extraordinary: np.ndarray
     sample_levels: np.ndarray
     level: str
     sides: tuple
@@ -136,42 +140,73 @@ def _majority_sign(values: np.ndarray) -> float:
     return 1.0 if float(values.sum()) >= 0 else -1.0
 
 
-def _side_frame(side: Side, t: np.ndarray, tangent: np.ndarray):
-    """Curvature, surface normal and the cross-edge direction into the face at pcurve params ``t``."""
-    uv = side.uv(t)
-    c = curvature(side.surface, uv[:, 0], uv[:, 1])
-    ders = np.asarray(side.surface.derivatives(uv[:, 0], uv[:, 1], 1), dtype=np.float64)
-    normal = np.array(c.normal)
-    singular = np.array(c.singular)
-    # Catmull-Clark extraordinary vertices: the parametrization degenerates there without
-    # vanishing exactly, so diffgeom does not see it; their exact limit normals replace the
-    # evaluator's approximate ones
-    corners, corner_normals = extraordinary_corners(side.surface)
-    for k in range(len(corners)):
-        at = np.all(np.abs(uv - corners[k]) <= 1e-12, axis=1)
-        singular |= at
-        if corner_normals is not None and at.any():
-            normal[at] = corner_normals[k] * np.sign(normal[at] @ corner_normals[k])[:, None]
+@dataclass(frozen=True)
+class Frame:
+    """One side of an edge at its samples (arrays ``(n, ...)``): the use ``side``, its pcurve
+    ``params``, surface parameters ``uv``, ``points``, unit ``normal`` (``Su x Sv``, or the exact
+    limit normal at an extraordinary vertex), ``across`` (unit, in the tangent plane,
+    perpendicular to the edge, into the face), its curvature ``c``
+    (:class:`~splinekit.diffgeom.curvature.SurfaceCurvature`) and the ``extraordinary`` mask."""
+
+    side: Side
+    params: np.ndarray
+    uv: np.ndarray
+    points: np.ndarray
+    normal: np.ndarray
+    across: np.ndarray
+    c: object
+    extraordinary: np.ndarray
+
+
+def frame(side: Side, params, uv, d_uv, ders, c, tangent, extraordinary, corner_normals=None) -> Frame:
+    """The :class:`Frame` of a use from its surface's first derivatives ``ders`` ``(2, 2, n, 3)``,
+    curvature ``c``, the pcurve's derivative ``d_uv`` ``(n, 2)`` and the edge's unit ``tangent``;
+    ``corner_normals`` ``(n, 3)``: exact normals where ``extraordinary``."""
     _finite(c.normal, side, "normals")
     _finite(np.column_stack([c.k1, c.k2]), side, "curvatures")
+    normal = np.array(c.normal)
+    if corner_normals is not None and extraordinary.any():
+        # the evaluator's normal at an extraordinary vertex is approximate; up to sign, the exact one
+        ref = corner_normals[extraordinary]
+        normal[extraordinary] = ref * np.sign(np.einsum("ij,ij->i", normal[extraordinary], ref))[:, None]
     # into the face: left of the pcurve's direction in (u, v), mapped to space; its sign decides
     # between the two perpendiculars n x t and t x n (robust where the map degenerates at a pole)
-    d = np.asarray(side.pcurve.derivatives(t, 1), dtype=np.float64).reshape(2, -1, 2)[1]
-    left = np.column_stack([-d[:, 1], d[:, 0]])
+    left = np.column_stack([-d_uv[:, 1], d_uv[:, 0]])
     m = ders[1, 0] * left[:, :1] + ders[0, 1] * left[:, 1:]
     across, _ = _unit(np.cross(normal, tangent))
     s = np.einsum("ij,ij->i", m, across)
     sign = np.where(np.abs(s) > 1e-9 * np.linalg.norm(m, axis=1), np.sign(s), _majority_sign(s))
-    return uv, c, normal, across * sign[:, None], singular
+    return Frame(side, params, uv, ders[0, 0], normal, across * sign[:, None], c, extraordinary)
 
 
-def _edge_tangent(side: Side, t: np.ndarray, points: np.ndarray) -> np.ndarray:
-    """Unit tangents ``(n, 3)`` of the use in its own direction; central differences of the
-    samples where the derivative vanishes (a pole at an end)."""
-    tangent, length = _unit(Trace(side).derivatives(t, 1)[1])
-    fallback, _ = _unit(np.gradient(points, axis=0))
-    weak = length <= 1e-9 * max(1.0, float(length.max()))
-    tangent[weak] = fallback[weak]
+def _side_frame(side: Side, t: np.ndarray, tangent=None) -> Frame:
+    """:func:`frame` of a use at its pcurve parameters ``t``; ``tangent`` None: its own."""
+    uv = side.uv(t)
+    c = curvature(side.surface, uv[:, 0], uv[:, 1])
+    ders = np.asarray(side.surface.derivatives(uv[:, 0], uv[:, 1], 1), dtype=np.float64)
+    _finite(ders[0, 0], side, "points")
+    d_uv = np.asarray(side.pcurve.derivatives(t, 1), dtype=np.float64).reshape(2, -1, 2)[1]
+    if tangent is None:
+        tangent = edge_tangent(ders, d_uv)
+    extraordinary = np.zeros(len(uv), dtype=bool)
+    corner_normals = None
+    corners, normals = extraordinary_corners(side.surface)
+    if len(corners):
+        near = np.all(np.abs(uv[:, None, :] - corners[None]) <= 1e-12, axis=2)  # (n, k)
+        extraordinary = near.any(axis=1)
+        if normals is not None:
+            corner_normals = normals[np.argmax(near, axis=1)]
+    return frame(side, t, uv, d_uv, ders, c, tangent, extraordinary, corner_normals)
+
+
+def edge_tangent(ders: np.ndarray, d_uv: np.ndarray) -> np.ndarray:
+    """Unit tangents ``(n, 3)`` of a use, ``Su u' + Sv v'`` normalized; central differences of
+    the points where that vanishes (a pole at an end of the edge)."""
+    tangent, length = _unit(ders[1, 0] * d_uv[:, :1] + ders[0, 1] * d_uv[:, 1:])
+    weak = length <= 1e-9 * max(1e-300, float(length.max()))
+    if weak.any():
+        fallback, _ = _unit(np.gradient(ders[0, 0], axis=0))
+        tangent[weak] = fallback[weak]
     return tangent
 
 
@@ -197,24 +232,26 @@ def measure(inner: Side, outer: Side, samples: int, *, gap_tol=None, angle_tol=N
     ``outer``'s use. ``swap``: report ``outer`` as side a (the caller's first face) and ``inner``
     as side b. Tolerances as in :func:`edge_continuity`."""
     t = inner.fractions(np.linspace(0.0, 1.0, samples))
-    P = inner.points(t)
-    _finite(P, inner, "points")
-    t_out = _closest_on(outer, P)
-    Q = outer.points(t_out)
-    tangent = _edge_tangent(inner, t, P)
-    inner_frame = (inner,) + _side_frame(inner, t, tangent)
-    outer_frame = (outer,) + _side_frame(outer, t_out, tangent)
-    (A, sa, ca, Na, xa, singular_a), (B, sb, cb, Nb, xb, singular_b) = \
-        (outer_frame, inner_frame) if swap else (inner_frame, outer_frame)
-    singular = singular_a | singular_b
+    fi = _side_frame(inner, t)
+    tangent = edge_tangent(np.asarray(inner.surface.derivatives(fi.uv[:, 0], fi.uv[:, 1], 1)),
+                           np.asarray(inner.pcurve.derivatives(t, 1), dtype=np.float64).reshape(2, -1, 2)[1])
+    fo = _side_frame(outer, _closest_on(outer, fi.points), tangent)
+    return compare(fo, fi, gap_tol, angle_tol, curvature_tol) if swap else compare(fi, fo, gap_tol, angle_tol, curvature_tol)
+
+
+def compare(fa: Frame, fb: Frame, gap_tol=None, angle_tol=None, curvature_tol=None) -> EdgeContinuity:
+    """The :class:`EdgeContinuity` of two frames at corresponding samples (a's normal leads)."""
+    A, B = fa.side, fb.side
+    extraordinary = fa.extraordinary | fb.extraordinary
     # orientation: the faces run the edge in opposite senses, c x n = -(c' x n')
-    runs = np.einsum("ij,ij->i", np.cross(xa, Na), np.cross(xb, Nb))
+    runs = np.einsum("ij,ij->i", np.cross(fa.across, fa.normal), np.cross(fb.across, fb.normal))
     relative = -_majority_sign(runs)
     sign_a = -1.0 if A.flip else 1.0
     sign_b = sign_a * relative
-    na, nb = sign_a * Na, sign_b * Nb
-    ka = sign_a * _normal_curvature(ca, xa)
-    kb = sign_b * _normal_curvature(cb, xb)
+    na, nb = sign_a * fa.normal, sign_b * fb.normal
+    ka = sign_a * _normal_curvature(fa.c, fa.across)
+    kb = sign_b * _normal_curvature(fb.c, fb.across)
+    P, Q = fa.points, fb.points
     gap = np.linalg.norm(P - Q, axis=1)
     angle = np.arctan2(np.linalg.norm(np.cross(na, nb), axis=1), np.einsum("ij,ij->i", na, nb))
     jump = np.abs(kb - ka)
@@ -222,21 +259,22 @@ def measure(inner: Side, outer: Side, samples: int, *, gap_tol=None, angle_tol=N
 
     size = max(1.0, float(np.abs(P).max()))
     length = float(np.linalg.norm(np.diff(P, axis=0), axis=1).sum())
-    gap_tol = tolerance_value(gap_tol, "gap_tol", max(CONTINUITY_GAP * size, inner.tolerance, outer.tolerance))
+    gap_tol = tolerance_value(gap_tol, "gap_tol", max(CONTINUITY_GAP * size, A.tolerance, B.tolerance))
     angle_tol = tolerance_value(angle_tol, "angle_tol", CONTINUITY_ANGLE)
     curvature_tol = tolerance_value(curvature_tol, "curvature_tol", CONTINUITY_CURVATURE)
     scale = np.maximum(np.maximum(np.abs(ka), np.abs(kb)), 1.0 / length if length > 0 else 0.0)
     g0 = gap <= gap_tol
     g1 = g0 & (angle <= angle_tol)
-    g2 = g1 & (jump <= curvature_tol * scale) & ~singular
+    g2 = g1 & (jump <= curvature_tol * scale) & ~extraordinary
     index = g0.astype(int) + g1 + g2
     levels = np.array(LEVELS)[index]
     return EdgeContinuity(
-        params=(t_out if swap else t), uv=np.stack([sa, sb], axis=1), points=(Q if swap else P),
-        normals=np.stack([na, nb], axis=1), gap=gap, angle=angle, normal_curvature=np.column_stack([ka, kb]),
-        curvature_jump=jump, curvature_vector_jump=vector_jump, singular=singular,
-        sample_levels=levels, level=LEVELS[int(index.min())], sides=(A.name, B.name), patches=(A.patch, B.patch),
-        flipped=relative < 0, gap_tol=gap_tol, angle_tol=angle_tol, curvature_tol=curvature_tol,
+        params=fa.params, uv=np.stack([fa.uv, fb.uv], axis=1), points=P, normals=np.stack([na, nb], axis=1),
+        gap=gap, angle=angle, normal_curvature=np.column_stack([ka, kb]), curvature_jump=jump,
+        curvature_vector_jump=vector_jump, singular=fa.c.singular | fb.c.singular | extraordinary,
+        extraordinary=extraordinary, sample_levels=levels, level=LEVELS[int(index.min())], sides=(A.name, B.name),
+        patches=(A.patch, B.patch), flipped=relative < 0, gap_tol=gap_tol, angle_tol=angle_tol,
+        curvature_tol=curvature_tol,
     )  # fmt: skip
 
 
@@ -316,10 +354,9 @@ def edge_continuity(a, b, samples: int = 64, *, edge=None, gap_tol=None, angle_t
     sides_a = sides_of(0, a)
     sides_b = sides_a if same else sides_of(1, b)
     if edge is not None:
-        try:
-            spec_a, spec_b = edge
-        except (TypeError, ValueError):
-            raise ParameterError(f"edge must be a pair (side of a, side of b), got {edge!r}") from None
+        if isinstance(edge, (str, bytes)) or not isinstance(edge, (tuple, list)) or len(edge) != 2:
+            raise ParameterError(f"edge must be a pair (side of a, side of b), got {edge!r}")
+        spec_a, spec_b = edge
         x, y = _given_side(sides_a, spec_a, "a"), _given_side(sides_b, spec_b, "b")
         if x.degenerate or y.degenerate:
             raise ParameterError("the given edge collapses to a point on one face: it has no length to sample")

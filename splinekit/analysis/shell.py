@@ -22,6 +22,7 @@ from ..tolerances import CONTINUITY_MATCH
 from .continuity import LEVELS, measure, tolerance_value
 from .matching import candidate_pairs
 from .sides import sides_of
+from .subdivision import subdivision_continuity
 
 __all__ = ["ShellContinuity", "shell_continuity", "subdivision_patches"]
 
@@ -104,7 +105,7 @@ def shell_continuity(part, samples: int = 32, *, gap_tol=None, angle_tol=None, c
 
     ``part``: a :class:`~splinekit.brep.Shell` or :class:`~splinekit.brep.Solid` (edges from its
     topology), a :class:`~splinekit.SubdivisionSurface` (Catmull-Clark; one
-    :class:`~splinekit.SubdivisionPatch` per quad), or a list of B-rep faces or parametric
+    :class:`~splinekit.SubdivisionPatch` per quad, every edge evaluated in one batch), or a list of B-rep faces or parametric
     surfaces (sides paired by their sampled end points and shapes). ``samples`` per edge;
     tolerances as in :func:`~splinekit.analysis.edge_continuity`.
     Returns :class:`ShellContinuity` (per-edge rows and ``.summary``).
@@ -112,7 +113,8 @@ def shell_continuity(part, samples: int = 32, *, gap_tol=None, angle_tol=None, c
     samples = as_int(samples, "samples", minimum=2)
     match_rtol = tolerance_value(match_rtol, "match_rtol", CONTINUITY_MATCH)
     if isinstance(part, SubdivisionSurface):
-        part = subdivision_patches(part)
+        edges, free = subdivision_continuity(part, samples, gap_tol, angle_tol, curvature_tol)
+        return _collect(edges, free)
     if isinstance(part, (Shell, Solid)):
         pairs, free = _brep_pairs(part.shells if isinstance(part, Solid) else [part])
     else:

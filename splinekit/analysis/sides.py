@@ -20,7 +20,7 @@ from ..construct import line
 from ..diffgeom.protocol import SubdivisionPatch, as_surface
 from ..errors import ParameterError
 
-__all__ = ["SIDE_NAMES", "Side", "Trace", "as_patch", "extraordinary_corners", "sides_of"]
+__all__ = ["SIDE_NAMES", "Side", "Trace", "as_patch", "extraordinary_corners", "sides_of", "subdivision_info"]
 
 SIDE_NAMES = ("v0", "u1", "v1", "u0")
 """The natural domain's sides in counter-clockwise order: ``v = v0``, ``u = u1``, ``v = v1``, ``u = u0``."""
@@ -107,6 +107,12 @@ def as_patch(obj, what: str):
     if isinstance(obj, TrimmedFace):
         return obj.surface, obj.reversed, obj.tolerance
     surface = as_surface(obj, what)
+    try:
+        (u0, _), (v0, _) = surface.domain
+        u0, v0 = float(u0), float(v0)
+    except (TypeError, ValueError):
+        raise ParameterError(f"{what} must be a parametric surface with domain ((u0, u1), (v0, v1)); "
+                             f"{type(obj).__name__} has domain {getattr(obj, 'domain', None)!r}") from None
     probe = np.asarray(surface.evaluate(np.array([surface.domain[0][0]]), np.array([surface.domain[1][0]])))
     if probe.shape[-1] != 3:
         raise ParameterError(f"{what} must be a surface in 3-D space, this one has dim={probe.shape[-1]}")
@@ -151,7 +157,9 @@ _EXTRAORDINARY: "weakref.WeakKeyDictionary" = weakref.WeakKeyDictionary()
 """Per SubdivisionSurface: ``(quads (F, 4), extraordinary (V,) bool, limit normals (V, 3) or None)``."""
 
 
-def _extraordinary_info(surface):
+def subdivision_info(surface):
+    """``(quads (F, 4), extraordinary (V,) bool, limit normals (V, 3) or None)`` of a Catmull-Clark
+    SubdivisionSurface: the quads its ``evaluate`` addresses, cached per surface."""
     if surface not in _EXTRAORDINARY:
         mesh = surface.mesh
         base = mesh if mesh.is_quad_mesh else surface.refine(1)  # evaluate's quads: the first refinement's
@@ -173,7 +181,7 @@ def extraordinary_corners(surface):
     zero, and the evaluator's normal there is a refined approximation (off by about 1e-3 rad)."""
     if not isinstance(surface, SubdivisionPatch):
         return np.zeros((0, 2)), None
-    quads, irregular, normals = _extraordinary_info(surface.surface)
+    quads, irregular, normals = subdivision_info(surface.surface)
     corners = quads[surface.face]
     mask = irregular[corners]
     return _QUAD_CORNERS[mask], None if normals is None else normals[corners[mask]]
