@@ -8,3 +8,4 @@ combs, continuity between consecutive curves and inflection points.
 
 from .continuity import EdgeContinuity, NoSharedEdgeError, edge_continuity
 from .shell import ShellContinuity, shell_continuity
+from .curves import CurvatureComb, CurveContinuity, curvature_comb, curve_continuity, inflections
