@@ -60,7 +60,8 @@ class EdgeContinuity:
 
     ``params``: parameters of the sampled use's pcurve; ``uv`` ``(n, 2, 2)``: the surface
     parameters on side a (``[:, 0]``) and b (``[:, 1]``); ``points`` ``(n, 3)``: the points on a;
-    ``normals`` ``(n, 2, 3)``: the oriented unit normals; ``gap``, ``angle`` (radians),
+    ``normals`` ``(n, 2, 3)``: the oriented unit normals; ``across`` ``(n, 2, 3)``: the unit
+    cross-edge directions into each face (those of the normal curvatures); ``gap``, ``angle`` (radians),
     ``normal_curvature`` ``(n, 2)``, ``curvature_jump``, ``curvature_vector_jump`` (module
     docstring); ``singular``: a normal is degenerate there (limit values); ``extraordinary``: at a
     Catmull-Clark extraordinary vertex (also singular; at most G1); ``sample_levels``:
@@ -74,6 +75,7 @@ class EdgeContinuity:
     uv: np.ndarray
     points: np.ndarray
     normals: np.ndarray
+    across: np.ndarray
     gap: np.ndarray
     angle: np.ndarray
     normal_curvature: np.ndarray
@@ -270,8 +272,8 @@ def compare(fa: Frame, fb: Frame, gap_tol=None, angle_tol=None, curvature_tol=No
     levels = np.array(LEVELS)[index]
     return EdgeContinuity(
         params=fa.params, uv=np.stack([fa.uv, fb.uv], axis=1), points=P, normals=np.stack([na, nb], axis=1),
-        gap=gap, angle=angle, normal_curvature=np.column_stack([ka, kb]), curvature_jump=jump,
-        curvature_vector_jump=vector_jump, singular=fa.c.singular | fb.c.singular | extraordinary,
+        across=np.stack([fa.across, fb.across], axis=1), gap=gap, angle=angle,
+        normal_curvature=np.column_stack([ka, kb]), curvature_jump=jump, curvature_vector_jump=vector_jump, singular=fa.c.singular | fb.c.singular | extraordinary,
         extraordinary=extraordinary, sample_levels=levels, level=LEVELS[int(index.min())], sides=(A.name, B.name),
         patches=(A.patch, B.patch), flipped=relative < 0, gap_tol=gap_tol, angle_tol=angle_tol,
         curvature_tol=curvature_tol,
