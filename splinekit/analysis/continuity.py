@@ -42,7 +42,7 @@ from .._validate import as_int
 from ..closest import project
 from ..diffgeom.curvature import curvature
 from ..errors import ParameterError
-from ..tolerances import CONTINUITY_ANGLE, CONTINUITY_CURVATURE, CONTINUITY_GAP, CONTINUITY_MATCH
+from ..tolerances import CONTINUITY_ANGLE, CONTINUITY_CURVATURE, CONTINUITY_GAP, CONTINUITY_MATCH, GEOMETRIC_CONFUSION
 from .matching import POLYLINE, NoSharedEdgeError, lies_on, polyline, shared_edge
 from .sides import SIDE_NAMES, Side, Trace, as_patch, extraordinary_corners, sides_of
 
@@ -181,8 +181,9 @@ def frame(side: Side, params, uv, d_uv, ders, c, tangent, extraordinary, corner_
     return Frame(side, params, uv, ders[0, 0], normal, across * sign[:, None], c, extraordinary)
 
 
-def _side_frame(side: Side, t: np.ndarray, tangent=None) -> Frame:
-    """:func:`frame` of a use at its pcurve parameters ``t``; ``tangent`` None: its own."""
+def _side_frame(side: Side, t: np.ndarray, tangent=None) -> tuple[Frame, np.ndarray]:
+    """:func:`frame` of a use at its pcurve parameters ``t`` and the edge tangent used
+    (``tangent`` None: the use's own)."""
     uv = side.uv(t)
     c = curvature(side.surface, uv[:, 0], uv[:, 1])
     ders = np.asarray(side.surface.derivatives(uv[:, 0], uv[:, 1], 1), dtype=np.float64)
@@ -198,7 +199,7 @@ def _side_frame(side: Side, t: np.ndarray, tangent=None) -> Frame:
         extraordinary = near.any(axis=1)
         if normals is not None:
             corner_normals = normals[np.argmax(near, axis=1)]
-    return frame(side, t, uv, d_uv, ders, c, tangent, extraordinary, corner_normals)
+    return frame(side, t, uv, d_uv, ders, c, tangent, extraordinary, corner_normals), tangent
 
 
 def edge_tangent(ders: np.ndarray, d_uv: np.ndarray) -> np.ndarray:
@@ -219,6 +220,19 @@ def _normal_curvature(c, across: np.ndarray) -> np.ndarray:
     return c.k1 * a * a + c.k2 * b * b
 
 
+def _corresponding(inner: Side, outer: Side, f: np.ndarray, points: np.ndarray) -> np.ndarray:
+    """Pcurve parameters ``(n,)`` on ``outer`` of the points ``points`` of ``inner`` at fractions
+    ``f``: the same or the reversed fractions when the two uses coincide there (the common case of
+    patches sharing their boundary with proportional parametrizations), else the closest points."""
+    t = outer.fractions(np.concatenate([f, 1.0 - f]))
+    Q = outer.points(t).reshape(2, len(f), -1)
+    d = np.linalg.norm(Q - points[None], axis=2).max(axis=1)
+    k = int(np.argmin(d))
+    if d[k] <= GEOMETRIC_CONFUSION * max(1.0, float(np.abs(points).max())):
+        return t.reshape(2, -1)[k]
+    return _closest_on(outer, points)
+
+
 def _closest_on(outer: Side, points: np.ndarray) -> np.ndarray:
     """Pcurve parameters ``(n,)`` of the points of ``outer``'s use closest to ``points``,
     seeded from its polyline (a local search)."""
@@ -233,11 +247,9 @@ def measure(inner: Side, outer: Side, samples: int, *, gap_tol=None, angle_tol=N
     """Continuity along ``inner``'s use sampled at ``samples`` equal pcurve steps, against
     ``outer``'s use. ``swap``: report ``outer`` as side a (the caller's first face) and ``inner``
     as side b. Tolerances as in :func:`edge_continuity`."""
-    t = inner.fractions(np.linspace(0.0, 1.0, samples))
-    fi = _side_frame(inner, t)
-    tangent = edge_tangent(np.asarray(inner.surface.derivatives(fi.uv[:, 0], fi.uv[:, 1], 1)),
-                           np.asarray(inner.pcurve.derivatives(t, 1), dtype=np.float64).reshape(2, -1, 2)[1])
-    fo = _side_frame(outer, _closest_on(outer, fi.points), tangent)
+    f = np.linspace(0.0, 1.0, samples)
+    fi, tangent = _side_frame(inner, inner.fractions(f))
+    fo, _ = _side_frame(outer, _corresponding(inner, outer, f, fi.points), tangent)
     return compare(fo, fi, gap_tol, angle_tol, curvature_tol) if swap else compare(fi, fo, gap_tol, angle_tol, curvature_tol)
 
 

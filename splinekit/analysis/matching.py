@@ -15,7 +15,7 @@ from ..brep.links import close_pairs, link_components
 from ..errors import ParameterError
 from .sides import Side
 
-__all__ = ["NoSharedEdgeError", "POLYLINE", "PROBES", "candidate_pairs", "lies_on", "polyline", "shared_edge"]
+__all__ = ["NoSharedEdgeError", "POLYLINE", "PROBES", "candidate_pairs", "lies_on", "polyline", "polylines", "shared_edge"]
 
 POLYLINE = 65
 """Points of a use's polyline (64 chords): the chord sag of a quarter circle is 5e-5 of its length."""
@@ -35,6 +35,23 @@ def polyline(side: Side) -> np.ndarray:
     if not np.isfinite(pts).all():
         raise ParameterError(f"patch {side.patch} evaluates to non-finite points along its side {side.name}")
     return pts
+
+
+def polylines(sides: list) -> list:
+    """:func:`polyline` of every use, with one evaluation per surface (its uses' samples together)."""
+    f = np.linspace(0.0, 1.0, POLYLINE)
+    groups: dict = {}
+    for i, s in enumerate(sides):
+        groups.setdefault(id(s.surface), []).append(i)
+    out = [None] * len(sides)
+    for members in groups.values():
+        uv = np.concatenate([sides[i].uv(sides[i].fractions(f)) for i in members])
+        pts = np.asarray(sides[members[0]].surface.evaluate(uv[:, 0], uv[:, 1]), dtype=np.float64).reshape(-1, POLYLINE, 3)
+        for k, i in enumerate(members):
+            if not np.isfinite(pts[k]).all():
+                raise ParameterError(f"patch {sides[i].patch} evaluates to non-finite points along its side {sides[i].name}")
+            out[i] = pts[k]
+    return out
 
 
 def _length(pts: np.ndarray) -> float:
@@ -73,7 +90,7 @@ def shared_edge(sides_a: list, sides_b: list, match_rtol: float, same: bool = Fa
     B = [s for s in sides_b if not s.degenerate]
     if not A or not B:
         raise NoSharedEdgeError("a face or surface has no side of non-zero length, so the two share no edge")
-    PA, PB = [polyline(s) for s in A], [polyline(s) for s in B]
+    PA, PB = polylines(A), polylines(B)
     best, pair = np.inf, None
     for i, x in enumerate(A):
         for j, y in enumerate(B):
@@ -99,7 +116,7 @@ def candidate_pairs(sides: list, match_rtol: float) -> list:
     live = [s for s in sides if not s.degenerate]
     if len(live) < 2:
         return []
-    P = [polyline(s) for s in live]
+    P = polylines(live)
     ends = np.concatenate([np.array([p[0] for p in P]), np.array([p[-1] for p in P])])
     radius = match_rtol * max(_length(p) for p in P)
     links = close_pairs(ends, radius)
