@@ -20,7 +20,7 @@ from ..curves import BezierCurve, BSplineCurve, SplineCurve
 from ..diffgeom.curves import curvature, frenet_frame, signed_curvature, tangent
 from ..errors import ParameterError
 from ..tolerances import CONTINUITY_ANGLE, CONTINUITY_CURVATURE, CONTINUITY_GAP
-from .continuity import LEVELS, tolerance_value
+from .compare import LEVELS, tolerance_value
 
 __all__ = ["COMB_LENGTH", "CurvatureComb", "CurveContinuity", "curvature_comb", "curve_continuity", "inflections"]
 

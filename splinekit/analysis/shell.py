@@ -19,7 +19,8 @@ from ..diffgeom.protocol import SubdivisionPatch
 from ..errors import ParameterError
 from ..subdiv import SubdivisionSurface
 from ..tolerances import CONTINUITY_MATCH
-from .continuity import LEVELS, measure, tolerance_value
+from .compare import LEVELS, tolerance_value
+from .sampling import measure_many
 from .matching import candidate_pairs
 from .sides import sides_of
 from .subdivision import subdivision_continuity
@@ -132,9 +133,8 @@ def shell_continuity(part, samples: int = 32, *, gap_tol=None, angle_tol=None, c
             pairs = candidate_pairs(sides, match_rtol)
             paired = {id(s) for pair in pairs for s in pair}
             free = sum(1 for s in sides if not s.degenerate and id(s) not in paired)
-    edges = tuple(measure(inner, outer, samples, gap_tol=gap_tol, angle_tol=angle_tol, curvature_tol=curvature_tol,
-                          swap=inner.patch > outer.patch)
-                  for inner, outer in pairs)  # fmt: skip
+    edges = tuple(measure_many(pairs, samples, gap_tol=gap_tol, angle_tol=angle_tol, curvature_tol=curvature_tol,
+                               swaps=[inner.patch > outer.patch for inner, outer in pairs]))
     return _collect(edges, free)
 
 

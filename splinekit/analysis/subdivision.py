@@ -8,13 +8,11 @@ calls of the surface's evaluator, and each edge is compared from slices of those
 
 from __future__ import annotations
 
-from types import SimpleNamespace
-
 import numpy as np
 
 from ..diffgeom.curvature import curvature
 from ..diffgeom.protocol import SubdivisionPatch
-from .continuity import compare, edge_tangent, frame
+from .compare import compare, curvature_rows, edge_tangent, frame
 from .sides import SIDE_NAMES, Side, subdivision_info
 
 __all__ = ["subdivision_continuity"]
@@ -65,11 +63,6 @@ def _side_samples(surface, faces, sides, t, reverse: bool):
     return c, ders, uv, d_uv
 
 
-def _slice(c, rows):
-    return SimpleNamespace(normal=c.normal[rows], k1=c.k1[rows], k2=c.k2[rows], directions=c.directions[rows],
-                           singular=c.singular[rows])
-
-
 def subdivision_continuity(surface, samples: int, gap_tol=None, angle_tol=None, curvature_tol=None):
     """``(edges, free)``: an :class:`~splinekit.analysis.EdgeContinuity` per interior edge of the
     Catmull-Clark ``surface`` (patch indices are its quads), and the number of boundary edges."""
@@ -98,9 +91,9 @@ def subdivision_continuity(surface, samples: int, gap_tol=None, angle_tol=None, 
         rows = slice(e * samples, (e + 1) * samples)
         A = Side(int(f), surface, None, False, SIDE_NAMES[k], None, 0.0, False)
         B = Side(int(g), surface, None, False, SIDE_NAMES[l], None, 0.0, False)
-        fa = frame(A, t, uva[rows], dua[rows], da[:, :, rows], _slice(ca, rows), tangent[rows], eva[rows],
+        fa = frame(A, t, uva[rows], dua[rows], da[:, :, rows], curvature_rows(ca, rows), tangent[rows], eva[rows],
                    None if na is None else na[rows])
-        fb = frame(B, 1.0 - t, uvb[rows], dub[rows], db[:, :, rows], _slice(cb, rows), tangent[rows], evb[rows],
+        fb = frame(B, 1.0 - t, uvb[rows], dub[rows], db[:, :, rows], curvature_rows(cb, rows), tangent[rows], evb[rows],
                    None if nb is None else nb[rows])
         edges.append(compare(fa, fb, gap_tol, angle_tol, curvature_tol))
     return tuple(edges), free
