@@ -14,6 +14,7 @@ import numpy as np
 from ..brep.links import close_pairs, link_components
 from ..errors import ParameterError
 from .sides import Side
+from .stacked import points_many
 
 __all__ = ["NoSharedEdgeError", "POLYLINE", "PROBES", "candidate_pairs", "lies_on", "polyline", "polylines", "shared_edge"]
 
@@ -38,19 +39,12 @@ def polyline(side: Side) -> np.ndarray:
 
 
 def polylines(sides: list) -> list:
-    """:func:`polyline` of every use, with one evaluation per surface (its uses' samples together)."""
+    """:func:`polyline` of every use, evaluated per group of surfaces (:func:`.stacked.split`)."""
     f = np.linspace(0.0, 1.0, POLYLINE)
-    groups: dict = {}
-    for i, s in enumerate(sides):
-        groups.setdefault(id(s.surface), []).append(i)
-    out = [None] * len(sides)
-    for members in groups.values():
-        uv = np.concatenate([sides[i].uv(sides[i].fractions(f)) for i in members])
-        pts = np.asarray(sides[members[0]].surface.evaluate(uv[:, 0], uv[:, 1]), dtype=np.float64).reshape(-1, POLYLINE, 3)
-        for k, i in enumerate(members):
-            if not np.isfinite(pts[k]).all():
-                raise ParameterError(f"patch {sides[i].patch} evaluates to non-finite points along its side {sides[i].name}")
-            out[i] = pts[k]
+    out = points_many([(s, s.fractions(f)) for s in sides])
+    for s, pts in zip(sides, out):
+        if not np.isfinite(pts).all():
+            raise ParameterError(f"patch {s.patch} evaluates to non-finite points along its side {s.name}")
     return out
 
 

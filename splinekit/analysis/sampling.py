@@ -19,59 +19,32 @@ from ..tolerances import GEOMETRIC_CONFUSION
 from .compare import compare, curvature_rows, edge_tangent, finite_values, frame
 from .matching import POLYLINE, polyline
 from .sides import Side, Trace, extraordinary_corners
+from .stacked import points_many, split
 
 __all__ = ["measure", "measure_many"]
 
 
-def _by_surface(requests):
-    """Indices of ``requests`` (pairs ``(side, t)``) grouped by their surface."""
-    groups: dict = {}
-    for i, (side, _) in enumerate(requests):
-        groups.setdefault(id(side.surface), []).append(i)
-    return groups.values()
-
-
-def _points_many(requests) -> list:
-    """Points ``(n, 3)`` of each request ``(side, t)``, one evaluation per surface."""
-    out = [None] * len(requests)
-    for members in _by_surface(requests):
-        uv = np.concatenate([requests[i][0].uv(requests[i][1]) for i in members])
-        surface = requests[members[0]][0].surface
-        pts = np.asarray(surface.evaluate(uv[:, 0], uv[:, 1]), dtype=np.float64).reshape(-1, 3)
-        start = 0
-        for i in members:
-            n = len(requests[i][1])
-            out[i] = pts[start : start + n]
-            start += n
-    return out
-
-
 def _raw_many(requests) -> list:
     """Per request ``(side, t)``: ``(uv, d_uv, ders (2, 2, n, 3), curvature rows, extraordinary,
-    corner normals or None)``, with one curvature and one derivative call per surface."""
-    out = [None] * len(requests)
-    for members in _by_surface(requests):
-        side0 = requests[members[0]][0]
-        uvs = [requests[i][0].uv(requests[i][1]) for i in members]
-        uv = np.concatenate(uvs)
-        c = curvature(side0.surface, uv[:, 0], uv[:, 1])
-        ders = np.asarray(side0.surface.derivatives(uv[:, 0], uv[:, 1], 1), dtype=np.float64)
-        corners, normals = extraordinary_corners(side0.surface)
-        start = 0
-        for i, uv_i in zip(members, uvs):
-            side, t = requests[i]
-            rows = slice(start, start + len(t))
-            start += len(t)
-            finite_values(ders[0, 0, rows], side, "points")
-            d_uv = np.asarray(side.pcurve.derivatives(t, 1), dtype=np.float64).reshape(2, -1, 2)[1]
-            extraordinary, corner_normals = np.zeros(len(t), dtype=bool), None
-            if len(corners):
-                near = np.all(np.abs(uv_i[:, None, :] - corners[None]) <= 1e-12, axis=2)  # (n, k)
-                extraordinary = near.any(axis=1)
-                if normals is not None:
-                    corner_normals = normals[np.argmax(near, axis=1)]
-            out[i] = (uv_i, d_uv, ders[:, :, rows], curvature_rows(c, rows), extraordinary, corner_normals)
+    corner normals or None)``, with one curvature and one derivative call per group of surfaces."""
+    def both(surface, uv):
+        c = curvature(surface, uv[:, 0], uv[:, 1])
+        return c, np.asarray(surface.derivatives(uv[:, 0], uv[:, 1], 1), dtype=np.float64)
+
+    out = []
+    for (side, t), (uv, rows, (c, ders)) in zip(requests, split(requests, both)):
+        d = ders[:, :, rows]
+        finite_values(d[0, 0], side, "points")
+        extraordinary, corner_normals = np.zeros(len(t), dtype=bool), None
+        corners, normals = extraordinary_corners(side.surface)
+        if len(corners):
+            near = np.all(np.abs(uv[:, None, :] - corners[None]) <= 1e-12, axis=2)  # (n, k)
+            extraordinary = near.any(axis=1)
+            if normals is not None:
+                corner_normals = normals[np.argmax(near, axis=1)]
+        out.append((uv, side.direction(t), d, curvature_rows(c, rows), extraordinary, corner_normals))
     return out
+
 
 def _corresponding(outer: Side, f: np.ndarray, points: np.ndarray, Q: np.ndarray) -> np.ndarray:
     """Pcurve parameters ``(n,)`` on ``outer`` of the points ``points`` of the inner use at
@@ -101,7 +74,7 @@ def measure_many(pairs, samples: int, *, gap_tol=None, angle_tol=None, curvature
     swaps = [False] * len(pairs) if swaps is None else swaps
     inner_raw = _raw_many([(inner, inner.fractions(f)) for inner, _ in pairs])
     both = np.concatenate([f, 1.0 - f])
-    Qs = _points_many([(outer, outer.fractions(both)) for _, outer in pairs])
+    Qs = points_many([(outer, outer.fractions(both)) for _, outer in pairs])
     t_out = [_corresponding(outer, f, raw[2][0, 0], Q) for (_, outer), raw, Q in zip(pairs, inner_raw, Qs)]
     outer_raw = _raw_many([(outer, t) for (_, outer), t in zip(pairs, t_out)])
     out = []

@@ -37,7 +37,8 @@ class Side:
     ``pcurve``: 2-D curve in the surface's ``(u, v)`` plane, material on its left;
     ``flip``: the face is reversed (its normal is ``-Su x Sv``); ``name``: ``"u0"``... for a
     natural side, else ``"edge <i>"``; ``key``: the B-rep edge key or None; ``tolerance``: model
-    units (0 for bare surfaces); ``degenerate``: the side collapses to a point in space.
+    units (0 for bare surfaces); ``degenerate``: the side collapses to a point in space;
+    ``segment``: ``(start, end)`` uv of a straight natural side (evaluated in closed form).
     """
 
     patch: int
@@ -48,11 +49,18 @@ class Side:
     key: object
     tolerance: float
     degenerate: bool
+    segment: tuple | None = None
 
     def uv(self, t) -> np.ndarray:
         """``(n, 2)`` parameters on the surface at pcurve parameters ``t`` ``(n,)``, clamped into
         the surface's domain (a trim may leave it by rounding)."""
-        uv = np.asarray(self.pcurve.evaluate(np.asarray(t, dtype=np.float64)), dtype=np.float64).reshape(-1, 2)
+        t = np.asarray(t, dtype=np.float64).reshape(-1)
+        if self.segment is not None:  # a natural side: the straight pcurve in closed form
+            a, b = self.segment
+            t0, t1 = self.pcurve.domain
+            uv = a + ((t - t0) / (t1 - t0))[:, None] * (b - a)
+        else:
+            uv = np.asarray(self.pcurve.evaluate(t), dtype=np.float64).reshape(-1, 2)
         (u0, u1), (v0, v1) = self.surface.domain
         return np.column_stack([np.clip(uv[:, 0], u0, u1), np.clip(uv[:, 1], v0, v1)])
 
@@ -60,6 +68,15 @@ class Side:
         """``(n, 3)`` points of the surface along the side at pcurve parameters ``t``."""
         uv = self.uv(t)
         return np.asarray(self.surface.evaluate(uv[:, 0], uv[:, 1]), dtype=np.float64).reshape(-1, 3)
+
+    def direction(self, t) -> np.ndarray:
+        """``(n, 2)``: the pcurve's derivative at ``t``."""
+        t = np.asarray(t, dtype=np.float64).reshape(-1)
+        if self.segment is not None:
+            a, b = self.segment
+            t0, t1 = self.pcurve.domain
+            return np.broadcast_to((b - a) / (t1 - t0), (t.size, 2)).copy()
+        return np.asarray(self.pcurve.derivatives(t, 1), dtype=np.float64).reshape(2, -1, 2)[1]
 
     def fractions(self, f) -> np.ndarray:
         """Pcurve parameters at fractions ``f`` of its domain."""
@@ -132,7 +149,7 @@ def _natural_sides(index: int, surface) -> list[Side]:
     for k in range(4):
         extent = float(np.linalg.norm(pts[k] - pts[k, 0], axis=1).max())
         out.append(Side(index, surface, line(corners[k], corners[(k + 1) % 4]), False, SIDE_NAMES[k], None, 0.0,
-                        extent <= 1e-9 * size))
+                        extent <= 1e-9 * size, (corners[k], corners[(k + 1) % 4])))
     return out
 
 
