@@ -233,3 +233,21 @@ def test_batched_subdivision_edges_agree_with_the_generic_matcher():
         assert e.level == b.level
         assert np.allclose(np.sort(np.abs(e.normal_curvature).ravel()), np.sort(np.abs(b.normal_curvature).ravel()), atol=1e-9)
         assert abs(e.max_curvature_jump - b.max_curvature_jump) < 1e-9 and abs(e.max_angle - b.max_angle) < 1e-12
+
+
+@pytest.mark.parametrize("name", ["teapot", "vase", "mug", "bracket", "wing", "block"])
+def test_every_model_is_analysed(name):
+    from models import MODELS, build_model
+
+    assert set(MODELS) == {"teapot", "vase", "mug", "bracket", "wing", "block"}  # a new model joins this list
+    model = build_model(name)
+    parts = list(model.bodies) + list(model.solids)
+    assert parts
+    for part in parts:
+        r = shell_continuity(part, samples=5)
+        assert r.summary["edges"] > 0 and r.summary["none"] == 0  # sewn parts: every shared edge closes G0
+        for e in r.edges:
+            for a in (e.gap, e.angle, e.normal_curvature, e.curvature_jump, e.curvature_vector_jump):
+                assert np.isfinite(a).all()
+        if model.closed:
+            assert r.free_edges == 0
