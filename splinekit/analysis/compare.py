@@ -55,7 +55,7 @@ LEVELS = ("none", "G0", "G1", "G2")
 class EdgeContinuity:
     """Continuity sampled along one shared edge (arrays ``(n,)`` unless stated).
 
-    ``params``: parameters of the sampled use's pcurve; ``uv`` ``(n, 2, 2)``: the surface
+    ``params``: parameters of side a's pcurve (its use of the edge); ``uv`` ``(n, 2, 2)``: the surface
     parameters on side a (``[:, 0]``) and b (``[:, 1]``); ``points`` ``(n, 3)``: the points on a;
     ``normals`` ``(n, 2, 3)``: the oriented unit normals; ``across`` ``(n, 2, 3)``: the unit
     cross-edge directions into each face (those of the normal curvatures); ``gap``, ``angle`` (radians),

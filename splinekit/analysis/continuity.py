@@ -36,7 +36,7 @@ def _given_side(sides: list, spec, which: str) -> Side:
             raise ParameterError(f"edge index {int(spec)} of {which} is outside 0..{len(sides) - 1}")
         return sides[int(spec)]
     pc = getattr(spec, "pcurve", None)
-    found = [s for s in sides if pc is not None and s.pcurve is pc]
+    found = [s for s in sides if pc is not None and s.pcurve is not None and s.pcurve is pc]
     if not found:
         raise ParameterError(f"edge {spec!r} is not an edge of {which}: give a side name, an index or one of its Edges")
     return found[0]
@@ -78,7 +78,7 @@ def edge_continuity(a, b, samples: int = 64, *, edge=None, gap_tol=None, angle_t
     -------
     EdgeContinuity
         ``.gap``, ``.angle``, ``.curvature_jump``, ``.normal_curvature``, ``.params``,
-        ``.points``, ``.level`` ("G2", "G1", "G0" or "none"), per-edge maxima... (module docstring
+        ``.points``, ``.level`` ("G2", "G1", "G0" or "none"), per-edge maxima... (:mod:`splinekit.analysis.compare`
         for the definitions and the orientation of the normals).
 
     Raises

@@ -22,7 +22,7 @@ from ..tolerances import CONTINUITY_MATCH
 from .compare import LEVELS, tolerance_value
 from .sampling import measure_many
 from .matching import candidate_pairs
-from .sides import sides_of
+from .sides import sides_of, sides_of_all
 from .subdivision import subdivision_continuity
 
 __all__ = ["ShellContinuity", "shell_continuity", "subdivision_patches"]
@@ -129,7 +129,7 @@ def shell_continuity(part, samples: int = 32, *, gap_tol=None, angle_tol=None, c
         if all(isinstance(x, TrimmedFace) for x in items):
             pairs, free = _brep_pairs([Shell(items)])
         else:
-            sides = [s for i, x in enumerate(items) for s in sides_of(i, x)]
+            sides = sides_of_all(items)
             pairs = candidate_pairs(sides, match_rtol)
             paired = {id(s) for pair in pairs for s in pair}
             free = sum(1 for s in sides if not s.degenerate and id(s) not in paired)

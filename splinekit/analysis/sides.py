@@ -11,16 +11,16 @@ derivatives the closest-point search needs.
 from __future__ import annotations
 
 import weakref
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
 from ..brep import Edge, TrimmedFace
-from ..construct import line
 from ..diffgeom.protocol import SubdivisionPatch, as_surface
 from ..errors import ParameterError
+from .stacked import points_many
 
-__all__ = ["SIDE_NAMES", "Side", "Trace", "as_patch", "extraordinary_corners", "sides_of", "subdivision_info"]
+__all__ = ["SIDE_NAMES", "Side", "Trace", "as_patch", "extraordinary_corners", "sides_of", "sides_of_all", "subdivision_info"]
 
 SIDE_NAMES = ("v0", "u1", "v1", "u0")
 """The natural domain's sides in counter-clockwise order: ``v = v0``, ``u = u1``, ``v = v1``, ``u = u0``."""
@@ -34,11 +34,13 @@ class Side:
     """One face's use of an edge.
 
     ``patch``: index of the face in the caller's list; ``surface``: its parametric surface;
-    ``pcurve``: 2-D curve in the surface's ``(u, v)`` plane, material on its left;
+    ``pcurve``: 2-D curve in the surface's ``(u, v)`` plane, material on its left (None for a
+    natural side: ``segment`` gives it);
     ``flip``: the face is reversed (its normal is ``-Su x Sv``); ``name``: ``"u0"``... for a
     natural side, else ``"edge <i>"``; ``key``: the B-rep edge key or None; ``tolerance``: model
     units (0 for bare surfaces); ``degenerate``: the side collapses to a point in space;
-    ``segment``: ``(start, end)`` uv of a straight natural side (evaluated in closed form).
+    ``segment``: ``(start, end)`` uv of a straight natural side, parametrized over ``[0, 1]``
+    (evaluated in closed form).
     """
 
     patch: int
@@ -51,14 +53,18 @@ class Side:
     degenerate: bool
     segment: tuple | None = None
 
+    @property
+    def domain(self) -> tuple:
+        """The pcurve's parameter range (``(0, 1)`` for a natural side)."""
+        return (0.0, 1.0) if self.segment is not None else tuple(self.pcurve.domain)
+
     def uv(self, t) -> np.ndarray:
         """``(n, 2)`` parameters on the surface at pcurve parameters ``t`` ``(n,)``, clamped into
         the surface's domain (a trim may leave it by rounding)."""
         t = np.asarray(t, dtype=np.float64).reshape(-1)
         if self.segment is not None:  # a natural side: the straight pcurve in closed form
             a, b = self.segment
-            t0, t1 = self.pcurve.domain
-            uv = a + ((t - t0) / (t1 - t0))[:, None] * (b - a)
+            uv = a + t[:, None] * (b - a)
         else:
             uv = np.asarray(self.pcurve.evaluate(t), dtype=np.float64).reshape(-1, 2)
         (u0, u1), (v0, v1) = self.surface.domain
@@ -74,13 +80,12 @@ class Side:
         t = np.asarray(t, dtype=np.float64).reshape(-1)
         if self.segment is not None:
             a, b = self.segment
-            t0, t1 = self.pcurve.domain
-            return np.broadcast_to((b - a) / (t1 - t0), (t.size, 2)).copy()
+            return np.broadcast_to(b - a, (t.size, 2)).copy()
         return np.asarray(self.pcurve.derivatives(t, 1), dtype=np.float64).reshape(2, -1, 2)[1]
 
     def fractions(self, f) -> np.ndarray:
         """Pcurve parameters at fractions ``f`` of its domain."""
-        a, b = self.pcurve.domain
+        a, b = self.domain
         return a + (b - a) * np.asarray(f, dtype=np.float64)
 
 
@@ -93,7 +98,7 @@ class Trace:
 
     def __init__(self, side: Side):
         self.side = side
-        self.domain = tuple(float(x) for x in side.pcurve.domain)
+        self.domain = tuple(float(x) for x in side.domain)
 
     def evaluate(self, t) -> np.ndarray:
         t = np.asarray(t, dtype=np.float64)
@@ -104,7 +109,12 @@ class Trace:
             raise ParameterError(f"an edge trace gives derivatives up to order 2, got {order}")
         t = np.asarray(t, dtype=np.float64)
         flat = t.ravel()
-        p = np.asarray(self.side.pcurve.derivatives(flat, order), dtype=np.float64).reshape(order + 1, -1, 2)
+        if self.side.segment is not None:  # straight: p' = end - start, p'' = 0
+            p = np.zeros((order + 1, flat.size, 2))
+            if order >= 1:
+                p[1] = self.side.direction(flat)
+        else:
+            p = np.asarray(self.side.pcurve.derivatives(flat, order), dtype=np.float64).reshape(order + 1, -1, 2)
         uv = self.side.uv(flat)
         d = np.asarray(self.side.surface.derivatives(uv[:, 0], uv[:, 1], order), dtype=np.float64)
         out = np.empty((order + 1, flat.size, 3))
@@ -130,27 +140,47 @@ def as_patch(obj, what: str):
     except (TypeError, ValueError):
         raise ParameterError(f"{what} must be a parametric surface with domain ((u0, u1), (v0, v1)); "
                              f"{type(obj).__name__} has domain {getattr(obj, 'domain', None)!r}") from None
-    probe = np.asarray(surface.evaluate(np.array([surface.domain[0][0]]), np.array([surface.domain[1][0]])))
-    if probe.shape[-1] != 3:
-        raise ParameterError(f"{what} must be a surface in 3-D space, this one has dim={probe.shape[-1]}")
+    net = getattr(surface, "control_points", None)  # splines: no evaluation needed
+    dim = np.shape(net)[-1] if net is not None else np.shape(surface.evaluate(np.array([u0]), np.array([v0])))[-1]
+    if dim != 3:
+        raise ParameterError(f"{what} must be a surface in 3-D space, this one has dim={dim}")
     return surface, False, 0.0
 
 
 def _natural_sides(index: int, surface) -> list[Side]:
+    """The four sides of the natural domain, counter-clockwise (``degenerate`` not yet known)."""
     (u0, u1), (v0, v1) = surface.domain
     corners = np.array([[u0, v0], [u1, v0], [u1, v1], [u0, v1]], dtype=np.float64)
-    probe = np.linspace(0.0, 1.0, _PROBE)
-    uv = np.concatenate([corners[k] + probe[:, None] * (corners[(k + 1) % 4] - corners[k]) for k in range(4)])
-    pts = np.asarray(surface.evaluate(uv[:, 0], uv[:, 1]), dtype=np.float64).reshape(4, _PROBE, 3)
-    if not np.isfinite(pts).all():
-        raise ParameterError(f"surface {index} evaluates to non-finite points on its boundary")
-    size = max(1.0, float(np.abs(pts).max()))
+    return [Side(index, surface, None, False, SIDE_NAMES[k], None, 0.0, False, (corners[k], corners[(k + 1) % 4]))
+            for k in range(4)]
+
+
+def _with_degeneracy(sides: list) -> list:
+    """``sides`` with ``degenerate`` set where a side's probes (:data:`_PROBE` points, evaluated per
+    group of surfaces) lie within 1e-9 of the model size of its start."""
+    if not sides:
+        return sides
+    pts = points_many([(s, np.linspace(0.0, 1.0, _PROBE)) for s in sides])
     out = []
-    for k in range(4):
-        extent = float(np.linalg.norm(pts[k] - pts[k, 0], axis=1).max())
-        out.append(Side(index, surface, line(corners[k], corners[(k + 1) % 4]), False, SIDE_NAMES[k], None, 0.0,
-                        extent <= 1e-9 * size, (corners[k], corners[(k + 1) % 4])))
+    for s, p in zip(sides, pts):
+        if not np.isfinite(p).all():
+            raise ParameterError(f"surface {s.patch} evaluates to non-finite points on its boundary")
+        extent = float(np.linalg.norm(p - p[0], axis=1).max())
+        out.append(replace(s, degenerate=extent <= 1e-9 * max(1.0, float(np.abs(p).max()))))
     return out
+
+
+def sides_of_all(items) -> list[Side]:
+    """Every edge use of every face or surface of ``items`` (numbered by position), the natural
+    sides of bare surfaces probed for collapse together."""
+    faces, natural = [], []
+    for i, obj in enumerate(items):
+        if isinstance(obj, TrimmedFace):
+            faces += sides_of(i, obj)
+        else:
+            surface, _, _ = as_patch(obj, f"patch {i}")
+            natural += _natural_sides(i, surface)
+    return faces + _with_degeneracy(natural)
 
 
 def sides_of(index: int, obj) -> list[Side]:
@@ -164,7 +194,7 @@ def sides_of(index: int, obj) -> list[Side]:
                             max(e.tolerance, obj.tolerance), e.degenerate))
         return out
     surface, _, _ = as_patch(obj, f"patch {index}")
-    return _natural_sides(index, surface)
+    return _with_degeneracy(_natural_sides(index, surface))
 
 
 _QUAD_CORNERS = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]])
