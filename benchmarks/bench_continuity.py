@@ -29,6 +29,7 @@ import argparse
 import os
 import platform
 import sys
+import time
 
 import numpy as np
 
@@ -70,21 +71,31 @@ def agreement(report, occ) -> tuple[float, str]:
     return diff, f"gap and angle; OCC done at {int(done.sum()):,} of {len(done):,} points"
 
 
+def cpu_seconds(fn) -> float:
+    """CPU time of one call: on a machine shared with other processes it says more than wall time."""
+    start = time.process_time()
+    fn()
+    return time.process_time() - start
+
+
 def run_case(tab, case, part, patches, samples):
     t_ours, reps, report = measure(lambda: shell_continuity(part, samples=samples), max_repeats=3)
+    cpu_ours = cpu_seconds(lambda: shell_continuity(part, samples=samples))
     n = sum(e.gap.size for e in report.edges)
     s = report.summary
     tab.add(case, "**splinekit** `shell_continuity`", n, t_ours, ref=t_ours, repeats=reps,
-            note=f"{s['edges']} edges: G2 {s['G2']}, G1 {s['G1']}, G0 {s['G0']}, none {s['none']}; edge finding included")
+            note=f"CPU {cpu_ours:.3g} s; {s['edges']} edges: G2 {s['G2']}, G1 {s['G1']}, G0 {s['G0']}, none {s['none']}; "
+                 "edge finding included")
     if patches is None:
         return report
     try:
         handles = [sk.occ.to_occ(p) for p in patches]
         pairs = occ_pairs(handles, report)
         t_occ, reps, occ = measure(lambda: occ_loop(pairs), max_repeats=3)
+        cpu_occ = cpu_seconds(lambda: occ_loop(pairs))
         diff, note = agreement(report, occ)
         tab.add(case, "OCC `LocalAnalysis_SurfaceContinuity` per point", n, t_occ, ref=t_ours, repeats=reps, diff=diff,
-                note=note + "; given the parameter pairs")
+                note=f"CPU {cpu_occ:.3g} s (CPU ratio {cpu_occ / cpu_ours:.2f}); {note}; given the parameter pairs")
     except Exception as exc:  # noqa: BLE001 - a peer that cannot run is reported, not fatal
         tab.fail(case, "OCC LocalAnalysis", exc)
     return report
