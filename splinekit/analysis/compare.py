@@ -39,6 +39,7 @@ from types import SimpleNamespace
 
 import numpy as np
 
+from .._validate import as_positive
 from ..errors import ParameterError
 from ..tolerances import CONTINUITY_ANGLE, CONTINUITY_CURVATURE, CONTINUITY_GAP
 from .sides import Side
@@ -48,7 +49,6 @@ __all__ = ["LEVELS", "EdgeContinuity", "Frame", "compare", "curvature_rows", "ed
 
 LEVELS = ("none", "G0", "G1", "G2")
 """Continuity levels from worst to best."""
-
 
 
 @dataclass(frozen=True)
@@ -111,15 +111,7 @@ class EdgeContinuity:
 
 def tolerance_value(value, name: str, default: float) -> float:
     """``value`` checked finite and >= 0, or ``default`` for None."""
-    if value is None:
-        return default
-    try:
-        value = float(value)
-    except (TypeError, ValueError, OverflowError):
-        raise ParameterError(f"{name} must be a number, got {value!r}") from None
-    if not (np.isfinite(value) and value >= 0):
-        raise ParameterError(f"{name} must be finite and >= 0, got {value!r}")
-    return value
+    return default if value is None else as_positive(value, name, allow_zero=True)
 
 
 def _unit(x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -128,6 +120,7 @@ def _unit(x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 
 def finite_values(values: np.ndarray, side: Side, what: str) -> None:
+    """A ParameterError naming the patch, side and first sample where ``values`` (``(n, ...)``) are not finite."""
     bad = ~np.isfinite(values).reshape(len(values), -1).all(axis=1)
     if bad.any():
         raise ParameterError(f"patch {side.patch} gives non-finite {what} along its side {side.name} "
