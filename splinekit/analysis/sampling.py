@@ -1,12 +1,13 @@
 """Where the samples of shared edges come from: the corresponding parameters on both uses and
-their frames, evaluated per surface for many edges at once.
+their frames, evaluated for many edges at once.
 
 For each edge (a pair of uses, ``inner`` lying on ``outer``), ``inner`` is sampled at equal steps
 of its pcurve; the corresponding parameters on ``outer`` are the same or the reversed fractions
 when the two uses coincide there (patches sharing their boundary with proportional
 parametrizations: the common case), else its closest points (a local search seeded from its
-polyline). Every sample of every edge on one surface is evaluated in one call (its curvature and
-first derivatives), so the cost grows with the number of surfaces, not of edges.
+polyline). Every sample of every edge on one surface, or on patches of one structure
+(:mod:`.stacked`), is evaluated in one call (curvature and first derivatives), so the number of
+calls grows with the number of surfaces or structures, not of edges.
 """
 
 from __future__ import annotations
