@@ -39,6 +39,16 @@ name                      value      meaning and unit
 ``FD_STEP``               1e-3       relative to a length (a parameter domain's, or the largest
                                      extent of an implicit's bounds): the step of numeric
                                      finite-difference derivatives
+``CONTINUITY_GAP``        1e-6       relative to the model's size (largest absolute coordinate,
+                                     at least 1): two faces closer than this along their shared
+                                     edge meet G0 (splinekit.analysis)
+``CONTINUITY_ANGLE``      1e-3       radians: normals closer than this across an edge meet G1
+                                     (OpenCascade's LocalAnalysis default)
+``CONTINUITY_CURVATURE``  1e-2       relative to the larger normal curvature across an edge (at
+                                     least 1 / the edge's length): a smaller jump is G2
+                                     (OpenCascade's LocalAnalysis default percentage)
+``CONTINUITY_MATCH``      1e-3       relative to an edge's length: a side lying this close to
+                                     another one is the edge they share
 ========================  =========  ==========================================================
 
 ``DEFAULT`` carries the first three under their older short names (``DEFAULT.param``,
@@ -68,6 +78,10 @@ __all__ = [
     "WELD",
     "DEVIATION_RTOL",
     "FD_STEP",
+    "CONTINUITY_GAP",
+    "CONTINUITY_ANGLE",
+    "CONTINUITY_CURVATURE",
+    "CONTINUITY_MATCH",
     "DEFAULT",
     "geometric_tolerance",
     "Tolerances",
@@ -84,6 +98,10 @@ OCC_CONFUSION = 1e-7
 WELD = 1e-8
 DEVIATION_RTOL = 1e-3
 FD_STEP = 1e-3
+CONTINUITY_GAP = 1e-6
+CONTINUITY_ANGLE = 1e-3
+CONTINUITY_CURVATURE = 1e-2
+CONTINUITY_MATCH = 1e-3
 
 
 @dataclass(frozen=True)

@@ -32,8 +32,12 @@ def test_named_tolerances_are_the_documented_figures():
     assert tolerances.WELD == 1e-8
     assert tolerances.DEVIATION_RTOL == 1e-3
     assert tolerances.FD_STEP == 1e-3
+    assert tolerances.CONTINUITY_GAP == 1e-6
+    assert tolerances.CONTINUITY_ANGLE == 1e-3
+    assert tolerances.CONTINUITY_CURVATURE == 1e-2
+    assert tolerances.CONTINUITY_MATCH == 1e-3
     constants = [name for name in tolerances.__all__ if name.isupper() and name != "DEFAULT"]
-    assert len(constants) == 11
+    assert len(constants) == 15
     for name in constants:  # each one has a row in the table: its name, its value, its unit
         assert f"``{name}``" in tolerances.__doc__, name
     # the older short names read the same figures
