@@ -1,0 +1,6 @@
+"""Surface quality analysis: zebra stripes, isophotes, curvature and draft-angle maps over a
+whole part, and deviation between a part and a point cloud or mesh (a scan)."""
+
+from .deviation import Deviation, deviation
+from .maps import CURVATURE_KINDS, DraftMap, SurfaceMap, curvature_map, draft_angle, isophotes, zebra
+from .sampling import SampledPart, sample_part
