@@ -88,7 +88,7 @@ _siblings.install()  # splinekit's own imports of models/exporters refuse anothe
 # Subpackages imported on first attribute access, keeping ``import splinekit`` fast; ``splinekit.occ``
 # (the OpenCascade bridge, splinekit.interop.occ under its short name) loads the B-rep layer with it
 # (brep comes with the tessellation, which pairs the edges of trimmed faces with its helpers)
-_LAZY_SUBMODULES = ("brep", "convert", "implicit", "levelset", "occ", "plot", "pointcloud")
+_LAZY_SUBMODULES = ("analysis", "brep", "convert", "implicit", "levelset", "occ", "plot", "pointcloud")
 
 
 def __getattr__(name):

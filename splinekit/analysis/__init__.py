@@ -3,4 +3,4 @@ whole part, and deviation between a part and a point cloud or mesh (a scan)."""
 
 from .deviation import Deviation, deviation
 from .maps import CURVATURE_KINDS, DraftMap, SurfaceMap, curvature_map, draft_angle, isophotes, zebra
-from .sampling import SampledPart, sample_part
+from .sampling import SampledPart, Sources, sample_part, sample_sources

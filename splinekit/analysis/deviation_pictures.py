@@ -20,7 +20,7 @@ CLIP_PERCENTILE = 99.0
 """The colour scale ends at this percentile of |distance|: a few outliers do not wash out the map."""
 PAINT_POINTS = 400_000
 """Foot points painted at most (an even subsample of larger clouds)."""
-REACH = 3.0
+REACH = 5.0
 """A pixel takes the colour of the nearest foot point within this many typical point spacings."""
 CMAP = "RdYlBu_r"  # blue inside, pale yellow on the surface, red outside; never the no-data grey
 

@@ -182,7 +182,7 @@ def sample_part(obj, tolerance=None) -> SampledPart:
     units; default :func:`splinekit.tessellate`'s, 1e-3 of the model size); it is ignored
     for a mesh. A :class:`SampledPart` is returned as it is.
     """
-    return sample_sources(obj, tolerance).part
+    return obj if isinstance(obj, SampledPart) else sample_sources(obj, tolerance).part
 
 
 @dataclass(frozen=True, eq=False)
@@ -199,7 +199,10 @@ class Sources:
 
 
 def sample_sources(obj, tolerance=None) -> Sources:
-    """:func:`sample_part` with the mesh, surfaces and faces behind it (:class:`Sources`)."""
+    """:func:`sample_part` with the mesh, surfaces and faces behind it (:class:`Sources`); a
+    :class:`Sources` is returned as it is (to sample once for several analyses)."""
+    if isinstance(obj, Sources):
+        return obj
     kind, item, surfaces = _surfaces_of(obj)
     if kind == "sampled":
         return Sources(item, None, None, None)
