@@ -11,8 +11,13 @@ their statistics.
 3. on exact geometry the closest point is then refined on the patch of that triangle:
    Newton's method of :func:`splinekit.project`, seeded with the point's parameters on the
    triangle (one seed per point, one batch per patch). The refined point is never farther
-   than the seed (the surface point at the mesh's closest point); on a trimmed face a refined point that leaves the face (its trims) is
-   dropped and the mesh answer kept (its error is below the tessellation's deviation);
+   than the seed. Near a seam the nearest triangle may belong to the wrong patch (the mesh
+   is off the surfaces by up to its chordal deviation), so every other patch among the
+   point's :data:`SEAM_NEIGHBOURS` nearest samples is tried as well, from its nearest sample,
+   and the nearest answer kept. On a trimmed face an answer that leaves the face (its trims)
+   is dropped and the point projected onto the face's trim edges (their 3-D curves,
+   :func:`splinekit.project`) instead; a point with no answer left keeps the mesh's (within
+   the tessellation's deviation);
 4. the sign: positive on the side the reference's normals point to (outside a closed part),
    from the exact normal at the foot point (the mesh's face normal for a mesh). Where the
    foot point lies on an edge or corner, the offset is not along that normal; there a
@@ -29,6 +34,7 @@ from dataclasses import dataclass
 from functools import cached_property
 
 import numpy as np
+from scipy.spatial import cKDTree
 
 from .. import _kernels, limits
 from ..closest import project
@@ -44,6 +50,9 @@ __all__ = ["BYTES_PER_POINT", "Deviation", "deviation"]
 
 BYTES_PER_POINT = 600
 """Peak memory per query point (the cloud, the foot points, parameters, the batch arrays)."""
+
+SEAM_NEIGHBOURS = 8
+"""Nearest samples of the reference whose patches are tried besides the nearest triangle's."""
 
 ALONG_NORMAL = 0.5
 """Offsets whose cosine with the foot point's normal is below this lie off an edge or corner:
@@ -246,34 +255,102 @@ def _barycentric(p, a, b, c):
 
 def _refine(sources, P, foot, tri_face, tri_corners, mesh):
     """Distances, foot points and oriented unit normals on the exact patches (module notes, 3.)."""
-    part, surfaces, faces = sources.part, sources.surfaces, sources.faces
+    part, surfaces = sources.part, sources.surfaces
     V = np.asarray(mesh.vertices, dtype=np.float64)
     patch = np.asarray(mesh.face_patch, dtype=np.int64)[tri_face]
     w = _barycentric(foot, V[tri_corners[:, 0]], V[tri_corners[:, 1]], V[tri_corners[:, 2]])
     corner_uv = np.asarray(mesh.corner_uv)[tri_face]  # (n, 3, 2); fan triangles of a triangle mesh are its faces
     uv = np.einsum("nk,nkj->nj", w, corner_uv)
-    dist = np.linalg.norm(P - foot, axis=1)
-    foot = foot.copy()
-    normal = np.zeros_like(foot)
+    best = _Best(np.full(len(P), np.inf), np.array(foot), uv.copy(), patch.copy())
+    # 1. Newton on the patch of the nearest triangle
+    pairs = [(np.arange(len(P)), patch, uv)]
+    # 2. near a seam the nearest triangle may lie on the wrong patch (the mesh is off the surfaces
+    # by up to its chordal deviation): every other patch among the point's nearest samples
+    _, near = cKDTree(part.points).query(P, k=min(SEAM_NEIGHBOURS, part.n_vertices), workers=-1)
+    near = near.reshape(len(P), -1)
+    owner = np.repeat(np.arange(len(P)), near.shape[1])
+    other = part.patch[near.ravel()]
+    _, first = np.unique(owner * (len(surfaces) + 1) + other, return_index=True)  # each (point, patch) once
+    first = first[other[first] != patch[owner[first]]]  # seeded at its nearest sample
+    pairs.append((owner[first], other[first], part.uv[near.ravel()[first]]))
+    for who, which, seeds in pairs:
+        ok, d, f, new_uv = _newton_pairs(sources, P, who, which, seeds)
+        best.update(who[ok], d[ok], f[ok], new_uv[ok], which[ok])
+        if sources.faces is not None:  # 3. a face that Newton left: the closest point on its trims
+            _on_trims(sources, P, who[~ok], which[~ok], best)
+    # a point left with no answer keeps the mesh's (within the tessellation's deviation)
+    lost = ~np.isfinite(best.dist)
+    best.dist[lost] = np.linalg.norm(P[lost] - foot[lost], axis=1)
+    best.foot[lost], best.uv[lost], best.patch[lost] = foot[lost], uv[lost], patch[lost]
+    # 4. the oriented normal at every foot point
+    normal = np.zeros_like(best.foot)
+    for p, rows in _groups(best.patch, len(surfaces)):
+        normal[rows] = part.patch_sign[p] * surfaces[p].normal(best.uv[rows, 0], best.uv[rows, 1])
+    return best.dist, best.foot, normal
+
+
+@dataclass
+class _Best:
+    """The nearest answer so far of every point: distance, foot point, its patch and parameters."""
+
+    dist: np.ndarray
+    foot: np.ndarray
+    uv: np.ndarray
+    patch: np.ndarray
+
+    def update(self, who, dist, foot, uv, patch):
+        """Keep the answers ``who`` (point indices, repeats allowed) that are nearer than what they have."""
+        order = np.argsort(dist)[::-1]  # a point answered twice: the nearest is written last
+        who, dist, foot, uv, patch = who[order], dist[order], foot[order], uv[order], patch[order]
+        nearer = dist < self.dist[who]
+        who = who[nearer]
+        self.dist[who], self.foot[who], self.uv[who], self.patch[who] = dist[nearer], foot[nearer], uv[nearer], patch[nearer]
+
+
+def _on_trims(sources, P, who, which, best):
+    """Closest points of ``P[who]`` on the trim edges (their 3-D curves) of faces ``which``."""
+    for p, rows in _groups(which, len(sources.faces)):
+        points = who[rows]
+        for edge in sources.faces[p].edges:
+            if edge.degenerate or edge.curve is None:
+                continue
+            try:
+                result = project(edge.curve, P[points])
+            except ConvergenceError:
+                continue
+            t = np.asarray(result.parameters)
+            (t0, t1) = edge.pcurve.domain
+            uv = edge.pcurve.evaluate(np.clip(t, t0, t1))
+            best.update(points, np.asarray(result.distances), np.asarray(result.points), uv, np.full(len(points), p))
+
+
+def _groups(patch, n_patches):
+    """``(patch, rows)`` for every patch that has rows."""
     order = np.argsort(patch, kind="stable")
-    bounds = np.searchsorted(patch[order], np.arange(len(surfaces) + 1))
-    for p in np.flatnonzero(np.diff(bounds)):  # one Newton batch per patch
-        rows = order[bounds[p]:bounds[p + 1]]
+    bounds = np.searchsorted(patch[order], np.arange(n_patches + 1))
+    for p in np.flatnonzero(np.diff(bounds)):
+        yield p, order[bounds[p]:bounds[p + 1]]
+
+
+def _newton_pairs(sources, P, who, which, seeds):
+    """Closest points of ``P[who]`` on patches ``which`` (both ``(m,)``) from ``seeds`` ``(m, 2)``:
+    ``(ok, distance, foot, uv)``, ``ok`` False where Newton failed or left the face's trims
+    (``contains_uv`` outside; on a trim counts as inside)."""
+    surfaces, faces = sources.surfaces, sources.faces
+    m = len(who)
+    ok = np.zeros(m, dtype=bool)
+    dist, foot, uv = np.full(m, np.inf), np.zeros((m, 3)), np.array(seeds, dtype=np.float64)
+    for p, rows in _groups(which, len(surfaces)):  # one Newton batch per patch
         surface = surfaces[p]
         (u0, u1), (v0, v1) = surface.domain
-        seeds = np.column_stack([np.clip(uv[rows, 0], u0, u1), np.clip(uv[rows, 1], v0, v1)])
+        start = np.column_stack([np.clip(uv[rows, 0], u0, u1), np.clip(uv[rows, 1], v0, v1)])
+        uv[rows] = start
         try:
-            result = project(surface, P[rows], seeds=seeds)
-        except ConvergenceError:  # keep the mesh's answers for this patch (within its deviation)
-            new_uv, better = seeds, np.zeros(len(rows), dtype=bool)
-        else:
-            new_uv = np.asarray(result.parameters)
-            better = np.ones(len(rows), dtype=bool)
-            if faces is not None:  # a point refined off the face's trims keeps the mesh answer
-                better = faces[p].contains_uv(new_uv) >= 0
-            keep = rows[better]
-            dist[keep] = np.asarray(result.distances)[better]
-            foot[keep] = np.asarray(result.points)[better]
-        use_uv = np.where(better[:, None], new_uv, seeds)
-        normal[rows] = part.patch_sign[p] * surface.normal(use_uv[:, 0], use_uv[:, 1])
-    return dist, foot, normal
+            result = project(surface, P[who[rows]], seeds=start)
+        except ConvergenceError:  # these points keep what they have (the mesh's answer)
+            continue
+        new_uv = np.asarray(result.parameters)
+        inside = np.ones(len(rows), dtype=bool) if faces is None else faces[p].contains_uv(new_uv) >= 0
+        ok[rows] = inside
+        dist[rows], foot[rows], uv[rows] = result.distances, result.points, new_uv
+    return ok, dist, foot, uv
