@@ -130,6 +130,7 @@ def _draft_painter(m):
 
     def paint(px):
         draft = draft_degrees(px.normals, pull)
+        draft[np.abs(draft) < VERTICAL_DEGREES] = 0.0  # a vertical wall, not a rounding-deep under-cut
         rgb = cmap(norm(draft))[:, :3]
         region = np.where(draft < -VERTICAL_DEGREES, 0, np.where(draft < min_draft - VERTICAL_DEGREES, 1, 2))
         return rgb, region, True

@@ -63,9 +63,19 @@ def read_scan(path):
     if suffix not in SCAN_SUFFIXES:
         raise FileFormatError(f"cannot read the scan {path!r}: scans are {', '.join(SCAN_SUFFIXES)} files")
     if suffix in POINT_SUFFIXES:
-        return _read_xyz(path)
-    mesh = exporters.import_mesh(path)
-    return mesh if mesh.n_faces else np.asarray(mesh.vertices)
+        points = _read_xyz(path)
+    else:
+        mesh = exporters.import_mesh(path)
+        if mesh.n_faces:
+            return mesh
+        points = np.asarray(mesh.vertices)
+    if not len(points):
+        raise FileFormatError(f"the scan {path!r} is empty: it holds no points")
+    bad = ~np.isfinite(points).all(axis=1)
+    if bad.any():
+        i = int(np.flatnonzero(bad)[0])
+        raise FileFormatError(f"the scan {path!r}: point {i} = {points[i].tolist()} is not finite")
+    return points
 
 
 def _read_xyz(path):
@@ -136,6 +146,8 @@ def cmd_analyze(args, console: Console) -> int:
         raise ParameterError("--continuity needs splinekit.analysis.shell_continuity (edge continuity), "
                              "which this version of splinekit does not have yet")
     size, view = parse_size(args.size), parse_view(args.view)
+    if not 1 <= args.stripes <= 180:
+        raise ParameterError(f"--stripes must be a whole number from 1 to 180, got {args.stripes}")
     pull = parse_vector(args.draft, "--draft") if args.draft is not None else None
     light = parse_vector(args.light, "--light")
     min_draft = parse_degrees(args.min_draft, "--min-draft", 0.0, 90.0)
