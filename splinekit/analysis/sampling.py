@@ -151,7 +151,7 @@ def _surfaces_of(obj):
     """``(kind, items)``: ``("mesh", PolyMesh)``, ``("exact", obj to tessellate, [surface per patch])``."""
     if isinstance(obj, SampledPart):
         return "sampled", obj, None
-    if isinstance(obj, PolyMesh) and not hasattr(obj, "corner_uv"):
+    if isinstance(obj, PolyMesh):  # a Tessellation too: without its surfaces, a mesh
         return "mesh", obj, None
     if isinstance(obj, SubdivisionSurface):
         if obj.scheme != "catmull-clark":  # no exact patches: its limit through a fine refinement
