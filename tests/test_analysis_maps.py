@@ -205,3 +205,17 @@ def test_a_zebra_map_refuses_another_view(tmp_path):
 def test_bad_input_names_the_problem(call, fragment):
     with pytest.raises(SplineKitError, match=fragment):
         call()
+
+
+def test_a_box_mesh_is_split_at_its_edges():
+    # a box given only as a mesh: each face keeps its own normal up to its edges
+    m = draft_angle(mesh_primitives.box(2.0), (0, 0, 1))
+    assert m.part.n_vertices == 24  # 8 corners x 3 faces
+    z = m.part.points[:, 2]
+    top, bottom = m.values > 45, m.values < -45
+    assert np.allclose(m.values[top], 90) and np.allclose(z[top], 1.0)
+    assert np.allclose(m.values[bottom], -90) and np.allclose(z[bottom], -1.0)
+    assert np.abs(m.values[~top & ~bottom]).max() < 1e-9
+    # a smooth mesh keeps its vertices
+    sphere = mesh_primitives.icosphere(3)
+    assert sample_part(sphere).n_vertices == sphere.n_vertices

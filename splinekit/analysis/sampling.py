@@ -12,7 +12,8 @@ a B-rep face, shell or solid, a Catmull-Clark :class:`~splinekit.SubdivisionSurf
   :func:`splinekit.curvature` at each vertex's patch parameters (one vectorized call per
   patch); at singular parameters (a pole, a collapsed edge) they are the limits
   :func:`splinekit.curvature` extrapolates, and the vertex is flagged in ``degenerate``;
-* a plain mesh keeps its vertices, with the mesh's angle-weighted vertex normals and its
+* a plain mesh keeps its vertices, split at its sharp edges (:mod:`.mesh_normals`: a box
+  gets one vertex per face at each corner, each with its face's normal), with the mesh's
   discrete curvatures (:attr:`~splinekit.PolyMesh.gaussian_curvature`,
   :attr:`~splinekit.PolyMesh.mean_curvature`); vertices whose normal vanishes are flagged.
 
@@ -37,6 +38,7 @@ from ..subdiv.surface import SubdivisionSurface
 from ..surfaces import BezierSurface, SplineSurface
 from ..tessellation import tessellate
 from ..tessellation.core import _subdivision_patches
+from .mesh_normals import split_at_creases
 
 __all__ = ["SampledPart", "Sources", "sample_part", "sample_sources", "unit_direction"]
 
@@ -243,16 +245,18 @@ def _outward(part: SampledPart) -> SampledPart:
 
 
 def _sample_mesh(mesh: PolyMesh) -> SampledPart:
+    """A plain mesh: vertices split at sharp edges (:mod:`.mesh_normals`) with the mesh's own
+    discrete curvatures of the vertex each copy comes from."""
     if mesh.vertices.shape[1] != 3 or mesh.n_faces == 0:
         raise ParameterError(f"the analysis needs a 3-D mesh with faces; got {mesh.vertices.shape[1]}-D with {mesh.n_faces} faces")
     tris, _ = triangulate(mesh)
-    normals = np.array(mesh.vertex_normals)
-    K = np.array(mesh.gaussian_curvature, dtype=np.float64)
-    H = np.array(mesh.mean_curvature, dtype=np.float64)
+    source, normals, triangles = split_at_creases(mesh.vertices, tris)
+    K = np.array(mesh.gaussian_curvature, dtype=np.float64)[source]
+    H = np.array(mesh.mean_curvature, dtype=np.float64)[source]
     root = np.sqrt(np.maximum(H * H - K, 0.0))
-    n = mesh.n_vertices
+    n = len(source)
     return SampledPart(
-        points=np.array(mesh.vertices, dtype=np.float64), normals=normals, triangles=np.asarray(tris, dtype=np.int64),
+        points=np.array(mesh.vertices, dtype=np.float64)[source], normals=normals, triangles=triangles,
         patch=np.full(n, -1, dtype=np.int64), uv=np.full((n, 2), np.nan), gaussian=K, mean=H, k1=H + root, k2=H - root,
         degenerate=~normals.any(axis=1), patch_sign=np.zeros(0), exact=False, tolerance=0.0,
     )
