@@ -17,6 +17,7 @@ from splinekit.analysis import (
     curvature_map,
     draft_angle,
     isophotes,
+    render_curvature_comb,
     sample_part,
     zebra,
 )
@@ -219,3 +220,27 @@ def test_a_box_mesh_is_split_at_its_edges():
     # a smooth mesh keeps its vertices
     sphere = mesh_primitives.icosphere(3)
     assert sample_part(sphere).n_vertices == sphere.n_vertices
+
+
+def test_curvature_comb_picture_of_circles(tmp_path):
+    # combs given by their closed form: a circle of radius r has curvature 1/r and teeth of
+    # length scale/r pointing away from its centre
+    from dataclasses import dataclass
+
+    @dataclass
+    class Comb:
+        points: np.ndarray
+        tips: np.ndarray
+        curvature: np.ndarray
+
+    t = np.linspace(0, 2 * np.pi, 100)
+    combs = []
+    for r, dim in ((1.0, 2), (2.0, 3)):
+        ring = np.column_stack([r * np.cos(t), r * np.sin(t)] + ([np.zeros_like(t)] if dim == 3 else []))
+        combs.append(Comb(ring, ring * (1 + 0.5 / r**2), np.full(len(t), 1 / r)))
+    for item in (combs[0], combs):
+        path = render_curvature_comb(item, tmp_path / "comb.png", size=(300, 240))
+        with Image.open(path) as image:
+            assert image.size == (300, 240)
+    with pytest.raises(SplineKitError, match="tips"):
+        render_curvature_comb([object()], tmp_path / "x.png")
