@@ -151,3 +151,11 @@ def test_a_plain_mesh_reference():
     assert not d.exact
     assert np.allclose(d.distances, [0.5, -0.5, np.sqrt(0.5)], atol=1e-12)
     assert isinstance(d.reference.mesh, PolyMesh)
+
+
+def test_an_inside_out_mesh_still_measures_outside_positive():
+    box = mesh_primitives.box(2.0)
+    inverted = PolyMesh(box.vertices, np.asarray(box.faces)[:, ::-1])
+    P = np.array([[0.0, 0.0, 1.5], [0.0, 0.0, 0.5], [1.5, 1.5, 1.5]])
+    for mesh in (box, inverted):
+        assert np.allclose(deviation(mesh, P).distances, [0.5, -0.5, np.sqrt(0.75)], atol=1e-12)

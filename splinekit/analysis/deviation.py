@@ -18,8 +18,9 @@ their statistics.
    is dropped and the point projected onto the face's trim edges (their 3-D curves,
    :func:`splinekit.project`) instead; a point with no answer left keeps the mesh's (within
    the tessellation's deviation);
-4. the sign: positive on the side the reference's normals point to (outside a closed part),
-   from the exact normal at the foot point (the mesh's face normal for a mesh). Where the
+4. the sign: positive on the side the reference's normals point to (outside a closed part;
+   a part that faces inward is turned outward first, as for the maps), from the exact normal
+   at the foot point (the mesh's face normal for a mesh). Where the
    foot point lies on an edge or corner, the offset is not along that normal; there a
    closed reference gives the sign of the angle-weighted pseudo-normal of the welded mesh
    (:meth:`~splinekit.pointcloud.MeshDistance.signed`, exact for the mesh).
@@ -228,6 +229,8 @@ def deviation(reference, points_or_mesh, *, tolerance=None) -> Deviation:
     if off_edge.any() and mesh.is_closed:
         side, _ = distance.signed(P[off_edge])
         signs[off_edge] = np.where(side < 0, -1.0, 1.0)
+    if not exact and part.flipped:  # a mesh facing inward: outside is where its normals do not point
+        signs = -signs
     return Deviation(points=P, distances=signs * dist, closest=foot, reference=part, exact=exact, scan=scan)
 
 

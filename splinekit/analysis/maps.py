@@ -12,8 +12,8 @@ The formulas (unit normal ``n``, all on whole arrays):
 * zebra: light bands parallel to ``axis`` all around the part, seen in a mirror. The
   view direction ``d`` (from the eye into the scene) reflects to ``r = d - 2 (d.n) n``;
   the value is the angle of ``r`` about ``axis``, measured from the direction back to the
-  viewer, in radians in ``(-pi, pi]``; the stripe is white where ``round(angle / (pi / stripes))`` is even
-  (``stripes`` black and white pairs all around), rounded so that a white stripe is centred on
+  viewer, in radians in ``(-pi, pi]``. The stripe is white where ``round(angle / (pi /
+  stripes))`` is even: ``stripes`` black and white pairs all around, a white one centred on
   the reflection straight back to the viewer. On a plane the angle is constant; on a
   cylinder about ``axis`` seen across it, it is twice the polar angle of the normal.
 * isophotes: the angle between ``n`` and the light ``direction``, in degrees in

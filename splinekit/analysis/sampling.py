@@ -95,6 +95,8 @@ class SampledPart:
         Whether normals and curvatures are those of exact surfaces (else a mesh's discrete ones).
     tolerance : float
         Chordal deviation of the triangles from the exact surfaces (0 for a plain mesh).
+    flipped : bool
+        Whether the part was turned to face outward (its source faced inward).
     """
 
     points: np.ndarray
@@ -110,6 +112,7 @@ class SampledPart:
     patch_sign: np.ndarray
     exact: bool
     tolerance: float
+    flipped: bool = False
 
     @property
     def n_vertices(self) -> int:
@@ -146,6 +149,7 @@ class SampledPart:
             patch_sign=np.concatenate([p.patch_sign for p in parts]),
             exact=all(p.exact for p in parts),
             tolerance=max(p.tolerance for p in parts),
+            flipped=any(p.flipped for p in parts),
         )
 
 
@@ -241,7 +245,7 @@ def _outward(part: SampledPart) -> SampledPart:
     if not (box > 0 and volume < -OUTWARD_FRACTION * box):
         return part
     return replace(part, normals=-part.normals, triangles=part.triangles[:, ::-1].copy(), mean=-part.mean,
-                   k1=-part.k2, k2=-part.k1, patch_sign=-part.patch_sign)
+                   k1=-part.k2, k2=-part.k1, patch_sign=-part.patch_sign, flipped=not part.flipped)
 
 
 def _sample_mesh(mesh: PolyMesh) -> SampledPart:

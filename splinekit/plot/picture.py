@@ -239,8 +239,8 @@ def draw(tris, corner_normals, color, scale, size, view, title, path, *, corner_
                     colorbar.set_ticks(colour_bar.ticks)
             else:
                 colorbar.set_label(colors.colorbar_label(color, scale), fontsize=9)
-            if colour_bar is None and scale == "symlog":
-                colorbar.set_ticks(colors.symlog_ticks(norm))
+                if scale == "symlog":
+                    colorbar.set_ticks(colors.symlog_ticks(norm))
             colorbar.ax.tick_params(labelsize=8)
         if text:
             fig.text(10.0 / w, 1.0 - 6.0 / h, text, fontsize=TITLE_FONT, va="top")
