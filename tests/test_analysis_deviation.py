@@ -113,7 +113,9 @@ def test_pictures_of_a_cloud(tmp_path):
 
 
 def test_summary_holds_every_statistic():
-    d = deviation(wavy_patch(), np.array([[0.5, 0.5, 1.0], [0.2, 0.3, -0.5]]))
+    P = np.array([[0.5, 0.5, 1.0], [0.2, 0.3, -0.5]])
+    d = deviation(wavy_patch(), P)
+    assert P.flags.writeable and not d.distances.flags.writeable  # the caller's array is left alone
     s = d.summary()
     assert set(s) == {"count", "max", "max_outside", "max_inside", "mean", "mean_abs", "rms", "std",
                       "p50", "p90", "p95", "p99"}

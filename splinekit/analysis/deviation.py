@@ -45,7 +45,7 @@ from ..mesh.geometry import triangulate
 from ..pointcloud import MeshDistance, meshdistance
 from ..pointcloud._cloud import as_cloud
 from . import deviation_pictures
-from .sampling import SampledPart, sample_sources
+from .sampling import SampledPart, freeze, sample_sources
 
 __all__ = ["BYTES_PER_POINT", "Deviation", "deviation"]
 
@@ -93,6 +93,9 @@ class Deviation:
     reference: SampledPart
     exact: bool
     scan: PolyMesh | None = None
+
+    def __post_init__(self):
+        freeze(self)
 
     # -- statistics --------------------------------------------------------------------------
     @cached_property
@@ -231,7 +234,7 @@ def deviation(reference, points_or_mesh, *, tolerance=None) -> Deviation:
         signs[off_edge] = np.where(side < 0, -1.0, 1.0)
     if not exact and part.flipped:  # a mesh facing inward: outside is where its normals do not point
         signs = -signs
-    return Deviation(points=P, distances=signs * dist, closest=foot, reference=part, exact=exact, scan=scan)
+    return Deviation(points=np.array(P), distances=signs * dist, closest=foot, reference=part, exact=exact, scan=scan)
 
 
 def _face_normals(mesh, corners):

@@ -36,7 +36,7 @@ from ..plot import raster
 from ..plot.picture import DEFAULT_SIZE
 from . import pictures
 from .fields import VERTICAL_DEGREES, draft_degrees, isophote_angle, zebra_angle, zebra_stripe
-from .sampling import SampledPart, sample_part, unit_direction
+from .sampling import SampledPart, freeze, sample_part, unit_direction
 
 __all__ = ["CURVATURE_KINDS", "DraftMap", "SurfaceMap", "curvature_map", "draft_angle", "isophotes", "zebra"]
 
@@ -71,6 +71,9 @@ class SurfaceMap:
     values: np.ndarray
     unit: str
     options: dict = field(default_factory=dict)
+
+    def __post_init__(self):
+        freeze(self)
 
     def render(self, path, *, size=DEFAULT_SIZE, view=None, title=None) -> str:
         """Write the map as a PNG to ``path`` (atomically); returns the path. ``view`` is
@@ -120,10 +123,12 @@ def zebra(part, *, stripes: int = 12, axis=None, view=DEFAULT_VIEW, tolerance=No
         raise ParameterError(f"stripes must be at most 180 (one-degree bands), got {stripes}")
     view = _view(view)
     eye, _, up = raster.view_basis(*view)
-    axis = up if axis is None else unit_direction(axis, "axis")
+    upright = axis is None
+    axis = up if upright else unit_direction(axis, "axis")
     sampled = sample_part(part, tolerance)
     angle = zebra_angle(sampled.normals, eye, axis)
-    options = {"stripes": stripes, "axis": axis, "eye": eye, "view": view, "stripe": zebra_stripe(angle, stripes)}
+    options = {"stripes": stripes, "axis": axis, "upright": upright, "eye": eye, "view": view,
+               "stripe": zebra_stripe(angle, stripes)}
     return SurfaceMap("zebra", sampled, angle, "rad", options)
 
 

@@ -60,7 +60,8 @@ def _zebra_painter(m):
         rgb = np.where(stripe[:, None] == 1, LIGHT, DARK) * np.ones(3)
         return rgb, None, False
 
-    return paint, None, f"zebra stripes: {stripes} pairs all around, bands along {vector_text(axis)}", None
+    along = "upright in the view" if m.options.get("upright") else f"along {vector_text(axis)}"
+    return paint, None, f"zebra stripes: {stripes} pairs all around, light bands {along}", None
 
 
 def _isophote_painter(m):

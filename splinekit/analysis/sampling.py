@@ -40,13 +40,20 @@ from ..tessellation import tessellate
 from ..tessellation.core import _subdivision_patches
 from .mesh_normals import split_at_creases
 
-__all__ = ["SampledPart", "Sources", "sample_part", "sample_sources", "unit_direction"]
+__all__ = ["SampledPart", "Sources", "freeze", "sample_part", "sample_sources", "unit_direction"]
 
 OUTWARD_FRACTION = 0.01
 """Enclosed volume, as a fraction of the bounding box, above which a part is turned to face outward."""
 
 SUBDIVISION_LEVELS = 2
 """Uniform refinements of a Catmull-Clark cage before its faces become B-spline patches."""
+
+
+def freeze(obj) -> None:
+    """Make every array field of the dataclass ``obj`` read-only (results are values)."""
+    for value in vars(obj).values():
+        if isinstance(value, np.ndarray):
+            value.setflags(write=False)
 
 
 def unit_direction(direction, name: str = "direction") -> np.ndarray:
@@ -114,6 +121,9 @@ class SampledPart:
     tolerance: float
     flipped: bool = False
 
+    def __post_init__(self):
+        freeze(self)
+
     @property
     def n_vertices(self) -> int:
         return len(self.points)
@@ -126,31 +136,6 @@ class SampledPart:
     def size(self) -> float:
         """Diagonal of the bounding box of the points (model units)."""
         return float(np.linalg.norm(np.ptp(self.points, axis=0))) if len(self.points) else 0.0
-
-    @staticmethod
-    def concatenate(parts) -> "SampledPart":
-        """One part of several (their patch indices renumbered one after the other)."""
-        parts = list(parts)
-        if len(parts) == 1:
-            return parts[0]
-        offsets = np.cumsum([0] + [p.n_vertices for p in parts[:-1]])
-        patch_offsets = np.cumsum([0] + [int(p.patch.max(initial=-1)) + 1 for p in parts[:-1]])
-        return SampledPart(
-            points=np.concatenate([p.points for p in parts]),
-            normals=np.concatenate([p.normals for p in parts]),
-            triangles=np.concatenate([p.triangles + o for p, o in zip(parts, offsets)]),
-            patch=np.concatenate([np.where(p.patch >= 0, p.patch + o, -1) for p, o in zip(parts, patch_offsets)]),
-            uv=np.concatenate([p.uv for p in parts]),
-            gaussian=np.concatenate([p.gaussian for p in parts]),
-            mean=np.concatenate([p.mean for p in parts]),
-            k1=np.concatenate([p.k1 for p in parts]),
-            k2=np.concatenate([p.k2 for p in parts]),
-            degenerate=np.concatenate([p.degenerate for p in parts]),
-            patch_sign=np.concatenate([p.patch_sign for p in parts]),
-            exact=all(p.exact for p in parts),
-            tolerance=max(p.tolerance for p in parts),
-            flipped=any(p.flipped for p in parts),
-        )
 
 
 def _surfaces_of(obj):
