@@ -244,3 +244,14 @@ def test_curvature_comb_picture_of_circles(tmp_path):
             assert image.size == (300, 240)
     with pytest.raises(SplineKitError, match="tips"):
         render_curvature_comb([object()], tmp_path / "x.png")
+
+
+@pytest.mark.parametrize("scheme, exact", [("catmull-clark", True), ("loop", False)])
+def test_subdivision_limit_surfaces(scheme, exact):
+    cage = mesh_primitives.box(2.0) if scheme == "catmull-clark" else mesh_primitives.icosphere(0)
+    part = sample_part(sk.SubdivisionSurface(cage, scheme))
+    assert part.exact == exact
+    assert np.allclose(np.linalg.norm(part.normals, axis=1), 1.0)
+    # a convex limit surface about the origin: outward normals, positive Gaussian curvature
+    assert (np.einsum("ij,ij->i", part.normals, part.points) > 0).all()
+    assert np.median(part.gaussian) > 0
