@@ -8,7 +8,7 @@ Usage (from the repository root, splinekit importable)::
 Each picture is one `splinekit analyze` call (printed before it runs), so anyone can draw the
 same picture. The deviation pictures measure a synthetic scan of the teapot written to a
 temporary folder: 200,000 points on its patches, pushed out along the normals by a smooth
-0.3 mm bump on the body and pulled in by 0.1 mm on the lid, plus 0.02 mm of noise.
+0.3 mm bump on the body's front and pulled in by 0.1 mm on the top 15 %, plus 0.02 mm of noise.
 """
 
 from __future__ import annotations
@@ -30,7 +30,7 @@ RUNS = [
     ("mug", ["--zebra", "--view", "20,-40"]),
     ("vase", ["--isophotes", "--light", "1,0,1", "--step", "10"]),
     ("bracket", ["--draft", "0,0,1", "--min-draft", "1"]),
-    ("wing", ["--curvature", "max", "--scale", "symlog", "--view", "40,-120"]),
+    ("wing", ["--curvature", "min", "--scale", "symlog", "--view", "40,-120"]),
     ("teapot", ["--deviation", "SCAN"]),
 ]
 
@@ -39,24 +39,29 @@ def teapot_scan(folder: Path) -> Path:
     """The synthetic scan of the module notes, as an .xyz file."""
     import splinekit as sk
     from models import build_model
+    from splinekit.analysis import sample_part
 
     patches = [p for body in build_model("teapot").bodies for p in body]
+    outward = sample_part(patches).patch_sign  # per patch: +1 where Su x Sv points out of the teapot
     rng = np.random.default_rng(18)
     n = 200_000
     pick = rng.integers(len(patches), size=n)
     uv = rng.uniform(0.0, 1.0, size=(n, 2))
-    points = np.empty((n, 3))
+    points, normals = np.empty((n, 3)), np.empty((n, 3))
     for k, patch in enumerate(patches):
         rows = np.flatnonzero(pick == k)
-        S = patch.evaluate(uv[rows, 0], uv[rows, 1])
-        N = sk.curvature(patch, uv[rows, 0], uv[rows, 1]).normal
-        points[rows] = S
-        outward = np.sign(np.einsum("ij,ij->i", N, S - np.array([0.0, 0.0, 15.0])))
-        z, y = S[:, 2], S[:, 1]
-        bump = 0.3 * np.exp(-((z - 12.0) ** 2 + (y - 10.0) ** 2) / 40.0) - 0.1 * (z > 30.0)
-        points[rows] += (outward * (bump + rng.normal(0.0, 0.02, len(rows))))[:, None] * N
+        points[rows] = patch.evaluate(uv[rows, 0], uv[rows, 1])
+        normals[rows] = outward[k] * sk.curvature(patch, uv[rows, 0], uv[rows, 1]).normal
+    # the bump: centred on the body where it faces the default view (azimuth -58 degrees)
+    size = float(np.ptp(points, axis=0).max())
+    middle = np.abs(points[:, 2] - np.median(points[:, 2])) < 0.02 * size
+    facing = points[:, :2] @ [np.cos(np.radians(-58.0)), np.sin(np.radians(-58.0))]
+    centre = points[np.flatnonzero(middle)[np.argmax(facing[middle])]]
+    bump = 0.3 * np.exp(-np.sum((points - centre) ** 2, axis=1) / (2 * (0.12 * size) ** 2))
+    lid = np.where(points[:, 2] > np.percentile(points[:, 2], 85), -0.1, 0.0)
+    offset = bump + lid + rng.normal(0.0, 0.02, n)
     path = folder / "teapot_scan.xyz"
-    np.savetxt(path, points, fmt="%.6f", header="synthetic teapot scan: x y z (mm)")
+    np.savetxt(path, points + offset[:, None] * normals, fmt="%.6f", header="synthetic teapot scan: x y z (mm)")
     return path
 
 
