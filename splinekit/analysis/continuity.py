@@ -15,7 +15,7 @@ from ..errors import ParameterError
 from ..tolerances import CONTINUITY_MATCH
 from .compare import LEVELS, EdgeContinuity, tolerance_value
 from .matching import NoSharedEdgeError, lies_on, polyline, shared_edge
-from .sampling import measure
+from .edge_samples import measure
 from .sides import SIDE_NAMES, Side, as_patch, sides_of
 
 __all__ = ["LEVELS", "EdgeContinuity", "NoSharedEdgeError", "edge_continuity"]

@@ -20,7 +20,7 @@ from ..errors import ParameterError
 from ..subdiv import SubdivisionSurface
 from ..tolerances import CONTINUITY_MATCH
 from .compare import LEVELS, tolerance_value
-from .sampling import measure_many
+from .edge_samples import measure_many
 from .matching import candidate_pairs
 from .sides import sides_of, sides_of_all
 from .subdivision import subdivision_continuity

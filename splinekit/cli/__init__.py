@@ -7,6 +7,7 @@ Subcommands::
     splinekit info FILE                              what a STEP, IGES, BREP or mesh file holds
     splinekit render MODEL|FILE [-o picture.png|.jpg] [--color ...] [--size WxH]
     splinekit check MODEL                            cross-check a model against OpenCascade
+    splinekit analyze MODEL|FILE --zebra|--isophotes|--curvature K|--draft X,Y,Z|--deviation SCAN|--continuity
     splinekit demo [-o picture.png]                  a NURBS surface, timed and drawn
     splinekit sweep MODEL --grid k=a:b:n|k=v1,v2 ... [-o DIR] [--format ...] [--measure ...]
                     [--scheduler tcp://host:8786] [--force]
@@ -25,7 +26,8 @@ names another module with the same registry interface (``MODELS``, ``DEFAULT_MOD
 ``get_model``, ``build_model``).
 
 One module per command (:mod:`.listing`, :mod:`.build`, :mod:`.info`, :mod:`.render`,
-:mod:`.check`, :mod:`.demo`, :mod:`.sweep`), each a thin mapping from arguments to library calls;
+:mod:`.check`, :mod:`.demo`, :mod:`.sweep`, :mod:`.analyze`), each a thin mapping from arguments to
+library calls;
 :mod:`.app` holds the parser and :func:`main`, :mod:`.console` the output formatting,
 :mod:`.registry` the model registry.
 """

@@ -13,6 +13,7 @@ from .. import __version__, _signals
 from .._progress import is_enabled, set_enabled
 from ..errors import SplineKitError
 from ..plot import COLOR_MODES, COLOR_SCALES
+from .analyze import cmd_analyze
 from .build import DEFAULT_FORMATS, DEFAULT_OUTPUT, FORMATS, cmd_build
 from .check import cmd_check
 from .console import Console, error_line, first_line, one_line
@@ -24,7 +25,7 @@ from .sweep import DEFAULT_OUTPUT as SWEEP_OUTPUT
 from .sweep import cmd_sweep
 
 COMMANDS = {"list": cmd_list, "build": cmd_build, "info": cmd_info, "render": cmd_render, "check": cmd_check, "demo": cmd_demo,
-            "sweep": cmd_sweep}
+            "sweep": cmd_sweep, "analyze": cmd_analyze}
 """Command name -> ``function(args, console) -> exit status``."""
 
 
@@ -100,6 +101,25 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--timeout", type=float, default=5.0, metavar="S", help="seconds to reach --scheduler (default: %(default)s)")
     s.add_argument("--max-variants", type=int, default=100_000, metavar="N", help="budget of variants (default: %(default)s)")
     s.add_argument("--force", action="store_true", help="rebuild variants already in the results folder")
+    a = sub.add_parser("analyze", parents=[common],
+                       help="surface quality: zebra, isophotes, curvature, draft, continuity, deviation from a scan")
+    a.add_argument("target", metavar="MODEL|FILE", help="a model name, or a STEP or mesh file")
+    model_options(a)
+    a.add_argument("-o", "--output", metavar="DIR", help=f"folder of the pictures, created if missing (default: {DEFAULT_OUTPUT})")
+    a.add_argument("--zebra", action="store_true", help="zebra stripes (reflected parallel light bands)")
+    a.add_argument("--stripes", type=int, default=12, metavar="N", help="zebra stripe pairs all around (default: %(default)s)")
+    a.add_argument("--isophotes", action="store_true", help="isophotes: lines of constant angle between normal and light")
+    a.add_argument("--light", default="0,0,1", metavar="X,Y,Z", help="light direction of --isophotes (default: %(default)s)")
+    a.add_argument("--step", type=float, default=10.0, metavar="DEG", help="degrees between isophotes (default: %(default)s)")
+    a.add_argument("--curvature", choices=("gaussian", "mean", "max", "min"), help="a curvature map")
+    a.add_argument("--scale", choices=COLOR_SCALES, default="percentile", help="colour scale of --curvature (default: %(default)s)")
+    a.add_argument("--draft", metavar="X,Y,Z", help="draft-angle map for this pull direction, under-cuts marked")
+    a.add_argument("--min-draft", default="0", metavar="DEG", help="least draft a face needs, in degrees (default: 0)")
+    a.add_argument("--continuity", action="store_true", help="G0/G1/G2 of every shared edge (printed)")
+    a.add_argument("--deviation", metavar="SCAN", help="signed deviation of a scan (.stl/.ply/.obj/... or .xyz points) from the part")
+    a.add_argument("--tolerance", metavar="T", help="chordal tolerance of the sampling in model units (default: 1e-3 of the model size)")
+    a.add_argument("--size", default="1000x800", metavar="WxH", help="picture size in pixels (default: %(default)s)")
+    a.add_argument("--view", default="28,-58", metavar="ELEV,AZIM", help="view angles in degrees (default: %(default)s)")
 
     d = sub.add_parser("demo", parents=[common], help="build a NURBS surface, print what was computed and draw it")
     d.add_argument("-o", "--output", metavar="PICTURE", help=f"picture to write, {pictures} (default: {DEFAULT_PICTURE})")

@@ -4,6 +4,8 @@ the picture (title, colour bar) with matplotlib, which writes the file."""
 from __future__ import annotations
 
 import textwrap
+from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 
@@ -115,7 +117,49 @@ def _outlines(fragments, covered, normals, pixel_size):
     return edge
 
 
-def draw(tris, corner_normals, color, scale, size, view, title, path, *, corner_values=None, patch_id=None, outward=0):
+class Pixels:
+    """What a custom painter (``draw(..., paint=...)``) gets for the ``n`` covered samples of a
+    picture: ``normals`` ``(n, 3)`` unit (interpolated across each triangle), ``values``
+    ``(n,)`` the interpolated ``corner_values`` (or None), ``triangle`` ``(n,)`` the triangle
+    each sample shows, ``eye`` ``(3,)`` the unit direction towards the viewer (orthographic:
+    one for all), and ``points`` ``(n, 3)``, the surface points in model units (interpolated
+    on first use)."""
+
+    def __init__(self, normals, values, triangle, eye, interpolate_points):
+        self.normals, self.values, self.triangle, self.eye = normals, values, triangle, eye
+        self._interpolate_points = interpolate_points
+
+    @cached_property
+    def points(self) -> np.ndarray:
+        return self._interpolate_points()
+
+
+@dataclass(frozen=True)
+class ColourBar:
+    """A colour bar of a custom painter: matplotlib ``norm`` and ``cmap``, the ``label`` and
+    optional ``ticks`` (None: matplotlib's)."""
+
+    norm: object
+    cmap: object
+    label: str
+    ticks: object = None
+
+
+def _label_borders(covered, labels):
+    """``(h, w)`` booleans: covered samples whose ``labels`` (one per covered sample, in
+    ``np.nonzero(covered)`` order) differ from the right or lower covered neighbour's."""
+    grid = np.full(covered.shape, np.iinfo(np.int64).min, dtype=np.int64)
+    grid[covered] = labels
+    border = np.zeros_like(covered)
+    for a, b in (((slice(None), slice(None, -1)), (slice(None), slice(1, None))),
+                 ((slice(None, -1), slice(None)), (slice(1, None), slice(None)))):
+        differ = covered[a] & covered[b] & (grid[a] != grid[b])
+        border[a] |= differ
+    return border
+
+
+def draw(tris, corner_normals, color, scale, size, view, title, path, *, corner_values=None, patch_id=None, outward=0,
+         paint=None, colour_bar=None):
     """Write a PNG of ``(T, 3, 3)`` triangles to ``path`` (atomically); returns the path.
 
     ``corner_normals`` ``(T, 3, 3)`` are interpolated across each triangle (pass each
@@ -126,6 +170,12 @@ def draw(tris, corner_normals, color, scale, size, view, title, path, *, corner_
     then left out before rasterizing, which halves the work. A picture too small for the
     colour bar or the title (see :func:`_has_bar`, :func:`_wrapped_title`) is drawn
     without them.
+
+    A custom colouring (the analysis maps: zebra, isophotes, draft): ``paint(pixels)`` gets
+    the :class:`Pixels` of the covered samples and returns ``(rgb (n, 3), labels, shaded)``:
+    the base colours, optional ``(n,)`` integer labels whose boundaries are drawn as dark
+    lines (isophotes, a region's border) and whether to shade the colours (zebra stripes are
+    not); ``colour_bar`` (a :class:`ColourBar`) then replaces the curvature colour bar.
     """
     plt = pyplot()
     from matplotlib import cm
@@ -136,7 +186,9 @@ def draw(tris, corner_normals, color, scale, size, view, title, path, *, corner_
     face_normals = triangle_normals(tris)
 
     norm = cmap = None
-    if corner_values is not None:
+    if colour_bar is not None:
+        norm, cmap = colour_bar.norm, colour_bar.cmap
+    elif corner_values is not None and paint is None:
         norm, cmap = colors.norm_and_cmap(color, corner_values.mean(axis=1), scale, triangle_areas(tris))
     if outward:
         front = outward * (face_normals @ eye) > -1e-3  # orthographic: one eye direction everywhere
@@ -159,13 +211,19 @@ def draw(tris, corner_normals, color, scale, size, view, title, path, *, corner_
     lost = ~n.any(axis=1)  # corner normals cancelled or undefined: the triangle's own
     n[lost] = face_normals[triangle[lost]]
     values = None if corner_values is None else fragments.interpolate(corner_values, hit)
-    base = colors.base_colors(color, values=values, normals=n,
-                              patch_id=None if patch_id is None else np.asarray(patch_id)[triangle], norm=norm, cmap=cmap)
+    labels, shaded = None, True
+    if paint is not None:
+        base, labels, shaded = paint(Pixels(n, values, triangle, eye, lambda: fragments.interpolate(tris, hit)))
+    else:
+        base = colors.base_colors(color, values=values, normals=n,
+                                  patch_id=None if patch_id is None else np.asarray(patch_id)[triangle], norm=norm, cmap=cmap)
     image = np.ones(hit.shape + (3,), dtype=np.float32)
-    image[hit] = colors.shade(base, n, eye, light)
+    image[hit] = colors.shade(base, n, eye, light) if shaded else base
     normals = np.zeros(hit.shape + (3,), dtype=np.float32)
     normals[hit] = n
     image[_outlines(fragments, hit, normals, 1.0 / pixels_per_unit)] *= 0.45
+    if labels is not None:
+        image[_label_borders(hit, labels)] *= 0.3
     image = image.reshape(frame_h, s, frame_w, s, 3).mean(axis=(1, 3))
 
     fig = plt.figure(figsize=(w / DPI, h / DPI), dpi=DPI)
@@ -175,9 +233,14 @@ def draw(tris, corner_normals, color, scale, size, view, title, path, *, corner_
             top = min(0.82, 1.0 - (title_px + 24.0) / h)  # below the title
             cax = fig.add_axes([1.0 - BAR_PIXELS / w, 0.14, 18.0 / w, max(top - 0.14, 0.2)])
             colorbar = fig.colorbar(cm.ScalarMappable(norm=norm, cmap=cmap), cax=cax)
-            colorbar.set_label(colors.colorbar_label(color, scale), fontsize=9)
-            if scale == "symlog":
-                colorbar.set_ticks(colors.symlog_ticks(norm))
+            if colour_bar is not None:
+                colorbar.set_label(colour_bar.label, fontsize=9)
+                if colour_bar.ticks is not None:
+                    colorbar.set_ticks(colour_bar.ticks)
+            else:
+                colorbar.set_label(colors.colorbar_label(color, scale), fontsize=9)
+                if scale == "symlog":
+                    colorbar.set_ticks(colors.symlog_ticks(norm))
             colorbar.ax.tick_params(labelsize=8)
         if text:
             fig.text(10.0 / w, 1.0 - 6.0 / h, text, fontsize=TITLE_FONT, va="top")
