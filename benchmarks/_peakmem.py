@@ -48,4 +48,6 @@ def in_child(script: str, case: str, env: dict | None = None, timeout: float = 9
 
 
 def mb(nbytes) -> str:
-    return "n/a" if nbytes is None else f"{nbytes / 1e6:.0f} MB"
+    if nbytes is None:
+        return "n/a"
+    return f"{nbytes / 1e6:.1f} MB" if abs(nbytes) < 10e6 else f"{nbytes / 1e6:.0f} MB"
