@@ -3,7 +3,9 @@
 For every sample point the exact Euclidean distance to the nearest triangle and the sign from
 the angle-weighted pseudo-normal of the nearest feature (face, edge or vertex; Baerentzen &
 Aanaes 2005), which is exact for a closed, consistently oriented mesh: both from
-:class:`~splinekit.pointcloud.meshdistance.MeshDistance`, the one mesh distance of splinekit.
+:class:`~splinekit.pointcloud.meshdistance.MeshDistance`, the one mesh distance of splinekit
+(on large grids its compiled :meth:`~splinekit.pointcloud.meshdistance.MeshDistance.grid_signed`,
+which works by blocks of samples).
 Voxels farther than half a voxel from the surface take the majority sign of their 6-connected
 component (no such component can straddle the surface), which protects them against a rounding
 slip of the pseudo-normal test.
@@ -69,7 +71,7 @@ def from_mesh(mesh, resolution, *, band=None, padding: float = 0.1, interpolatio
     -------
     SampledSDF or NarrowBandSDF
         Exact signed distances at the samples (module notes: nearest triangle
-        by a BVH, sign by pseudo-normals).
+        by a BVH, per sample or by blocks of samples; sign by pseudo-normals).
     """
     pad = positive(padding, "padding", allow_zero=True)
     _interp_name(interpolation)

@@ -21,7 +21,9 @@ tests in the same order), which also names the feature (face, edge or vertex) it
 
 Signed (:meth:`MeshDistance.signed`, for a closed, consistently oriented mesh): the sign comes
 from the angle-weighted pseudo-normal of that feature (Baerentzen & Aanaes 2005), which is exact
-for such a mesh.
+for such a mesh. On the samples of a grid, :meth:`MeshDistance.grid_signed` gives the same
+answer with the compiled kernel of :mod:`._gridsdf_kernels`, which shares most of the work
+over blocks of samples (its module notes).
 
 Every query runs on a copy of the mesh moved and scaled (by a power of two, exactly) to the unit
 box: the region tests multiply dot products (length^4) and the pseudo-normals take norms of
