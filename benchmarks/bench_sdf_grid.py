@@ -10,7 +10,7 @@ Case: a lumpy sphere, closed and non-convex: an icosphere of level 6 (81,920
 triangles; level 4, 5,120 triangles, with ``--quick``) with its radius
 modulated by ``1 + 0.3 sin(3 theta) sin^2(phi) + 0.15 cos(5 phi)``, sampled on
 the grid ``from_mesh`` builds (128 samples along the longest side, 10 %
-padding, one extra layer: about 130^3 = 2.2 million samples).
+padding, one extra layer: 1,854,840 samples).
 
 Part 1, the issue-17 row, every implementation on all grid points:
 
