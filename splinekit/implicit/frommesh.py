@@ -3,7 +3,9 @@
 For every sample point the exact Euclidean distance to the nearest triangle and the sign from
 the angle-weighted pseudo-normal of the nearest feature (face, edge or vertex; Baerentzen &
 Aanaes 2005), which is exact for a closed, consistently oriented mesh: both from
-:class:`~splinekit.pointcloud.meshdistance.MeshDistance`, the one mesh distance of splinekit.
+:class:`~splinekit.pointcloud.meshdistance.MeshDistance`, the one mesh distance of splinekit
+(on large grids its compiled :meth:`~splinekit.pointcloud.meshdistance.MeshDistance.grid_signed`,
+which works by blocks of samples).
 Voxels farther than half a voxel from the surface take the majority sign of their 6-connected
 component (no such component can straddle the surface), which protects them against a rounding
 slip of the pseudo-normal test.
@@ -69,7 +71,7 @@ def from_mesh(mesh, resolution, *, band=None, padding: float = 0.1, interpolatio
     -------
     SampledSDF or NarrowBandSDF
         Exact signed distances at the samples (module notes: nearest triangle
-        by a BVH, sign by pseudo-normals).
+        by a BVH, per sample or by blocks of samples; sign by pseudo-normals).
     """
     pad = positive(padding, "padding", allow_zero=True)
     _interp_name(interpolation)
@@ -96,17 +98,12 @@ def from_mesh(mesh, resolution, *, band=None, padding: float = 0.1, interpolatio
         if band < need:
             raise ParameterError(f"band = {band!r} must be at least two voxel diagonals ({need:.6g}) for this grid")
     dist = MeshDistance(V, T)
-    total = int(np.prod(shape))
-    nx, ny, nz = (int(s) for s in shape)
-    d = np.empty(total)
-    found = np.empty(total, dtype=bool)
     limit = np.inf if band is None else band
-    for s in range(0, total, 1 << 20):
-        flat = np.arange(s, min(s + (1 << 20), total))
-        ijk = np.stack([flat // (ny * nz), (flat // nz) % ny, flat % nz], axis=1)
-        d[flat], found[flat] = dist.signed(lo + ijk * spacing, limit)
-    d = d.reshape(nx, ny, nz)
-    found = found.reshape(nx, ny, nz)
+    d = dist.grid_signed(lo, spacing, shape, limit)  # compiled, by blocks of samples
+    if d is None:
+        d, found = _signed_by_chunks(dist, lo, spacing, shape, limit)
+    else:
+        found = np.isfinite(d)
     inside = _component_signs(d, found, 0.5 * float(spacing.max()))
     d = np.where(found, np.abs(d), np.inf)
     signed = np.where(inside, -d, d)
@@ -114,6 +111,20 @@ def from_mesh(mesh, resolution, *, band=None, padding: float = 0.1, interpolatio
         return SampledSDF(signed, lo, spacing, interpolation)
     keep = np.flatnonzero(np.abs(signed).ravel() < band)
     return NarrowBandSDF(keep, signed.ravel()[keep], inside, tuple(shape), lo, spacing, band, interpolation)
+
+
+def _signed_by_chunks(dist, lo, spacing, shape, limit):
+    """``(signed distances, found)`` of shape ``shape`` by :meth:`MeshDistance.signed` on chunks
+    of the grid's points (the path without compiled code)."""
+    total = int(np.prod(shape))
+    nx, ny, nz = (int(s) for s in shape)
+    d = np.empty(total)
+    found = np.empty(total, dtype=bool)
+    for s in range(0, total, 1 << 20):
+        flat = np.arange(s, min(s + (1 << 20), total))
+        ijk = np.stack([flat // (ny * nz), (flat // nz) % ny, flat % nz], axis=1)
+        d[flat], found[flat] = dist.signed(lo + ijk * spacing, limit)
+    return d.reshape(nx, ny, nz), found.reshape(nx, ny, nz)
 
 
 def _component_signs(d, found, gap):

@@ -7,7 +7,8 @@ Sampling (:func:`sample_curve`, :func:`sample_surface`, :func:`sample_mesh`,
 reconstruction as a B-spline height field (:func:`fit_height_field`) or an
 implicit surface (:func:`reconstruct_implicit`). Exact point-to-mesh distances:
 :func:`closest_points_on_mesh`. Every function takes and returns whole
-``(n, 3)`` float64 arrays; neighbour searches use scipy's cKDTree.
+``(n, 3)`` float64 arrays; neighbour searches use scipy's cKDTree, or for large
+clouds the compiled Morton-ordered hierarchy of :mod:`._knn_kernels` (the same answer).
 """
 
 from .analysis import PointCurvature, curvature, remove_outliers

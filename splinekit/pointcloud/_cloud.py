@@ -15,6 +15,11 @@ from ..errors import ControlPointError, ParameterError
 CHUNK = 65536
 """Points whose neighbourhoods are processed together (bounds temporary memory)."""
 
+DEGENERATE = 1e-13
+"""In :func:`smallest_eigenpairs`: cross products of rows of ``C - lambda_min I`` shorter than
+this times the squared longest row are rounding noise (the two smallest eigenvalues coincide
+to about this fraction). The compiled kernels use the same value."""
+
 
 def as_cloud(points, name: str = "points", dim: int | None = 3, min_count: int = 1) -> np.ndarray:
     """``points`` as a C-contiguous float64 ``(n, dim)`` array of finite values, ``n >= min_count``."""
@@ -69,14 +74,20 @@ def neighbours(tree, points: np.ndarray, k: int):
     naming the point, not an out-of-range index further on."""
     d, i = tree.query(points, k=k, workers=-1)
     d, i = d.reshape(len(points), k), i.reshape(len(points), k)
-    lost = ~(np.isfinite(d).all(axis=1) & (i < tree.n).all(axis=1))
+    refuse_lost_neighbours(points, np.where((i < tree.n).all(axis=1), d[:, -1], np.inf), k)
+    return d, i
+
+
+def refuse_lost_neighbours(points: np.ndarray, kth: np.ndarray, k: int) -> None:
+    """ControlPointError naming the first point whose distance to its k-th neighbour ``kth (n,)``
+    is not finite (squared distances overflowed: the search found no such neighbour)."""
+    lost = ~np.isfinite(kth)
     if lost.any():
         j = int(np.flatnonzero(lost)[0])
         raise ControlPointError(
             f"the distances from point {j} {np.asarray(points[j]).tolist()} to its {k} nearest cloud points "
             "overflow the float range; rescale the cloud"
         )
-    return d, i
 
 
 def local_frames(points: np.ndarray, idx: np.ndarray):
@@ -124,7 +135,8 @@ def smallest_eigenpairs(C: np.ndarray):
     ``C - lambda_min I``. The vector's error is about ``eps * lambda_max /
     (lambda_mid - lambda_min)``: accurate for surface-like neighbourhoods
     (where ``lambda_mid`` is of the order of ``lambda_max``), meaningless where
-    the two smallest eigenvalues coincide -- callers refuse those. About ten
+    the two smallest eigenvalues coincide (where they coincide to rounding, the
+    vector is any unit vector of their common eigenspace). About ten
     times faster than ``numpy.linalg.eigh`` on stacks of 3 x 3 matrices.
     """
     a, b, c = C[:, 0, 0], C[:, 1, 1], C[:, 2, 2]
@@ -148,6 +160,19 @@ def smallest_eigenpairs(C: np.ndarray):
     best = norms.argmax(axis=1)
     rows = np.arange(len(C))
     v = cands[rows, best]
-    length = np.sqrt(norms[rows, best])
+    # where the two smallest eigenvalues coincide, C - lambda_min I has rank one (its rows all
+    # along the top eigenvector) and every cross product is rounding noise: take a vector
+    # orthogonal to the longest row instead, which lies in the double eigenvalue's eigenspace
+    row2 = np.einsum("mjd,mjd->mj", M, M)
+    g = M[rows, row2.argmax(axis=1)]
+    noise = norms[rows, best] <= (DEGENERATE * row2.max(axis=1)) ** 2
+    if noise.any():
+        gn = g[noise]
+        axis = np.eye(3)[np.abs(gn).argmin(axis=1)]
+        ortho = np.cross(gn, axis)
+        zero = ~(np.einsum("md,md->m", ortho, ortho) > 0)  # the zero matrix: any direction
+        ortho[zero] = (0.0, 0.0, 1.0)
+        v[noise] = ortho
+    length = np.sqrt(np.einsum("md,md->m", v, v))
     v /= np.where(length > 0, length, 1.0)[:, None]
     return values, v

@@ -76,6 +76,68 @@ def box_d2(px, py, pz, lo, hi, i):
     return dx * dx + dy * dy + dz * dz
 
 
+@njit(cache=True, inline="always")
+def walk(px, py, pz, best, bt, br, lo, hi, tlo, thi, tri, L, m, stack, q, cp):
+    """Depth-first BVH search for the nearest triangle of ``p``, nearer child first, pruning
+    every box farther than the squared distance ``best`` (that of triangle ``bt``, region
+    ``br``, closest point ``cp``; ``bt = -1`` for none yet). Returns the improved
+    ``(best, bt, br)`` and leaves the closest point in ``cp``."""
+    sp = 1
+    stack[0] = 1
+    while sp > 0:
+        sp -= 1
+        node = stack[sp]
+        if box_d2(px, py, pz, lo, hi, node) > best:
+            continue
+        if node >= L:
+            first = (node - L) * 4
+            for t in range(first, min(first + 4, m)):
+                # the triangle's own box first: a cheap lower bound
+                if box_d2(px, py, pz, tlo, thi, t) > best:
+                    continue
+                r = closest_on_triangle(px, py, pz, tri, t, q)
+                dx, dy, dz = px - q[0], py - q[1], pz - q[2]
+                d2 = dx * dx + dy * dy + dz * dz
+                if d2 < best or (bt < 0 and d2 <= best):
+                    best, bt, br = d2, t, r
+                    cp[0], cp[1], cp[2] = q[0], q[1], q[2]
+        else:
+            a, b = 2 * node, 2 * node + 1
+            da = box_d2(px, py, pz, lo, hi, a)
+            db = box_d2(px, py, pz, lo, hi, b)
+            # push the farther child first so that the nearer one is searched first
+            if da <= db:
+                if db <= best:
+                    stack[sp] = b
+                    sp += 1
+                if da <= best:
+                    stack[sp] = a
+                    sp += 1
+            else:
+                if da <= best:
+                    stack[sp] = a
+                    sp += 1
+                if db <= best:
+                    stack[sp] = b
+                    sp += 1
+    return best, bt, br
+
+
+@njit(cache=True, inline="always")
+def seeded(px, py, pz, limit, prev, lo, hi, tlo, thi, tri, L, m, stack, q, cp):
+    """:func:`walk` within the squared distance ``limit``, first bounded by triangle ``prev``
+    (-1 for none): ``(best, bt, br)`` with the closest point in ``cp``."""
+    best, bt, br = limit, -1, 0
+    if prev >= 0:
+        r = closest_on_triangle(px, py, pz, tri, prev, q)
+        dx, dy, dz = px - q[0], py - q[1], pz - q[2]
+        d2 = dx * dx + dy * dy + dz * dz
+        if d2 <= best:
+            best, bt, br = d2, prev, r
+            cp[0], cp[1], cp[2] = q[0], q[1], q[2]
+    return walk(px, py, pz, best, bt, br, lo, hi, tlo, thi, tri, L, m, stack, q, cp)
+
+
 @njit(cache=True, parallel=True)
 def nearest(P, limit, lo, hi, tlo, thi, tri, L, m, out_d2, out_tri, out_cp, out_reg):
     """Depth-first BVH search per point, nearer child first; each point starts
@@ -86,61 +148,13 @@ def nearest(P, limit, lo, hi, tlo, thi, tri, L, m, out_d2, out_tri, out_cp, out_
     for c in prange((n + chunk - 1) // chunk):
         stack = np.empty(128, dtype=np.int64)
         q = np.empty(3)
+        cp = np.empty(3)
         prev = -1
         for i in range(c * chunk, min(n, (c + 1) * chunk)):
-            px, py, pz = P[i, 0], P[i, 1], P[i, 2]
-            best = limit
-            bt = -1
-            br = 0
-            bx = by = bz = 0.0
-            if prev >= 0:
-                r = closest_on_triangle(px, py, pz, tri, prev, q)
-                dx, dy, dz = px - q[0], py - q[1], pz - q[2]
-                d2 = dx * dx + dy * dy + dz * dz
-                if d2 <= best:
-                    best, bt, br = d2, prev, r
-                    bx, by, bz = q[0], q[1], q[2]
-            sp = 1
-            stack[0] = 1
-            while sp > 0:
-                sp -= 1
-                node = stack[sp]
-                if box_d2(px, py, pz, lo, hi, node) > best:
-                    continue
-                if node >= L:
-                    first = (node - L) * 4
-                    for t in range(first, min(first + 4, m)):
-                        # the triangle's own box first: a cheap lower bound
-                        if box_d2(px, py, pz, tlo, thi, t) > best:
-                            continue
-                        r = closest_on_triangle(px, py, pz, tri, t, q)
-                        dx, dy, dz = px - q[0], py - q[1], pz - q[2]
-                        d2 = dx * dx + dy * dy + dz * dz
-                        if d2 < best or (bt < 0 and d2 <= best):
-                            best, bt, br = d2, t, r
-                            bx, by, bz = q[0], q[1], q[2]
-                else:
-                    a, b = 2 * node, 2 * node + 1
-                    da = box_d2(px, py, pz, lo, hi, a)
-                    db = box_d2(px, py, pz, lo, hi, b)
-                    # push the farther child first so that the nearer one is searched first
-                    if da <= db:
-                        if db <= best:
-                            stack[sp] = b
-                            sp += 1
-                        if da <= best:
-                            stack[sp] = a
-                            sp += 1
-                    else:
-                        if da <= best:
-                            stack[sp] = a
-                            sp += 1
-                        if db <= best:
-                            stack[sp] = b
-                            sp += 1
+            best, bt, br = seeded(P[i, 0], P[i, 1], P[i, 2], limit, prev, lo, hi, tlo, thi, tri, L, m, stack, q, cp)
             if bt >= 0:
                 prev = bt
                 out_d2[i] = best
                 out_tri[i] = bt
                 out_reg[i] = br
-                out_cp[i, 0], out_cp[i, 1], out_cp[i, 2] = bx, by, bz
+                out_cp[i, 0], out_cp[i, 1], out_cp[i, 2] = cp[0], cp[1], cp[2]

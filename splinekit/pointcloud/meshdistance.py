@@ -21,7 +21,9 @@ tests in the same order), which also names the feature (face, edge or vertex) it
 
 Signed (:meth:`MeshDistance.signed`, for a closed, consistently oriented mesh): the sign comes
 from the angle-weighted pseudo-normal of that feature (Baerentzen & Aanaes 2005), which is exact
-for such a mesh.
+for such a mesh. On the samples of a grid, :meth:`MeshDistance.grid_signed` gives the same
+answer with the compiled kernel of :mod:`._gridsdf_kernels`, which shares most of the work
+over blocks of samples (its module notes).
 
 Every query runs on a copy of the mesh moved and scaled (by a power of two, exactly) to the unit
 box: the region tests multiply dot products (length^4) and the pseudo-normals take norms of
@@ -50,6 +52,12 @@ CHUNK = 65536
 """Points per block of the numpy search (bounds temporary memory)."""
 
 KERNELS = "splinekit.pointcloud._meshdistance_kernels"
+
+GRID_KERNELS = "splinekit.pointcloud._gridsdf_kernels"
+
+GRID_BLOCK = 4
+"""Samples along each side of the blocks :meth:`MeshDistance.grid_signed` shares its work over
+(module notes of its kernels: 4 measured fastest on 82k triangles at 128^3, ahead of 2 and 8)."""
 
 # features of a closest point: 0 face interior, 1-3 vertex 0-2, 4 edge 01, 5 edge 12, 6 edge 20
 FACE, EDGE01, EDGE12, EDGE20 = 0, 4, 5, 6
@@ -276,6 +284,15 @@ class MeshDistance:
         """``(face, edge, vertex)`` pseudo-normals for :meth:`signed`; NotManifoldError when open."""
         return _pseudo_normals(self.unit_vertices, self.tris)
 
+    @cached_property
+    def _bvh_normals(self):
+        """Pseudo-normals in the hierarchy's triangle order: face ``(m, 3)``, edge ``(m, 3, 3)``
+        and, per triangle corner, vertex ``(m, 3, 3)``."""
+        fn, en, vn = self.pseudo_normals
+        order = self.bvh.order
+        return (np.ascontiguousarray(fn[order]), np.ascontiguousarray(en[order]),
+                np.ascontiguousarray(vn[self.tris[order]]))
+
     # -- queries ---------------------------------------------------------------------------
     def query(self, points):
         """``(distances (m,), closest points (m, 3), triangle (m,))`` of ``points`` ``(m, 3)``.
@@ -313,6 +330,28 @@ class MeshDistance:
         out = d.copy()
         out[found] = np.where(side < 0, -d[found], d[found])
         return out * self._scale, found
+
+    def grid_signed(self, origin, spacing, shape, max_distance=np.inf):
+        """Signed distances (model units, negative inside) at the samples ``origin + (i, j, k) *
+        spacing`` of a grid of ``shape`` (3 ints), as an array of that shape, ``inf`` beyond
+        ``max_distance``; what :meth:`signed` gives at those points, computed by blocks of
+        samples (module notes of :mod:`splinekit.pointcloud._gridsdf_kernels`). None when
+        compiled code does not serve this job (then call :meth:`signed` on the points)."""
+        shape = tuple(int(x) for x in shape)
+        total = int(np.prod(shape))
+        kernels = _kernels.load(GRID_KERNELS, work=total)
+        if kernels is None:
+            return None
+        fn, en, vn = self._bvh_normals
+        b = self.bvh
+        o = (np.asarray(origin, dtype=np.float64) - self._shift) / self._scale
+        h = np.asarray(spacing, dtype=np.float64) / self._scale
+        with np.errstate(over="ignore"):
+            limit = float(max_distance / self._scale) ** 2
+        out = np.empty(total)
+        kernels.grid_signed(o, h, np.array(shape, dtype=np.int64), limit, GRID_BLOCK, b.lo, b.hi, b.tlo, b.thi,
+                            b.tri, b.n_leaves, b.m, fn, en, vn, out)
+        return (out * self._scale).reshape(shape)
 
     def _nearest(self, P, max_distance):
         """Nearest triangle of unit-box points ``P``: ``(d, triangle, closest, feature)``; beyond

@@ -27,8 +27,10 @@ from ._cloud import (
     covariances,
     kd_tree,
     neighbours,
+    refuse_lost_neighbours,
     smallest_eigenpairs,
 )
+from ._pointtree import compiled_knn, compiled_normals
 
 __all__ = ["estimate_normals", "orient_normals"]
 
@@ -71,9 +73,14 @@ def estimate_normals(points, k: int = 16, *, orient: bool = True) -> np.ndarray:
     """
     P = as_cloud(points, min_count=1)
     k = as_neighbour_count(k, len(P))
-    tree = kd_tree(P)
-    _, idx = neighbours(tree, P, k)
-    N = _pca_normals(P, idx)
+    fast = compiled_normals(P, k, want_indices=orient)
+    if fast is None:
+        _, idx = neighbours(kd_tree(P), P, k)
+        N = _pca_normals(P, idx)
+    else:  # search and PCA in one compiled pass (same neighbourhoods, same closed-form eigenvectors)
+        values, N, kth, idx = fast
+        refuse_lost_neighbours(P, kth, k)
+        _refuse_flat(P, values, k, 0)
     if orient:
         N = _orient(P, N, idx)
     return N
@@ -99,7 +106,12 @@ def orient_normals(points, normals, k: int = 16) -> np.ndarray:
         i = int(np.flatnonzero(bad)[0])
         raise FittingError(f"normals[{i}] is the zero vector: it has no direction to orient")
     k = as_neighbour_count(k, len(P), minimum=2)
-    _, idx = neighbours(kd_tree(P), P, k)
+    fast = compiled_knn(P, k)
+    if fast is None:
+        _, idx = neighbours(kd_tree(P), P, k)
+    else:
+        d, idx = fast
+        refuse_lost_neighbours(P, d[:, -1], k)
     return _orient(P, N / length[:, None], idx)
 
 
@@ -108,14 +120,20 @@ def _pca_normals(P: np.ndarray, idx: np.ndarray) -> np.ndarray:
     for s in range(0, len(P), CHUNK):
         stop = min(s + CHUNK, len(P))
         values, N[s:stop] = smallest_eigenpairs(covariances(P, idx, s, stop))
-        flat = ~(values[:, 1] > PLANARITY_RTOL * values[:, 2])
-        if flat.any():
-            i = s + int(np.flatnonzero(flat)[0])
-            raise FittingError(
-                f"the {idx.shape[1]} nearest neighbours of point {i} {P[i].tolist()} are collinear or coincide: "
-                "no normal is defined there; remove duplicates or use a larger k"
-            )
+        _refuse_flat(P, values, idx.shape[1], s)
     return N
+
+
+def _refuse_flat(P: np.ndarray, values: np.ndarray, k: int, start: int) -> None:
+    """FittingError naming the first point (from ``start``) whose covariance eigenvalues
+    ``values`` (ascending) say its neighbourhood is a line or a point."""
+    flat = ~(values[:, 1] > PLANARITY_RTOL * values[:, 2])
+    if flat.any():
+        i = start + int(np.flatnonzero(flat)[0])
+        raise FittingError(
+            f"the {k} nearest neighbours of point {i} {P[i].tolist()} are collinear or coincide: "
+            "no normal is defined there; remove duplicates or use a larger k"
+        )
 
 
 def _orient(P: np.ndarray, N: np.ndarray, idx: np.ndarray) -> np.ndarray:
