@@ -37,12 +37,12 @@ from functools import cached_property
 import numpy as np
 from scipy.spatial import cKDTree
 
-from .. import _kernels, limits
+from .. import limits
 from ..closest import project
 from ..errors import ConvergenceError, ParameterError
 from ..mesh import PolyMesh
 from ..mesh.geometry import triangulate
-from ..pointcloud import MeshDistance, meshdistance
+from ..pointcloud import MeshDistance
 from ..pointcloud._cloud import as_cloud
 from . import deviation_pictures
 from .sampling import SampledPart, freeze, sample_sources
@@ -59,8 +59,6 @@ ALONG_NORMAL = 0.5
 """Offsets whose cosine with the foot point's normal is below this lie off an edge or corner:
 their sign is taken from the closed mesh's pseudo-normals."""
 
-MESH_QUERY_WORK = 20
-"""Cost of one mesh-distance query point on the numpy path, in :mod:`splinekit._kernels` work units."""
 
 PERCENTILES = (50.0, 90.0, 95.0, 99.0)
 """Percentiles of ``|distance|`` in :meth:`Deviation.summary`."""
@@ -215,10 +213,6 @@ def deviation(reference, points_or_mesh, *, tolerance=None) -> Deviation:
         mesh = part.mesh
     corners, face_of = triangulate(mesh)
     distance = MeshDistance(mesh.vertices, corners)
-    # MeshDistance asks for its compiled search with work = its point count, but a point of a mesh
-    # query costs the numpy path about MESH_QUERY_WORK curve points: ask with the real cost, so a
-    # large cloud gets the compiled search on the first call (a no-op when numba is absent or off)
-    _kernels.load(meshdistance.KERNELS, work=len(P) * MESH_QUERY_WORK)
     dist, foot, tri = distance.query(P)
     exact = sources.surfaces is not None
     if exact:

@@ -125,6 +125,10 @@ def closest_points_on_triangles(p, a, b, c) -> np.ndarray:
 
 _LEAF = 4  # triangles per leaf; the kernel assumes 4
 
+QUERY_WORK = 20
+"""Cost of one query point on the numpy path, in :mod:`splinekit._kernels` work units (a point
+costs about as much as twenty curve points): large queries get the compiled search at once."""
+
 
 class _TriangleBVH:
     """A complete binary tree over Morton-ordered triangles (``_LEAF`` per leaf),
@@ -356,7 +360,7 @@ class MeshDistance:
     def _nearest(self, P, max_distance):
         """Nearest triangle of unit-box points ``P``: ``(d, triangle, closest, feature)``; beyond
         ``max_distance`` ``d`` is inf and the triangle -1. Compiled search for large queries."""
-        kernels = _kernels.load(KERNELS, work=len(P))
+        kernels = _kernels.load(KERNELS, work=len(P) * QUERY_WORK)
         if kernels is not None:
             return self.bvh.nearest(kernels, P, max_distance)
         dist, close, tri, feature = self._search(P)
