@@ -28,7 +28,7 @@ _TYPES = {
 }
 _INT32_MAX = 2**31 - 1
 _GIANT_STEPS = 4096  # the most Python steps of the chain of records (see _record_starts)
-_CHUNK = 1 << 20  # units laid out per vectorized step when chaining records
+_CHUNK = 1 << 18  # units laid out per vectorized step when chaining records
 _END_HEADER = re.compile(rb"^[ \t]*end_header[ \t\r]*$", re.MULTILINE)
 
 
