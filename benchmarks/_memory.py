@@ -11,9 +11,11 @@ Two peaks, taken in one extra (untimed) call:
 - ``traced``: the peak of the allocations Python and numpy report to :mod:`tracemalloc` while the
   call runs (exact for numpy arrays and Python objects; blind to C++ libraries such as
   manifold3d or OpenCascade, which allocate with their own allocators);
-- ``rss``: the peak resident set size above its value at the start, sampled every millisecond
-  from ``/proc/self/statm`` by a thread (sees every allocator, but misses spikes shorter than a
-  sample and counts memory freed to the allocator but not to the system). None off Linux.
+- ``rss``: the peak resident set size above its value at the start (sees every allocator, and
+  counts memory freed to the allocator but not returned to the system): Linux's high-water mark
+  ``VmHWM``, reset to the current RSS through ``/proc/self/clear_refs`` before the call; where
+  that reset is refused, sampled every millisecond by a thread (which misses short spikes).
+  None off Linux.
 
 The output size is the sum of ``nbytes`` of every array in the result (ndarrays, a PolyMesh's
 vertices and flat faces, scipy sparse matrices' three arrays, inside tuples, lists and dicts).
@@ -23,7 +25,6 @@ A ratio near 1 is the floor: the workload holds little beyond what it returns.
 from __future__ import annotations
 
 import gc
-import os
 import threading
 import tracemalloc
 from dataclasses import dataclass
@@ -31,9 +32,6 @@ from dataclasses import dataclass
 import numpy as np
 
 __all__ = ["Memory", "measure_memory", "output_bytes"]
-
-_PAGE = os.sysconf("SC_PAGE_SIZE") if hasattr(os, "sysconf") else 4096
-
 
 def output_bytes(obj) -> int:
     """Bytes of the arrays held by ``obj`` (see the module notes); shared arrays counted once."""
@@ -56,12 +54,25 @@ def output_bytes(obj) -> int:
     return total
 
 
-def _rss() -> int | None:
+def _status(key: str) -> int | None:
+    """A ``/proc/self/status`` size in bytes (``VmRSS``, ``VmHWM``), or None."""
     try:
-        with open("/proc/self/statm") as fh:
-            return int(fh.read().split()[1]) * _PAGE
+        with open("/proc/self/status") as fh:
+            for line in fh:
+                if line.startswith(key + ":"):
+                    return int(line.split()[1]) * 1024
     except OSError:
-        return None
+        pass
+    return None
+
+
+def _reset_high_water_mark() -> bool:
+    try:
+        with open("/proc/self/clear_refs", "w") as fh:
+            fh.write("5")
+        return True
+    except OSError:
+        return False
 
 
 @dataclass
@@ -83,32 +94,35 @@ class Memory:
 def measure_memory(fn) -> Memory:
     """Run ``fn()`` once more and measure its peaks (see the module notes); not a timing run."""
     gc.collect()
-    start = _rss()
+    exact = _reset_high_water_mark()
+    start = _status("VmRSS")
     peak = [start or 0]
     done = threading.Event()
 
     def sample():
         while not done.wait(0.001):
-            now = _rss()
+            now = _status("VmRSS")
             if now is not None and now > peak[0]:
                 peak[0] = now
 
-    thread = threading.Thread(target=sample, daemon=True)
+    thread = None if exact else threading.Thread(target=sample, daemon=True)
     tracing = tracemalloc.is_tracing()
     if not tracing:
         tracemalloc.start()
     tracemalloc.reset_peak()
     base = tracemalloc.get_traced_memory()[0]
-    thread.start()
+    if thread is not None:
+        thread.start()
     try:
         result = fn()
     finally:
         done.set()
-        thread.join()
+        if thread is not None:
+            thread.join()
         traced = tracemalloc.get_traced_memory()[1] - base
         if not tracing:
             tracemalloc.stop()
-    end = _rss()
+    end = _status("VmHWM" if exact else "VmRSS")
     if end is not None and end > peak[0]:
         peak[0] = end
     rss = None if start is None else peak[0] - start

@@ -89,7 +89,6 @@ def main(argv=None):
     try:
         sk_path, pf_path = os.path.join(folder, "sk.ply"), os.path.join(folder, "pf.ply")
         exporters.export_ply(sk_path, mesh)
-        rows = {}
         if plyfile is not None:
             vert = np.empty(len(V), dtype=[("x", "f8"), ("y", "f8"), ("z", "f8")])
             vert["x"], vert["y"], vert["z"] = V.T

@@ -43,6 +43,7 @@ import argparse
 import time
 
 import numpy as np
+from _ratios import report, skipped
 
 from splinekit.implicit import from_mesh
 from splinekit.mesh import PolyMesh, primitives
@@ -89,7 +90,7 @@ def main():
     try:
         import trimesh
     except ImportError:
-        print("trimesh: not installed")
+        skipped("trimesh", "not installed")
     else:
         tm = trimesh.Trimesh(V, T, process=False)
         d_tm, t_tm = _timed(trimesh.proximity.signed_distance, tm, pts[pick])
@@ -100,10 +101,11 @@ def main():
             f"ratio trimesh / splinekit = {t_ext / t_sk:.1f}; max |diff| {diff.max():.2e}, "
             f"sign mismatches {int(np.sum(np.sign(-d_tm) != np.sign(ref[pick])))} of {subset}"
         )
+        report("mesh SDF grid: trimesh / splinekit", t_ext / t_sk, 3.0)
     try:
         import open3d as o3d
     except (ImportError, OSError) as exc:  # not installed, or a missing system library
-        print(f"open3d: not available ({type(exc).__name__})")
+        skipped("open3d", f"not available ({type(exc).__name__}: {exc})")
     else:
         scene = o3d.t.geometry.RaycastingScene()
         scene.add_triangles(o3d.core.Tensor(V.astype(np.float32)), o3d.core.Tensor(T.astype(np.uint32)))
@@ -114,6 +116,7 @@ def main():
             f"open3d compute_signed_distance: {t_o3:8.3f} s  ratio open3d / splinekit = {t_o3 / t_sk:.2f}; "
             f"max |diff| {diff.max():.2e} (float32), sign mismatches {int(np.sum(np.sign(d_o3) != np.sign(ref)))} of {n}"
         )
+        report("mesh SDF grid: open3d / splinekit", t_o3 / t_sk, 3.0)
 
     # meshing the grid: marching tetrahedra straight from the samples vs the
     # base class's meshing of the interpolant resampled for edge length h

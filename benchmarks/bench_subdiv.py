@@ -80,6 +80,7 @@ if REPO_DIR not in sys.path:
     sys.path.insert(0, REPO_DIR)
 
 import _meshes as M  # noqa: E402
+from _ratios import report as report_ratio  # noqa: E402
 
 # --------------------------------------------------------------------------------------
 # configuration
@@ -870,11 +871,13 @@ def bench_loop(report, cfg, peers):
             aim = "aim 0.7x met" if r <= TARGETS["loop_vs_igl_aim"] else "aim 0.7x not met"
             report.target(case, "Loop time <= 1.0x libigl (aim 0.7x)", f"{r:.2f}x libigl time",
                           r <= TARGETS["loop_vs_igl"], aim + quick)
+            report_ratio(f"{case}: libigl / splinekit", 1 / r, 1 / TARGETS["loop_vs_igl"])
         if t_tm is None:
             report.target(case, "Loop >= 5x faster than trimesh", "-", None, "trimesh not run")
         else:
             r = t_tm / t_sk
             report.target(case, "Loop >= 5x faster than trimesh", f"{r:.1f}x", r >= TARGETS["loop_vs_trimesh"], quick)
+            report_ratio(f"{case}: trimesh / splinekit", r, TARGETS["loop_vs_trimesh"])
     return per_level
 
 
@@ -895,6 +898,7 @@ def bench_cc(report, cfg, peers, mesh, top, label):
         rate = r[3] / r[0]
         report.target(case, "Catmull-Clark >= 4M output faces/s", fmt_rate(rate), rate >= TARGETS["cc_faces_per_s"],
                       note)
+        report_ratio(f"{case}: output faces/s / target rate", rate / TARGETS["cc_faces_per_s"], 1.0)
     if mesh.startswith("torus"):
         m = mem.get("splinekit") if r is not None else None
         # at reduced sizes (--quick) the limit is scaled with the face count
@@ -1022,6 +1026,7 @@ def bench_stencil(report, cfg, peers, scheme, mesh, top, label):
         report.target(case, text, "-", None, "splinekit stencil not available")
     else:
         report.target(case, text, fmt_rate(t_sk_rate), t_sk_rate >= TARGETS["stencil_verts_per_s"])
+        report_ratio(f"{case}: output vertices/s / target rate", t_sk_rate / TARGETS["stencil_verts_per_s"], 1.0)
 
 
 # --------------------------------------------------------------------------------------
