@@ -27,7 +27,7 @@ from __future__ import annotations
 import gc
 import threading
 import tracemalloc
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -78,8 +78,9 @@ def _reset_high_water_mark() -> bool:
 @dataclass
 class Memory:
     traced: int  # bytes, tracemalloc peak above the start
-    rss: int | None  # bytes, sampled RSS peak above the start (None: not available)
+    rss: int | None  # bytes, RSS peak above the start (None: not available)
     output: int  # bytes of the result's arrays
+    result: object = field(default=None, repr=False)  # what fn returned
 
     def ratio(self) -> float:
         return self.traced / self.output if self.output else float("inf")
@@ -126,4 +127,4 @@ def measure_memory(fn) -> Memory:
     if end is not None and end > peak[0]:
         peak[0] = end
     rss = None if start is None else peak[0] - start
-    return Memory(traced, rss, output_bytes(result))
+    return Memory(traced, rss, output_bytes(result), result)

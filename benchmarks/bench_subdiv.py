@@ -68,7 +68,6 @@ import statistics
 import subprocess
 import sys
 import time
-import tracemalloc
 
 import numpy as np
 
@@ -80,6 +79,7 @@ if REPO_DIR not in sys.path:
     sys.path.insert(0, REPO_DIR)
 
 import _meshes as M  # noqa: E402
+from _memory import measure_memory, output_bytes  # noqa: E402
 from _ratios import report as report_ratio  # noqa: E402
 
 # --------------------------------------------------------------------------------------
@@ -592,43 +592,17 @@ def peer_status():
 # memory: one fresh subprocess per case
 
 
-def _status(key):
-    with open("/proc/self/status") as f:
-        for line in f:
-            if line.startswith(key + ":"):
-                return int(line.split()[1]) * 1024
-    raise KeyError(key)
-
-
 def child_main(spec):
-    """Run in a fresh interpreter: peak RSS growth (and tracemalloc peak) of one case."""
+    """Run in a fresh interpreter: peak RSS growth and tracemalloc peak of one case
+    (``_memory.measure_memory``; tracemalloc sees numpy allocations, not C++ peers')."""
     V, F = base_mesh(spec["mesh"])
     run = runner_for(spec["scheme"], spec["impl"])
     out = run(V, F, 1)  # warm-up: lazy imports, JIT, caches, thread pools
     del out
-    gc.collect()
-    res = {}
-    try:
-        with open("/proc/self/clear_refs", "w") as f:
-            f.write("5")  # reset VmHWM to the current RSS
-        base = _status("VmRSS")
-        out = run(V, F, spec["level"])
-        res["rss"] = _status("VmHWM") - base
-    except OSError:
-        out = run(V, F, spec["level"])
-        res["rss"] = None
-    res["out_bytes"] = int(sum(a.nbytes for a in out[:2] if isinstance(a, np.ndarray)))
-    res["faces"] = int(out[2])
-    del out
-    gc.collect()
+    mem = measure_memory(lambda: run(V, F, spec["level"]))
+    res = {"rss": mem.rss, "out_bytes": output_bytes(mem.result[:2]), "faces": int(mem.result[2])}
     if spec.get("traced"):
-        tracemalloc.start()
-        b0 = tracemalloc.get_traced_memory()[0]
-        tracemalloc.reset_peak()
-        out = run(V, F, spec["level"])
-        res["traced"] = tracemalloc.get_traced_memory()[1] - b0
-        tracemalloc.stop()
-        del out
+        res["traced"] = mem.traced
     print("RESULT " + json.dumps(res))
 
 
