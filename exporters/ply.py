@@ -262,9 +262,10 @@ def _record_starts(stream: _Stream, pos: int, el: _Element) -> tuple[np.ndarray,
     ``nxt[u]``, where a record laid out at unit ``u`` would end (computed for every unit ``u`` of
     the rest of the file, vectorized), squared ``s`` times and followed in giant steps of ``2**s``
     records, then in ``2**s`` vectorized baby steps. The work is ``s ~ log2(count / 4096)``
-    gathers of the file's length and at most about ``2 * 4096`` Python steps, none per record
-    (one step per record cost 2 s per 100k faces when consecutive faces differ in size). Files
-    whose records all share the first record's layout (all triangles, say) skip the chain.
+    gathers of the file's length and about ``4096 + count / 4096`` Python steps (at most 8192 up
+    to 16.7M records), none per record (one step per record cost 2 s per 100k faces when
+    consecutive faces differ in size). Files whose records all share the first record's layout
+    (all triangles, say) skip the chain.
     """
     n, count = stream.size - pos, el.count
     if count == 0 or not el.props:
@@ -285,8 +286,12 @@ def _record_starts(stream: _Stream, pos: int, el: _Element) -> tuple[np.ndarray,
                 off += stream.width(dt)
         if same:
             return starts, pos + rec * count
+    # a record takes at least its scalars and list counts: more records than fit cannot be valid,
+    # and the chain below follows at most one past that many (a header may claim any count)
+    shortest = sum(stream.width(dt if cdt is None else cdt) for _, dt, cdt in el.props)
+    count = min(count, n // shortest + 1)
     index = np.int32 if n + 2 < 2**31 else np.int64
-    limits.check(3 * (n + 2) * np.dtype(index).itemsize, f"reading the {count:,} records of PLY {el.name!r} in {stream.what}")
+    limits.check(3 * (n + 2) * np.dtype(index).itemsize, f"reading the {el.count:,} records of PLY {el.name!r} in {stream.what}")
     end = n + 1  # the sink: where the chain goes after a record that does not fit
     nxt = np.empty(n + 2, dtype=index)
     for lo in range(0, n, _CHUNK):  # bounded temporaries; a handful of steps per file
@@ -318,6 +323,8 @@ def _record_starts(stream: _Stream, pos: int, el: _Element) -> tuple[np.ndarray,
     if bad.size:
         i = int(bad[0])
         _explain(stream, pos + int(chain[i]), el, i)
+    if count < el.count:  # unreachable: so many records of at least `shortest` units overrun the file
+        raise FileFormatError(f"{stream.what}: PLY {el.name} {count} is truncated (file ends at {stream.size})")
     return chain[:-1], pos + int(chain[-1])
 
 

@@ -122,3 +122,14 @@ def test_bad_mixed_files_are_refused(tmp_path):
     (tmp_path / "c.ply").write_bytes(good[:at] + bytes([2]) + good[at + 1:])
     with pytest.raises(FileFormatError):
         exporters.import_ply(tmp_path / "c.ply")
+
+
+@pytest.mark.parametrize("claimed", [10**12, 2**31 + 5])
+def test_a_header_claiming_more_faces_than_the_file_holds_is_refused_quickly(tmp_path, claimed):
+    V, faces = polygons([3, 4, 5] * 20, 4)
+    plyfile_write(tmp_path / "ok.ply", V, faces, "<", "u1")
+    good = (tmp_path / "ok.ply").read_bytes()
+    bad = good.replace(f"element face {len(faces)}\n".encode(), f"element face {claimed}\n".encode())
+    (tmp_path / "c.ply").write_bytes(bad)
+    with pytest.raises(FileFormatError, match="truncated"):
+        exporters.import_ply(tmp_path / "c.ply")
