@@ -100,3 +100,15 @@ def test_copies_do_not_carry_the_cache(builds):
         assert clone == a and "_derived" not in clone.__dict__
     booleans.union(pickle.loads(pickle.dumps(a)), b)
     assert len(builds) == 3
+
+
+def test_what_the_cache_relies_on_meshes_and_results_are_read_only():
+    a, b = pair()
+    u = booleans.union(a, b)
+    for mesh in (a, u):
+        for arr in (mesh.vertices, mesh.face_indices, mesh.face_offsets):
+            assert not arr.flags.writeable
+            with pytest.raises(ValueError):
+                arr[0] = arr[0]
+        with pytest.raises(AttributeError):
+            mesh.topology = None
