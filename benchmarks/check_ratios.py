@@ -92,7 +92,11 @@ def main(argv=None) -> int:
         if opts.full:
             args, timeout = [a for a in args if a != "--quick"], timeout * 10
         print(f"running bench_{name}.py {' '.join(args)} ...", file=sys.stderr, flush=True)
-        results[name] = run(name, args, timeout)
+        results[name] = res = run(name, args, timeout)
+        for label, ratio, target in res["ratios"]:  # as they come: a long run shows its progress
+            print(f"  {label}: {ratio:.3g} (target >= {target:.3g})", file=sys.stderr, flush=True)
+        if res["error"]:
+            print(f"  failed: {res['error']}", file=sys.stderr, flush=True)
 
     print(f"# Speed ratios ({'full' if opts.full else 'quick'} benchmarks)\n")
     print(f"{platform.node()}, {platform.machine()}, {os.cpu_count()} CPUs, Python {platform.python_version()}; "
