@@ -86,7 +86,18 @@ def make_faces(count: int, seed: int = 0) -> list:
 
 
 def max_pole_difference(surfaces, items) -> float:
-    return max(float(np.abs(s.control_points - it.geometry.control_points).max()) for s, it in zip(surfaces, items))
+    """Largest pole difference between ``surfaces`` and the faces read back (``import_step`` gives
+    a Shell, TrimmedFace or surface per item); inf when the face counts differ."""
+    got = []
+    for it in items:
+        faces = getattr(it.geometry, "faces", None)
+        if faces is None:
+            got.append(getattr(it.geometry, "surface", it.geometry))
+        else:
+            got.extend(f.surface for f in faces)
+    if len(got) != len(surfaces):
+        return float("inf")
+    return max(float(np.abs(s.control_points - g.control_points).max()) for s, g in zip(surfaces, got))
 
 
 def main(argv=None) -> int:

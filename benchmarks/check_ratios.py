@@ -41,7 +41,7 @@ BENCHMARKS = {
     "export": (["--quick"], 900),
     "implicit": (["--quick"], 900),
     "mass": (["--quick"], 900),
-    "meshing": (["--quick"], 600),
+    "meshing": (["--quick"], 1500),
     "ply": (["--quick"], 600),
     "pointcloud": (["--quick"], 900),
     "project": (["--quick"], 600),
