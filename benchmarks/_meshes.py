@@ -131,3 +131,37 @@ def torus(nu: int = 100, nv: int = 100, R: float = 1.0, r: float = 0.35) -> tupl
     # (u, v) -> position has outward normal d/du x d/dv, so (a, b, c, d) is counter-clockwise from outside
     F = np.stack([a, b, c, d], axis=-1).reshape(-1, 4).astype(np.int64)
     return np.ascontiguousarray(V), F
+
+
+def mixed_torus(nu: int = 100, nv: int = 100, R: float = 1.0, r: float = 0.35):
+    """A closed torus of triangles, quads and pentagons interleaved face by face.
+
+    Returns ``(V, indices, offsets)``: ``V`` ``(n, 3)``, the flat corner indices and the
+    ``(F + 1,)`` face offsets (CSR). It is :func:`torus` (``nv`` a multiple of 4) with a midpoint
+    vertex on every edge ``(i, j) - (i + 1, j)`` with ``j % 4 == 0``: in each block of four quads
+    along ``j`` the first and last become pentagons, the second is split into two triangles and
+    the third stays a quad, so consecutive faces have sizes 5, 3, 3, 4, 5, 5, 3, 3, 4, 5, ...
+    ``5 * nu * nv / 4`` faces.
+    """
+    if nv % 4:
+        raise ValueError("mixed_torus needs nv divisible by 4")
+    V, Q = torus(nu, nv, R, r)
+    Q = Q.reshape(nu, nv // 4, 4, 4)  # (i, block, j % 4, corner a b c d)
+    n = nu * nv
+    mid_index = n + np.arange(nu * (nv // 4)).reshape(nu, nv // 4)
+    edge = Q[:, :, 0, :2]  # the edges (a, b) of the quads with j % 4 == 0
+    M = 0.5 * (V[edge[..., 0]] + V[edge[..., 1]]).reshape(-1, 3)
+    m_low = mid_index  # on the bottom edge a-b of the quad j % 4 == 0
+    m_high = np.roll(mid_index, -1, axis=1)  # on the top edge c-d of the quad j % 4 == 3 (next block)
+    q0, q1, q2, q3 = (Q[:, :, k] for k in range(4))
+    parts = [
+        q0[..., 0], m_low, q0[..., 1], q0[..., 2], q0[..., 3],  # pentagon
+        q1[..., 0], q1[..., 1], q1[..., 2],  # triangle
+        q1[..., 0], q1[..., 2], q1[..., 3],  # triangle
+        q2[..., 0], q2[..., 1], q2[..., 2], q2[..., 3],  # quad
+        q3[..., 0], q3[..., 1], q3[..., 2], m_high, q3[..., 3],  # pentagon
+    ]
+    indices = np.stack(parts, axis=-1).reshape(-1).astype(np.int64)
+    sizes = np.tile(np.array([5, 3, 3, 4, 5], dtype=np.int64), nu * (nv // 4))
+    offsets = np.concatenate([[0], np.cumsum(sizes)])
+    return np.vstack([V, M]), indices, offsets

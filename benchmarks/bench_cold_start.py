@@ -36,6 +36,8 @@ import statistics
 import subprocess
 import sys
 
+from _ratios import report
+
 CHILD = r"""
 import json, sys, time
 import numpy as np
@@ -139,6 +141,7 @@ def main(argv=None) -> int:
     print()
     print("| case | numpy cold | numpy warm | compiled cold | compiled warm | numba loaded | cold ratio | warm ratio |")
     print("|---|---|---|---|---|---|---|---|")
+    ratios = []
     for case in cases:
         rows = {flag: [run(case, flag, args.forced) for _ in range(processes)] for flag in (False, True)}
         med = {flag: {k: statistics.median(r[k] for r in rs) for k in ("cold", "warm")} for flag, rs in rows.items()}
@@ -146,6 +149,11 @@ def main(argv=None) -> int:
         n, c = med[False], med[True]
         print(f"| {case} | {1e3 * n['cold']:.1f} | {1e3 * n['warm']:.1f} | {1e3 * c['cold']:.1f} | "
               f"{1e3 * c['warm']:.1f} | {loaded} | {c['cold'] / n['cold']:.2f} | {c['warm'] / n['warm']:.2f} |")
+        ratios.append((case, n, c))
+    print()
+    for case, n, c in ratios:  # the lines check_ratios.py reads: numpy path / compiled path, more is better
+        report(f"cold start {case}: numpy first call / compiled first call", n["cold"] / c["cold"], 1 / 1.5)
+        report(f"cold start {case}: numpy warm / compiled warm", n["warm"] / c["warm"], 1.0)
     return 0
 
 

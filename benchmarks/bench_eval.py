@@ -48,13 +48,16 @@ import statistics
 import subprocess
 import sys
 import time
-import tracemalloc
 
 import numpy as np
 
-import splinekit as sk
-from splinekit import _kernels
-from splinekit.basis.knots import clamped_uniform
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))  # the helpers beside this file
+from _memory import measure_memory  # noqa: E402
+from _ratios import report, skipped  # noqa: E402
+
+import splinekit as sk  # noqa: E402
+from splinekit import _kernels  # noqa: E402
+from splinekit.basis.knots import clamped_uniform  # noqa: E402
 
 NUMBA_SETTING = os.environ.get("SPLINEKIT_NUMBA")  # as the caller set it (None: unset)
 os.environ.setdefault("SPLINEKIT_NUMBA", "1")  # warm figures of the compiled kernels: see the docstring
@@ -232,6 +235,18 @@ class Table:
         if t >= 1.0:
             return f"{t:.2f} s"
         return f"{t * 1e3:.3g} ms"
+
+    def report_ratios(self, target: float = 1.0):
+        """The ratio lines check_ratios.py reads: one per peer row (peer time / splinekit time;
+        target: no peer faster), and one line per peer that did not run."""
+        for r in self.rows:
+            if "splinekit" in r["impl"]:
+                continue
+            label = f"{r['case']} / {r['impl']}".replace("`", "")
+            if r["ratio"] is None:
+                skipped(label, r["note"])
+            else:
+                report(label, r["ratio"], target)
 
     def render(self):
         head = ("| case | implementation | points | time | ns/point | ratio (peer / splinekit) "
@@ -586,16 +601,11 @@ def bench_grid(tab, cfg, surf):
 
 
 def bench_memory(surf, n):
+    """``(peak extra bytes, output bytes)`` of one ``evaluate_grid`` (benchmarks/_memory.py)."""
     us = np.linspace(0.0, 1.0, n)
     surf.evaluate_grid(us[:10], us[:10])  # warm caches outside the measurement
-    gc.collect()
-    tracemalloc.start()
-    base = tracemalloc.get_traced_memory()[0]
-    tracemalloc.reset_peak()
-    out = surf.evaluate_grid(us, us)
-    peak = tracemalloc.get_traced_memory()[1]
-    tracemalloc.stop()
-    return peak - base, out.nbytes
+    mem = measure_memory(lambda: surf.evaluate_grid(us, us))
+    return mem.traced, mem.output
 
 
 _RSS_CODE = r"""
@@ -830,6 +840,7 @@ def main(argv=None):
     print("Max abs diff compares each peer's output with splinekit's on the points it computed.")
     print()
     print(tab.render())
+    tab.report_ratios()  # the lines check_ratios.py reads
     print()
     print("## Targets")
     print()

@@ -40,6 +40,7 @@ import time
 import numpy as np
 
 import exporters
+from _ratios import report, skipped
 from splinekit.mesh import PolyMesh
 from splinekit.mesh.geometry import triangulate
 from splinekit.mesh.primitives import torus
@@ -98,6 +99,18 @@ class Table:
         msg = f"{type(exc).__name__}: {exc}".replace("|", "/").splitlines()[0][:110]
         self.rows.append({"case": case, "impl": impl, "t": None, "nbytes": None, "repeats": None, "ref": None,
                           "sk": None, "diff": None, "note": f"not run: {msg}"})
+
+    def report_ratios(self, target: float = 1.0):
+        """The lines check_ratios.py reads: peer time / splinekit time for every peer row (the raw
+        writes are floors, not peers), and one line per peer that did not run."""
+        for r in self.rows:
+            if "splinekit" in r["impl"] or r["impl"].startswith("raw"):
+                continue
+            label = f"{r['case']} / {r['impl']}".replace("`", "")
+            if r["t"] is None or r["sk"] is None:
+                skipped(label, r["note"])
+            else:
+                report(label, r["t"] / r["sk"], target)
 
     def render(self):
         lines = [f"| case | implementation | time | file size | MB/s | ratio vs {self.ref_label} "
@@ -278,15 +291,17 @@ def bench_other_writers(tab: Table, mesh: PolyMesh, small: PolyMesh, folder: str
 def bench_readers(tab: Table, mesh: PolyMesh, folder: str, repeats: int):
     try:
         import trimesh
-    except ImportError:
-        trimesh = None
+    except ImportError as exc:
+        trimesh, missing = None, exc
     for suffix, process, note in ((".stl", True, "merges duplicate vertices"), (".ply", False, ""), (".obj", False, "")):
         path = os.path.join(folder, "read" + suffix)
         exporters.export_mesh(path, mesh)
         case = f"3. read {suffix[1:].upper()}{' (binary)' if suffix != '.obj' else ''}, {mesh.n_faces:,} triangles"
         t_sk, n = measure(lambda path=path: exporters.import_mesh(path), repeats)
         tab.add(case, f"**splinekit** `import_{suffix[1:]}`", t_sk, os.path.getsize(path), repeats=n, sk=t_sk, note=note)
-        if trimesh is not None:
+        if trimesh is None:
+            tab.fail(case, "trimesh", missing)  # said, not skipped silently
+        else:
             t, n = measure(lambda path=path, process=process: trimesh.load(path, force="mesh", process=process), repeats)
             tab.add(case, f"trimesh `load` (process={process})", t, os.path.getsize(path), repeats=n, sk=t_sk,
                     note="merges duplicate vertices" if process else "")
@@ -335,6 +350,7 @@ def main(argv=None):
     print("Ratios are time / reference time (< 1: faster than the reference).")
     print()
     print(tab.render())
+    tab.report_ratios()  # the lines check_ratios.py reads
     print()
     print("## Target")
     print()

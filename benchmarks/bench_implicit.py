@@ -41,6 +41,7 @@ import statistics
 import time
 
 import numpy as np
+from _ratios import report, skipped
 
 import splinekit.implicit as si
 from splinekit.implicit import meshing
@@ -133,8 +134,8 @@ def bench_eval(rows, n, tree, mesh, trimesh_subset):
         threads = os.environ.get("OMP_NUM_THREADS", "all cores")
         rows.append(("CSG SDF", "Open3D RaycastingScene.compute_signed_distance", n, t, t_sk,
                      float(np.abs(out - ref).max()), f"{note_mesh}; float32; threads: {threads}"))  # fmt: skip
-    except ImportError:
-        rows.append(("CSG SDF", "Open3D (not installed)", n, None, t_sk, None, ""))
+    except (ImportError, OSError) as exc:  # not installed, or a missing system library (libusb)
+        rows.append(("CSG SDF", f"Open3D (not available: {type(exc).__name__}: {str(exc)[:60]})", n, None, t_sk, None, ""))
 
 
 def bench_mesh(rows, tree, edges, naive_edge):
@@ -189,6 +190,14 @@ def main(argv=None):
     bench_eval(rows, n, tree, mesh, trimesh_subset=1_000 if args.quick else 3_000)
     bench_mesh(rows, tree, edges, naive_edge=edges[0])
     print(render(rows))
+    print()
+    for case, impl, _, t, ref, _, note in rows:  # the lines check_ratios.py reads
+        if "splinekit" in impl:
+            continue
+        if t is None:
+            skipped(f"{case} / {impl}", note or "not run")
+        else:
+            report(f"{case} / {impl}", t / ref, 1.0)
 
 
 if __name__ == "__main__":

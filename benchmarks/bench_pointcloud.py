@@ -302,6 +302,7 @@ def main(argv=None):
 
     print(f"load average {os.getloadavg()[0]:.2f} on {os.cpu_count()} CPUs\n")
     print(tab.render())
+    tab.report_ratios()  # the lines check_ratios.py reads
     print(f"\ntotal {time.perf_counter() - start:.1f} s")
 
 

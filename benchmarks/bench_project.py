@@ -210,6 +210,7 @@ def main(argv=None):
           "OCC reports orthogonal feet only, so it misses boundary minima (see the notes).")
     print()
     print(tab.render())
+    tab.report_ratios()  # the lines check_ratios.py reads
     if tab.failures:
         print()
         print("## Peers not run")

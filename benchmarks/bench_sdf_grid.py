@@ -63,6 +63,7 @@ import numpy as np
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from _peakmem import in_child, mb, measure_here
+from _ratios import report
 
 from splinekit.implicit import from_mesh
 from splinekit.mesh import PolyMesh, primitives
@@ -211,10 +212,12 @@ def issue_row(quick):
     else:
         ratio = best[fastest] / ours
         print(f"target: fastest peer ({fastest}) / splinekit >= 3: {ratio:.2f} -> {'met' if ratio >= 3 else 'NOT met'}")
+        report(f"mesh -> SDF grid, fastest peer ({fastest}) / splinekit", ratio, 3.0)
         exact = [k for k in ("libigl", "open3d") if k in best]
         if exact:
             k = min(exact, key=best.get)
             print(f"fastest exact peer ({k}) / splinekit: {best[k] / ours:.2f}")
+            report(f"mesh -> SDF grid, fastest exact peer ({k}) / splinekit", best[k] / ours, 3.0)
     return mesh, sdf
 
 

@@ -68,7 +68,6 @@ import statistics
 import subprocess
 import sys
 import time
-import tracemalloc
 
 import numpy as np
 
@@ -80,6 +79,8 @@ if REPO_DIR not in sys.path:
     sys.path.insert(0, REPO_DIR)
 
 import _meshes as M  # noqa: E402
+from _memory import measure_memory, output_bytes  # noqa: E402
+from _ratios import report as report_ratio  # noqa: E402
 
 # --------------------------------------------------------------------------------------
 # configuration
@@ -591,43 +592,17 @@ def peer_status():
 # memory: one fresh subprocess per case
 
 
-def _status(key):
-    with open("/proc/self/status") as f:
-        for line in f:
-            if line.startswith(key + ":"):
-                return int(line.split()[1]) * 1024
-    raise KeyError(key)
-
-
 def child_main(spec):
-    """Run in a fresh interpreter: peak RSS growth (and tracemalloc peak) of one case."""
+    """Run in a fresh interpreter: peak RSS growth and tracemalloc peak of one case
+    (``_memory.measure_memory``; tracemalloc sees numpy allocations, not C++ peers')."""
     V, F = base_mesh(spec["mesh"])
     run = runner_for(spec["scheme"], spec["impl"])
     out = run(V, F, 1)  # warm-up: lazy imports, JIT, caches, thread pools
     del out
-    gc.collect()
-    res = {}
-    try:
-        with open("/proc/self/clear_refs", "w") as f:
-            f.write("5")  # reset VmHWM to the current RSS
-        base = _status("VmRSS")
-        out = run(V, F, spec["level"])
-        res["rss"] = _status("VmHWM") - base
-    except OSError:
-        out = run(V, F, spec["level"])
-        res["rss"] = None
-    res["out_bytes"] = int(sum(a.nbytes for a in out[:2] if isinstance(a, np.ndarray)))
-    res["faces"] = int(out[2])
-    del out
-    gc.collect()
+    mem = measure_memory(lambda: run(V, F, spec["level"]))
+    res = {"rss": mem.rss, "out_bytes": output_bytes(mem.result[:2]), "faces": int(mem.result[2])}
     if spec.get("traced"):
-        tracemalloc.start()
-        b0 = tracemalloc.get_traced_memory()[0]
-        tracemalloc.reset_peak()
-        out = run(V, F, spec["level"])
-        res["traced"] = tracemalloc.get_traced_memory()[1] - b0
-        tracemalloc.stop()
-        del out
+        res["traced"] = mem.traced
     print("RESULT " + json.dumps(res))
 
 
@@ -870,11 +845,13 @@ def bench_loop(report, cfg, peers):
             aim = "aim 0.7x met" if r <= TARGETS["loop_vs_igl_aim"] else "aim 0.7x not met"
             report.target(case, "Loop time <= 1.0x libigl (aim 0.7x)", f"{r:.2f}x libigl time",
                           r <= TARGETS["loop_vs_igl"], aim + quick)
+            report_ratio(f"{case}: libigl / splinekit", 1 / r, 1 / TARGETS["loop_vs_igl"])
         if t_tm is None:
             report.target(case, "Loop >= 5x faster than trimesh", "-", None, "trimesh not run")
         else:
             r = t_tm / t_sk
             report.target(case, "Loop >= 5x faster than trimesh", f"{r:.1f}x", r >= TARGETS["loop_vs_trimesh"], quick)
+            report_ratio(f"{case}: trimesh / splinekit", r, TARGETS["loop_vs_trimesh"])
     return per_level
 
 
@@ -895,6 +872,7 @@ def bench_cc(report, cfg, peers, mesh, top, label):
         rate = r[3] / r[0]
         report.target(case, "Catmull-Clark >= 4M output faces/s", fmt_rate(rate), rate >= TARGETS["cc_faces_per_s"],
                       note)
+        report_ratio(f"{case}: output faces/s / target rate", rate / TARGETS["cc_faces_per_s"], 1.0)
     if mesh.startswith("torus"):
         m = mem.get("splinekit") if r is not None else None
         # at reduced sizes (--quick) the limit is scaled with the face count
@@ -1022,6 +1000,7 @@ def bench_stencil(report, cfg, peers, scheme, mesh, top, label):
         report.target(case, text, "-", None, "splinekit stencil not available")
     else:
         report.target(case, text, fmt_rate(t_sk_rate), t_sk_rate >= TARGETS["stencil_verts_per_s"])
+        report_ratio(f"{case}: output vertices/s / target rate", t_sk_rate / TARGETS["stencil_verts_per_s"], 1.0)
 
 
 # --------------------------------------------------------------------------------------

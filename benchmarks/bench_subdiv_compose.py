@@ -17,6 +17,15 @@ the same stencils (the refinement itself is not timed):
 The results must agree exactly (sparsity and values). "ns/nnz" is the time per stored entry of
 the result: about constant across levels means linear in the output size.
 
+A second table composes the same number of levels on three sizes of base mesh (Catmull-Clark
+tori of 50^2, 100^2 and 200^2 quads to level 3, or to level 2 with ``--quick``), each output
+four times the last, and gives the growth of the time against the growth of the output, and the
+peak memory of the largest against its output arrays (``_memory.py``). The ratio line for
+``check_ratios.py`` is that linearity between the two larger sizes (both far beyond the caches):
+(time per entry of the middle one) / (time per entry of the largest), target >= 0.5 (a fourfold
+output may cost at most eight times the time). The smallest runs from the caches and is cheaper
+per entry.
+
 Profile finding (scipy 1.17, 2 shared cores): the composition was already sparse at every level
 (no dense intermediate) and linear in its output; the whole cost is scipy's single-threaded
 ``csr_matmat`` of the last level, 50-200 ns per output entry depending on the machine's load,
@@ -43,6 +52,8 @@ if REPO_DIR not in sys.path:
     sys.path.insert(0, REPO_DIR)
 
 import splinekit as sk  # noqa: E402
+from _memory import measure_memory  # noqa: E402
+from _ratios import report  # noqa: E402
 from splinekit.mesh.primitives import icosphere, torus  # noqa: E402
 
 
@@ -93,6 +104,28 @@ def main():
             print(f"| {label} | {level} | {M.shape[0]:,} x {M.shape[1]:,} | {nnz:,} | {t_ref * 1e3:.1f} ms | "
                   f"{t_ref / nnz * 1e9:.0f} | {t_sk * 1e3:.1f} ms | {t_sk / nnz * 1e9:.0f} | {t_ref / t_sk:.1f}x | "
                   f"{diff:.1e} |")
+    sizes_table(args.quick, repeats)
+
+
+def sizes_table(quick: bool, repeats: int):
+    """The same levels on three base meshes, each output 4x the last: time growth against size growth."""
+    level = 2 if quick else 3
+    print(f"\n## Three sizes: Catmull-Clark tori to level {level}\n")
+    print("| base quads | output | nnz | **splinekit** `Refinement.matrix` | ns/nnz | output growth | time growth |")
+    print("|---|---|---|---|---|---|---|")
+    rows = []
+    for n in (50, 100, 200):
+        part = sk.Refinement(torus(n, n, 2.0, 0.7), "catmull-clark", level)
+        t, M = best_of(lambda: part.__class__.matrix.func(part), repeats)
+        grow = "-" if not rows else f"{M.nnz / rows[-1][1]:.2f}x"
+        tgrow = "-" if not rows else f"{t / rows[-1][0]:.2f}x"
+        print(f"| {n} x {n} | {M.shape[0]:,} x {M.shape[1]:,} | {M.nnz:,} | {t * 1e3:.1f} ms | "
+              f"{t / M.nnz * 1e9:.0f} | {grow} | {tgrow} |")
+        rows.append((t, M.nnz, part))
+    mem = measure_memory(lambda: rows[-1][2].__class__.matrix.func(rows[-1][2]))
+    print(f"\nMemory of the largest: {mem.line()}\n")
+    (t0, n0, _), (t1, n1, _) = rows[1], rows[2]
+    report("subdiv compose: linearity, per-entry time middle / largest size", (t0 / n0) / (t1 / n1), 0.5)
 
 
 if __name__ == "__main__":

@@ -87,6 +87,7 @@ import sys
 import time
 
 import numpy as np
+from _ratios import report
 
 import splinekit as sk
 from splinekit.basis.knots import clamped_uniform
@@ -304,6 +305,7 @@ def main():
     )
     print(header)
     print("|" + "|".join(["---"] * (header.count("|") - 1)) + "|")
+    ratio_lines = []
     for name, patches in models:
         size = model_size(patches)
         for rel in rels:
@@ -351,6 +353,10 @@ def main():
             else:
                 row += ["-"] * 6
             print("| " + " | ".join(row) + " |", flush=True)
+            if have_occ and "sphere" in name:  # the row: >= 10x BRepMesh at every tolerance
+                ratio_lines.append((f"tessellate {name}, tol {rel:g}: OCC serial time / splinekit time", times[0] / t_sk))
+    for label, ratio in ratio_lines:  # the lines check_ratios.py reads
+        report(label, ratio, 10.0)
     print(
         "\nmax dev / tol: the deviation at triangle centres and edge midpoints, parametric (the exact "
         "point at the (u, v) interpolated from the corners against the flat point; includes the "
@@ -389,8 +395,10 @@ def brep_parts(quick):
 
         parts.append(("build123d filleted box 20, r 3", brep_from_shape(bd.fillet(bd.Box(20, 20, 20).edges(), 3).wrapped)))
         parts.append(("build123d box - cylinder", brep_from_shape((bd.Box(20, 20, 20) - bd.Cylinder(4, 20)).wrapped)))
-    except ImportError:
-        pass
+    except ImportError as exc:
+        print(f"skipped peer: build123d parts: not installed ({exc})\n")
+    if not quick and not os.path.isdir(STEP_DIR):
+        print("(foreign STEP files: skipped, no shared data folder beside the repository)")
     if not quick and os.path.isdir(STEP_DIR):
         from OCP.STEPControl import STEPControl_Reader
 
@@ -400,6 +408,7 @@ def brep_parts(quick):
                       "catiav4_4solids_sphere_torus_cone.stp", "proe2001_k1_extrusion.stp", "alias_k1_allbspline.stp"):  # fmt: skip
             path = os.path.join(STEP_DIR, fname)
             if not os.path.exists(path):
+                print(f"(STEP {fname}: skipped, not in the shared data folder)")
                 continue
             reader = STEPControl_Reader()
             reader.ReadFile(path)

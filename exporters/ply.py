@@ -13,6 +13,7 @@ import re
 
 import numpy as np
 
+from splinekit import limits
 from splinekit.errors import ExportError, FileFormatError, ParameterError
 
 from . import _meshio
@@ -26,6 +27,8 @@ _TYPES = {
     "float": "f4", "float32": "f4", "double": "f8", "float64": "f8",
 }
 _INT32_MAX = 2**31 - 1
+_GIANT_STEPS = 4096  # the most Python steps of the chain of records (see _record_starts)
+_CHUNK = 1 << 18  # units laid out per vectorized step when chaining records
 _END_HEADER = re.compile(rb"^[ \t]*end_header[ \t\r]*$", re.MULTILINE)
 
 
@@ -185,82 +188,177 @@ class _Stream:
         return dtype.itemsize if self.binary else 1
 
     def column(self, pos: int, dtype: np.dtype, stride: int, m: int, k: int = 1) -> np.ndarray:
-        """``(m, k)`` values: ``k`` consecutive items from each of ``m`` records ``stride`` units apart."""
+        """``(m, k)`` values (no copy): ``k`` consecutive items from each of ``m`` records ``stride`` units apart."""
         if self.binary:
             dt = dtype.newbyteorder(self.order)
             return np.ndarray((m, k), dtype=dt, buffer=self.data, offset=pos, strides=(stride, dt.itemsize))
         return np.lib.stride_tricks.as_strided(self.tokens[pos:], shape=(m, k), strides=(stride * 8, 8))
 
-    def scalar(self, pos: int, dtype: np.dtype):
-        return self.column(pos, dtype, 0, 1)[0, 0]
+    def every(self, pos: int, dtype: np.dtype) -> np.ndarray:
+        """A value of ``dtype`` starting at every unit from ``pos`` to the end (no copy): unit
+        ``pos + u`` is entry ``u`` (binary: overlapping unaligned reads, one per byte)."""
+        if not self.binary:
+            return self.tokens[pos:]
+        dt = dtype.newbyteorder(self.order)
+        m = max(self.size - pos - dt.itemsize + 1, 0)
+        return np.ndarray((m,), dtype=dt, buffer=self.data, offset=min(pos, self.size), strides=(1,))
+
+
+def _walk(stream: _Stream, pos: int, el: _Element, q: np.ndarray, wanted=frozenset()):
+    """Lay out a record of ``el`` at each of the unit positions ``pos + q`` ``(m,)``, all at once.
+
+    Returns ``(length, ok, values)``: the record length in units ``(m,)`` int64, whether a
+    record fits there (every list length readable, finite, whole and >= 0, and the record inside
+    the file) ``(m,)`` bool, and for the ``wanted`` properties their values as :func:`_read_element`
+    gives them (read only where every record is known to be valid).
+    """
+    n = stream.size - pos
+    length = np.zeros(q.shape, dtype=np.int64)
+    ok = np.ones(q.shape, dtype=bool)
+    values = {}
+    for name, dt, cdt in el.props:
+        w = stream.width(dt)
+        if cdt is None:
+            if name in wanted:
+                values[name] = stream.every(pos, dt)[q + length]
+            length += w
+            continue
+        wc = stream.width(cdt)
+        at = q + length
+        readable = at <= n - wc
+        counts = stream.every(pos, cdt)
+        k = counts[np.where(readable, at, 0)] if counts.size else np.zeros(q.shape, dtype=cdt)
+        valid = readable & (k >= 0)
+        if k.dtype.kind == "f":  # ASCII: a length must be a whole finite number
+            valid &= np.isfinite(k) & (k == np.floor(k))
+        k = np.where(valid, np.minimum(k.astype(np.float64 if k.dtype.kind == "f" else np.int64), n), 0)
+        k = k.astype(np.int64)  # clipped to the file's length first: an ASCII 1e300 has no int64 value
+        ok &= valid
+        if name in wanted:
+            first = at + wc  # the unit of each record's first item
+            offsets = np.concatenate([[0], np.cumsum(k)])
+            item = np.repeat(first, k) + (np.arange(offsets[-1]) - np.repeat(offsets[:-1], k)) * w
+            values[name] = (stream.every(pos, dt)[item], k)
+        length += wc + k * w
+    ok &= q + length <= n
+    return length, ok, values
+
+
+def _explain(stream: _Stream, pos: int, el: _Element, index: int):
+    """Raise the FileFormatError that says why record ``index`` of ``el`` at unit ``pos`` is bad."""
+    what, off = stream.what, 0
+    for _, dt, cdt in el.props:
+        if cdt is not None:
+            if pos + off + stream.width(cdt) > stream.size:
+                raise FileFormatError(f"{what}: PLY {el.name} {index} is truncated")
+            k = stream.every(pos + off, cdt)[0]
+            if not (np.isfinite(k) and k >= 0 and k == int(k)):  # an ASCII length may be inf or nan
+                raise FileFormatError(f"{what}: PLY {el.name} {index} has an invalid list length {k!r}")
+            off += stream.width(cdt) + int(k) * stream.width(dt)
+        else:
+            off += stream.width(dt)
+    raise FileFormatError(f"{what}: PLY {el.name} {index} is truncated (file ends at {stream.size})")
+
+
+def _record_starts(stream: _Stream, pos: int, el: _Element) -> tuple[np.ndarray, int, int | None]:
+    """Where each record of ``el`` starts ``(count,)`` int64 (units from ``pos``), where the
+    element ends, and the record length when every record has the first one's layout (else None).
+
+    A record's length depends on its list lengths, so record ``i + 1`` starts where record ``i``
+    ends: a chain through the file. It is followed for every record at once by pointer doubling:
+    ``nxt[u]``, where a record laid out at unit ``u`` would end (computed for every unit ``u`` of
+    the rest of the file, vectorized), squared ``s`` times and followed in giant steps of ``2**s``
+    records, then in ``2**s`` vectorized baby steps. The work is ``s ~ log2(count / 4096)``
+    gathers of the file's length and about ``4096 + count / 4096`` Python steps (at most 8192 up
+    to 16.7M records), none per record (one step per record cost 2 s per 100k faces when
+    consecutive faces differ in size). Files whose records all share the first record's layout
+    (all triangles, say) skip the chain.
+    """
+    n, count = stream.size - pos, el.count
+    if count == 0 or not el.props:
+        return np.zeros(count, dtype=np.int64), pos, None
+    length, ok, _ = _walk(stream, pos, el, np.zeros(1, dtype=np.int64))
+    if not ok[0]:
+        _explain(stream, pos, el, 0)
+    rec = int(length[0])
+    if rec * count <= n:  # the same layout everywhere? (then its list lengths repeat every rec units)
+        starts = np.arange(count, dtype=np.int64) * rec
+        same, off = True, 0
+        for _, dt, cdt in el.props:
+            if cdt is not None:
+                k = stream.every(pos + off, cdt)[::rec][:count]
+                same = same and bool((k == k[0]).all())
+                off += stream.width(cdt) + int(k[0]) * stream.width(dt)
+            else:
+                off += stream.width(dt)
+        if same:
+            return starts, pos + rec * count, rec
+    # a record takes at least its scalars and list counts: more records than fit cannot be valid,
+    # and the chain below follows at most one past that many (a header may claim any count)
+    shortest = sum(stream.width(dt if cdt is None else cdt) for _, dt, cdt in el.props)
+    count = min(count, n // shortest + 1)
+    index = np.int32 if n + 2 < 2**31 else np.int64
+    limits.check(3 * (n + 2) * np.dtype(index).itemsize, f"reading the {el.count:,} records of PLY {el.name!r} in {stream.what}")
+    end = n + 1  # the sink: where the chain goes after a record that does not fit
+    nxt = np.empty(n + 2, dtype=index)
+    for lo in range(0, n, _CHUNK):  # bounded temporaries; a handful of steps per file
+        q = np.arange(lo, min(lo + _CHUNK, n), dtype=np.int64)
+        length, ok, _ = _walk(stream, pos, el, q)
+        nxt[lo:lo + q.size] = np.where(ok, q + length, end)
+    nxt[n:] = end
+    # baby step, giant step: jump = nxt composed 2**s times (s squarings of the table), then the
+    # starts of records 0, B, 2B, ... (B = 2**s) one jump each (at most _GIANT_STEPS Python steps,
+    # whatever the count), then the B - 1 records after each of those, one gather per row
+    s = (-(-(count + 1) // _GIANT_STEPS) - 1).bit_length()  # the least s with (count + 1) / 2**s <= _GIANT_STEPS
+    jump = nxt
+    for _ in range(s):
+        jump = jump[jump]
+    giant = np.empty(-(-(count + 1) // (1 << s)), dtype=index)
+    p = 0
+    for i in range(giant.size):
+        giant[i] = p
+        p = int(jump[p])
+    del jump
+    block = np.empty((1 << s, giant.size), dtype=index)
+    block[0] = giant
+    for r in range(1, 1 << s):
+        block[r] = nxt[block[r - 1]]
+    del nxt
+    chain = block.T.ravel()
+    chain = chain[:count + 1].astype(np.int64)
+    bad = np.flatnonzero(chain[1:] == end)
+    if bad.size:
+        i = int(bad[0])
+        _explain(stream, pos + int(chain[i]), el, i)
+    if count < el.count:  # unreachable: so many records of at least `shortest` units overrun the file
+        raise FileFormatError(f"{stream.what}: PLY {el.name} {count} is truncated (file ends at {stream.size})")
+    return chain[:-1], pos + int(chain[-1]), None
 
 
 def _read_element(stream: _Stream, pos: int, el: _Element, wanted: set):
     """Parse element ``el`` starting at unit ``pos``.
 
     Returns ``(values, end)``: ``values[name]`` is an ``(count,)`` array for a wanted scalar
-    property, ``(flat items, sizes)`` for a wanted list. Records are taken in runs that share one
-    layout (the same list lengths), each run with whole-array reads; a file whose consecutive faces
-    alternate in size therefore costs one short step per face.
+    property, ``(flat items, sizes)`` for a wanted list (see :func:`_record_starts`).
     """
-    what = stream.what
-    out_scalar = {name: [] for name, _, c in el.props if c is None and name in wanted}
-    out_list = {name: ([], []) for name, _, c in el.props if c is not None and name in wanted}
-    done, window = 0, 64
-    while done < el.count:
-        # the layout of the record at pos: offsets of every property, given its list lengths
-        layout, off, lengths = [], 0, []
+    starts, end, rec = _record_starts(stream, pos, el)
+    if rec is None:
+        _, _, values = _walk(stream, pos, el, starts, wanted)
+    else:  # one layout: strided views, no gather (50x faster for an all-triangle file)
+        values, off = {}, 0
         for name, dt, cdt in el.props:
-            if cdt is None:
-                layout.append((name, dt, off, None))
-                off += stream.width(dt)
-                continue
-            if pos + off + stream.width(cdt) > stream.size:
-                raise FileFormatError(f"{what}: PLY {el.name} {done} is truncated")
-            k = stream.scalar(pos + off, cdt)
-            if not (np.isfinite(k) and k >= 0 and k == int(k)):  # an ASCII length may be inf or nan
-                raise FileFormatError(f"{what}: PLY {el.name} {done} has an invalid list length {k!r}")
-            k = int(k)
-            layout.append((name, dt, off + stream.width(cdt), k))
-            lengths.append((off, cdt, k))
-            off += stream.width(cdt) + k * stream.width(dt)
-        rec = off
-        if rec == 0:  # an element without properties holds no data
-            break
-        fit = (stream.size - pos) // rec
-        if fit < 1:
-            raise FileFormatError(f"{what}: PLY {el.name} {done} is truncated (file ends at {stream.size})")
-        # extend the run while the following records have the same list lengths
-        m, limit = 1, min(el.count - done, fit)
-        while m < limit:
-            step = min(window, limit - m)
-            same = np.ones(step, dtype=bool)
-            for loff, cdt, k in lengths:
-                same &= stream.column(pos + m * rec + loff, cdt, rec, step)[:, 0] == k
-            if same.all():
-                m += step
-                window *= 2
-            else:
-                m += int(np.argmin(same))
-                window = 64
-                break
-        if m < el.count - done and m == fit:
-            raise FileFormatError(f"{what}: PLY {el.name} {done + m} is truncated (file ends at {stream.size})")
-        for name, dt, poff, k in layout:
-            if k is None and name in out_scalar:
-                out_scalar[name].append(stream.column(pos + poff, dt, rec, m)[:, 0])
-            elif k is not None and name in out_list:
-                out_list[name][0].append(stream.column(pos + poff, dt, rec, m, k).ravel())
-                out_list[name][1].append(np.full(m, k, dtype=np.int64))
-        pos += m * rec
-        done += m
-    values = {name: np.concatenate(parts) if parts else np.zeros(0) for name, parts in out_scalar.items()}
-    for name, (items, sizes) in out_list.items():
-        values[name] = (
-            np.concatenate(items) if items else np.zeros(0),
-            np.concatenate(sizes) if sizes else np.zeros(0, dtype=np.int64),
-        )
-    return values, pos
+            k = None
+            if cdt is not None:
+                k = int(stream.every(pos + off, cdt)[0])
+                off += stream.width(cdt)
+            if name in wanted:
+                col = stream.column(pos + off, dt, rec, el.count, 1 if k is None else k)
+                values[name] = col[:, 0] if k is None else (col.ravel(), np.full(el.count, k, dtype=np.int64))
+            off += (1 if k is None else k) * stream.width(dt)
+    for name, _, cdt in el.props:
+        if name in wanted and name not in values:
+            values[name] = np.zeros(0) if cdt is None else (np.zeros(0), np.zeros(0, dtype=np.int64))
+    return values, end
 
 
 def import_ply(path):

@@ -15,7 +15,8 @@ import numpy as np
 import pytest
 
 import splinekit as sk
-from splinekit.mesh.primitives import box, icosphere, torus
+from splinekit.mesh.geometry import triangulate
+from splinekit.mesh.primitives import box, grid, icosphere, torus
 from splinekit.subdiv import SCHEMES, Level, Refinement, RefinementStep, catmull_clark, doo_sabin, loop
 from splinekit.subdiv.creases import edge_sharpness, vertex_sharpness
 
@@ -140,3 +141,39 @@ def test_regular_faces_keeps_its_former_signature():
         old = regular_faces(lv.topology, lv.edge_sharpness, lv.vertex_sharpness)
     np.testing.assert_array_equal(old, regular_faces(lv))
     assert old.all()  # a torus of quads with valence-4 vertices only
+
+
+def _grid_case(scheme, nx, ny, seed):
+    """An open grid (boundary) in the scheme's face type, bumped, with random semi-sharp creases
+    (sharpness 0.5 - 3.5: they decay over the levels) and one corner."""
+    rng = np.random.default_rng(seed)
+    mesh = grid(nx, ny)
+    if scheme == "loop":
+        mesh = sk.PolyMesh(mesh.vertices, triangulate(mesh)[0])
+    V = mesh.vertices + rng.normal(scale=0.05, size=mesh.vertices.shape)
+    mesh = mesh.with_vertices(V)
+    edges = mesh.topology.edges
+    pick = rng.choice(len(edges), size=max(1, len(edges) // 5), replace=False)
+    creases = {(int(a), int(b)): float(s) for (a, b), s in zip(edges[pick], rng.uniform(0.5, 3.5, pick.size))}
+    corners = {int(rng.integers(mesh.n_vertices)): float("inf")}
+    return mesh, creases, corners
+
+
+@pytest.mark.parametrize("scheme", ["catmull-clark", "loop", "doo-sabin"])
+@pytest.mark.parametrize("seed", [0, 1])
+def test_composed_matrix_with_boundaries_and_creases_matches_level_by_level_refinement(scheme, seed):
+    """``Refinement.matrix`` (composed stencils) against two references that never compose:
+    ``subdivide`` (vertices refined level by level, compiled kernels where they exist, no stencil
+    kept) and the dense product of the level stencils."""
+    mesh, creases, corners = _grid_case(scheme, 5, 4, seed)
+    for levels in (1, 2, 3):
+        r = Refinement(mesh, scheme, levels, creases=creases, corners=corners)
+        M = r.matrix
+        assert M.format == "csr" and M.shape == (r.topology.n_vertices, mesh.n_vertices)
+        fine = sk.subdivide(mesh, scheme, levels, creases=creases, corners=corners)
+        np.testing.assert_allclose(M @ mesh.vertices, fine.vertices, rtol=0, atol=1e-13)
+        dense = np.eye(mesh.n_vertices)
+        for S in r.stencils:
+            dense = S.toarray() @ dense
+        np.testing.assert_allclose(M.toarray(), dense, rtol=0, atol=1e-15)
+        np.testing.assert_allclose(np.asarray(M.sum(axis=1)).ravel(), 1.0, rtol=0, atol=1e-13)

@@ -242,6 +242,19 @@ class PolyMesh:
         t = self.topology
         return t.n_faces > 0 and bool((t.face_sizes == 4).all())
 
+    def derived(self, key: str, make):
+        """``make(self)``, computed on the first call for ``key`` and kept with the mesh.
+
+        For values that modules in lower layers derive from a mesh and would otherwise rebuild
+        on every call (the manifold3d object of :mod:`splinekit.interop.booleans`). Safe because
+        a mesh is immutable (read-only arrays, no attribute assignment); a value is dropped with
+        its mesh, and pickling or copying a mesh does not carry it. ``make`` raising caches nothing.
+        """
+        cache = self.__dict__.setdefault("_derived", {})
+        if key not in cache:
+            cache[key] = make(self)
+        return cache[key]
+
     # -- geometry (splinekit.mesh.geometry), cached; arrays are read-only -----------------
     # Polygons are fan-triangulated from each face's first corner; see geometry.py for
     # units, sign conventions and degenerate cases. Normals, mean curvature and volume
