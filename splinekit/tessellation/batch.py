@@ -11,13 +11,14 @@ map to the piece's local parameter, combine.
 from __future__ import annotations
 
 import numpy as np
+from scipy.sparse import csr_matrix
 
 from .cells import bezier_matrix, cells_of_patches
 
 __all__ = ["CurveBatch", "SurfaceBatch"]
 
-CHUNK = 1 << 16
-"""Queries evaluated per block (bounds the gathered control nets' memory)."""
+CHUNK = 1 << 14
+"""Queries evaluated per block (bounds the temporaries' memory)."""
 
 
 def _bernstein(p, t):
@@ -186,17 +187,28 @@ class SurfaceBatch:
         for c in np.unique(sets):
             sel = np.flatnonzero(sets == c) if len(self.cellsets) > 1 else np.arange(n)
             cs = self.cellsets[c]
+            table = cs.nets.reshape(-1, 4)  # (cells * (p + 1) * (q + 1), 4) homogeneous
+            m = (cs.p + 1) * (cs.q + 1)
             for lo in range(0, sel.size, CHUNK):
                 part = sel[lo : lo + CHUNK]
-                nets = cs.nets[g[part] - self.offsets[c]]  # (m, p + 1, q + 1, 4) homogeneous
+                gl = g[part] - self.offsets[c]
                 Bu, Bv = _bernstein(cs.p, s[part]), _bernstein(cs.q, t[part])
-                T0 = np.einsum("in,nijk->njk", Bu, nets)
-                h = np.einsum("jn,njk->nk", Bv, T0)
+                # each query combines the m control points of its cell: a sparse (queries x table)
+                # product reads the small table in place of gathering an (n, p + 1, q + 1, 4) copy
+                # of the nets (which cost ten times as much from about 10k queries on)
+                cols = (gl[:, None] * m + np.arange(m)).ravel()
+                ptr = np.arange(0, m * part.size + 1, m)
+
+                def combine(A, B):
+                    w = (A.T[:, :, None] * B.T[:, None, :]).ravel()  # (queries, p + 1, q + 1) weights
+                    return csr_matrix((w, cols, ptr), shape=(part.size, table.shape[0])) @ table
+
+                h = combine(Bu, Bv)
                 S = h[:, :3] / h[:, 3:]
                 out[0][part] = S
                 if partial:  # quotient rule, then local -> surface parameters
-                    hu = np.einsum("jn,njk->nk", Bv, np.einsum("in,nijk->njk", _bernstein_d(cs.p, s[part]), nets))
-                    hv = np.einsum("jn,njk->nk", _bernstein_d(cs.q, t[part]), T0)
+                    hu = combine(_bernstein_d(cs.p, s[part]), Bv)
+                    hv = combine(Bu, _bernstein_d(cs.q, t[part]))
                     box = self.box[g[part]]
                     out[1][part] = (hu[:, :3] - hu[:, 3:] * S) / (h[:, 3:] * (box[:, 1] - box[:, 0])[:, None])
                     out[2][part] = (hv[:, :3] - hv[:, 3:] * S) / (h[:, 3:] * (box[:, 3] - box[:, 2])[:, None])
