@@ -19,6 +19,8 @@ __all__ = ["CurveBatch", "SurfaceBatch"]
 
 CHUNK = 1 << 14
 """Queries evaluated per block (bounds the temporaries' memory)."""
+SPARSE_FROM = 2048
+"""Blocks of at least this many queries combine control points through a sparse product."""
 
 
 def _bernstein(p, t):
@@ -196,12 +198,15 @@ class SurfaceBatch:
                 # each query combines the m control points of its cell: a sparse (queries x table)
                 # product reads the small table in place of gathering an (n, p + 1, q + 1, 4) copy
                 # of the nets (which cost ten times as much from about 10k queries on)
-                cols = (gl[:, None] * m + np.arange(m)).ravel()
-                ptr = np.arange(0, m * part.size + 1, m)
+                if part.size >= SPARSE_FROM:
+                    cols = (gl[:, None] * m + np.arange(m)).ravel()
+                    ptr = np.arange(0, m * part.size + 1, m)
 
                 def combine(A, B):
-                    w = (A.T[:, :, None] * B.T[:, None, :]).ravel()  # (queries, p + 1, q + 1) weights
-                    return csr_matrix((w, cols, ptr), shape=(part.size, table.shape[0])) @ table
+                    w = A.T[:, :, None] * B.T[:, None, :]  # (queries, p + 1, q + 1) weights
+                    if part.size < SPARSE_FROM:  # few queries: the gathered copy is cheaper than building the matrix
+                        return np.einsum("nm,nmk->nk", w.reshape(part.size, m), cs.nets[gl].reshape(part.size, m, 4))
+                    return csr_matrix((w.ravel(), cols, ptr), shape=(part.size, table.shape[0])) @ table
 
                 h = combine(Bu, Bv)
                 S = h[:, :3] / h[:, 3:]
