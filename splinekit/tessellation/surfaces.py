@@ -39,7 +39,9 @@ triangles):
 
 Small models spend most of their time in fixed per-call work rather than in
 evaluation, so the bookkeeping avoids sorts, sparse matrices and per-patch
-Python work where a cached table or one whole-array operation does. Once the
+Python work where a cached table or one whole-array operation does; what does
+not depend on the tolerance (steps 1 and 2, and the bounds of step 1) is
+computed once per patch set and kept on its first patch. Once the
 compiled kernels (:mod:`._kernels`) are loaded (:mod:`splinekit._kernels`: a
 large tessellation, or enough work done, loads them), the fused pass, the weld,
 the triangle remap, the vertex gathering, the pole normals and the rational
