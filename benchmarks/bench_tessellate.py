@@ -40,24 +40,46 @@ the batch evaluator 12 ms, the interior grids 11 ms (mostly second-derivative bo
 pcurve domain check 4 ms, edge pairing 3 ms. Everything that does not depend on the tolerance
 (batch evaluators, second-derivative bounds, edge uses, domain check, pairing, the edges'
 representatives, directions and span bounds) is now computed once per face set and kept in the
-first face's ``_cache`` (faces are immutable), and the loop checks use slices: 55 ms per call
-under the same load, the rest spread over edge sampling (15 ms), grids (8 ms), edge end welding
-(7 ms), the trim crossing test (5 ms), Triangle (3 ms), densifying trims (3 ms) and the final
-assembly (2.5 ms). The sphere's triangle count at 1e-4 (51k) is its a-priori interior grid itself
-(229 x 115 points; refinement adds none): the measured chord error of its grid lines is about
-0.3 of the tolerance in both directions at the equator, falling to 0.03 along the parallels
-near the poles. Thinning each grid line to an integer stride of its measured chord error
-removed 17% of the grid points, but the refinement put nearly all back (49k triangles, 7
-rounds): not kept. Instead each span's count is now set from the grid's measured second
-differences (0.4 of the tolerance per direction; 0.5 left the 1e-4 sphere unconverged after 8
-rounds; at most halved, since a cone whose rulings measure straight flipped triangles at its
-apex): the sphere gives 40k triangles at 1e-4 and 4.0k at 1e-3 (was 51k and 5.0k), the torus
-43k and 4.6k (was 48k and 5.1k), still one refinement round. A row's own count near the poles
-(the lat-long grid's remaining excess, about pi / 2) is not done. Last run (load average ~20 on
-2 cores; ratios only): time ratio (OCC / splinekit at the same measured deviation) sphere 18x and
-31x, torus 6.9x and 39x (1e-3, 1e-4); small analytic parts 0.7x at 1e-3 and 1.8-6x at 1e-4;
-filleted box 1.1x, STEP parts 0.57-1.6x, with 0.2-1.0x OCC's triangles. A small part still
-costs ~12-20 ms of fixed per-call work (first call ~20-30 ms).
+first face's ``_cache`` (faces are immutable), and the loop checks use slices. The sphere's
+interior grid is set from the grid's measured second differences (0.4 of the tolerance per
+direction, at most halved: a cone whose rulings measure straight flipped triangles at its apex);
+thinning each grid line to an integer stride of its measured chord error was tried and not kept
+(the refinement put nearly all points back).
+
+Profile at 1e-1 ... 1e-5 (this session; per-section best of 20-40 calls with the sections timed
+by wrappers, cProfile for call counts; the machine's load average was 8-16 on 2 cores, so single
+calls vary 3-10x and only best-of-N figures repeat):
+
+* Small analytic parts (box with a hole, 7 faces; plate with 3 holes, 9 faces; cylinder): the
+  time is flat from 1e-1 to 1e-4 (box 3.5 ms at 96-416 triangles, plate 4.2 ms, cylinder 2.7 ms;
+  1e-5: box 12.8 ms for 1,264 triangles) and is ~3,800 Python-level calls: edge sampling
+  0.7-0.9 ms (one measure round: ~100 numpy calls over every edge at once), interior grids
+  0.5 ms, the final assembly (normals from the exact partials) 0.3 ms, the measurement's
+  evaluation 0.3 ms, Triangle 0.2-0.3 ms, loop assembly and checks 0.25 ms, edge-end welding
+  0.2 ms, trim crossing test 0.15 ms, the inside/outside labelling 0.1 ms. The interior grids
+  cost 1.0 ms before this session: a face whose cells all need one step (every plane) now takes
+  its knot breaks as its grid with no per-face work. OCC meshes such a part at the matched
+  deflection in ~2 ms, so the ratio is ~0.5-1x: 10x would need ~0.2 ms per call, below what one
+  Triangle call plus the ~100 numpy calls of a single edge-sampling round cost; a compiled
+  per-call driver (or caching results per tolerance, which the benchmark must not measure) would
+  be the way, not further numpy batching. Fixed floor measured: ~3 ms per call (box), of which
+  no single step is over 25%.
+* B-rep sphere (one face, two poles, a seam): 3.3 ms at 1e-1 (248 triangles; same fixed costs
+  as above), 31 ms at 1e-3 and ~300 ms at 1e-4 before this session, of which the measurement's
+  batch evaluation took 16.6 ms at 1e-3 (10k queries): gathering a copy of the control nets per
+  query (an ``(n, 3, 3, 4)`` array) fell off a cliff between 5k and 10k queries (0.8 ms -> 10-13
+  ms: allocation and cache misses on the shared machine). The batch evaluator now combines the
+  queries' control points through one sparse (queries x control points) product in blocks of
+  16k queries, reading the small table in place (10k queries: 2-4 ms). The rest at 1e-4:
+  Triangle ~50-90 ms, the final assembly ~50-90 ms, the grid points' clearance test ~13 ms.
+* Patch sets (part 1 sphere): ~1,500 Python-level calls at 1e-1 (1.1-1.2 ms), half of them
+  tolerance-independent (Bézier cells, bounds, linked cell nodes): those are now cached on the
+  first patch like a face set's preparation (0.7-0.8 ms at 1e-1; the first-call column shows
+  the uncached cost).
+* Poles: the triangle counts at equal measured deviation are 0.4-0.55 of BRepMesh's at every
+  tolerance measured (both parts), so per-row counts near the poles (a lat-long grid's excess,
+  about pi / 2 in the interior) were not needed for the triangle target and are not done; at
+  coarse tolerances the time is the fixed per-call cost, not the point count.
 
 Peers (part 1): ``BRepMesh_IncrementalMesh`` on the same geometry (faces built with
 ``splinekit.occ.to_occ`` + ``BRepBuilderAPI_MakeFace``, one compound, angular deflection 0.5 rad =
