@@ -79,7 +79,16 @@ calls vary 3-10x and only best-of-N figures repeat):
 * Poles: the triangle counts at equal measured deviation are 0.4-0.55 of BRepMesh's at every
   tolerance measured (both parts), so per-row counts near the poles (a lat-long grid's excess,
   about pi / 2 in the interior) were not needed for the triangle target and are not done; at
-  coarse tolerances the time is the fixed per-call cost, not the point count.
+  coarse tolerances the time is the fixed per-call cost, not the point count. Why thinning the
+  rows near a pole fails under this yardstick (the previous session's 17% fewer grid points
+  came back in refinement): the deviation is parametric, and a triangle's diagonal midpoint errs
+  by ``h_u h_v |S_uv| / 4`` besides the ``h^2 |S''| / 8`` terms; on a sphere ``S_uv`` (the turn
+  of the parallel's tangent with latitude) grows towards the poles while ``S_uu`` shrinks, and
+  it points along the parallel, i.e. tangentially. Widening ``h_u`` k times near a pole
+  multiplies that tangential term by k, which the parametric measure counts and a geometric
+  (closest-point) measure would not. Per-row counts therefore need the geometric yardstick for
+  ``max_deviation`` (and for this benchmark), which changes the documented contract of
+  ``Tessellation.max_deviation``: left for a decision.
 
 Peers (part 1): ``BRepMesh_IncrementalMesh`` on the same geometry (faces built with
 ``splinekit.occ.to_occ`` + ``BRepBuilderAPI_MakeFace``, one compound, angular deflection 0.5 rad =
