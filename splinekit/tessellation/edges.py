@@ -206,7 +206,7 @@ def sample_groups(uses, groups, scales, tol, angle_tol, surfaces, pc, memo=None)
         uv = pc.evaluate(ui[who], t)
         pole = surfaces.evaluate(face[ui], ends[:, 0, 0], ends[:, 0, 1])
         cut = np.flatnonzero(np.diff(who)) + 1
-        for k, (tk, uvk) in enumerate(zip(np.split(t, cut), np.split(uv, cut))):
+        for k, (tk, uvk) in enumerate(zip(_pieces(t, cut), _pieces(uv, cut))):
             o = out[dg[k]]
             o.points, o.params, o.uv, o.degenerate = pole[k : k + 1], {int(ui[k]): tk}, {int(ui[k]): uvk}, True
 
@@ -295,15 +295,22 @@ def sample_groups(uses, groups, scales, tol, angle_tol, surfaces, pc, memo=None)
         t, who = _subdivide(who[seg], t[seg], t[seg + 1], pieces)
 
     cut = np.flatnonzero(np.diff(who)) + 1
-    for k, Xk in enumerate(np.split(X, cut)):
+    for k, Xk in enumerate(_pieces(X, cut)):
         o = out[live[k]]
         o.points, o.degenerate, o.params, o.uv = Xk, False, {}, {}
     ucut = np.flatnonzero(np.diff(owner)) + 1
-    for o, (sk_, uvk) in enumerate(zip(np.split(s, ucut), np.split(uv, ucut))):
+    for o, (sk_, uvk) in enumerate(zip(_pieces(s, ucut), _pieces(uv, ucut))):
         grp = out[live[lg[o]]]
         grp.params[int(lu[o])] = sk_
         grp.uv[int(lu[o])] = uvk
     return out
+
+
+def _pieces(a, cut):
+    """``a`` cut before the indices ``cut`` (as ``np.split``, which costs several numpy calls
+    per piece: this runs for every edge of every call)."""
+    bounds = [0, *cut.tolist(), len(a)]
+    return [a[i:j] for i, j in zip(bounds[:-1], bounds[1:])]
 
 
 def _exact(k, t, has_curve, curve_of, c3, rep, pc, surfaces, face):
