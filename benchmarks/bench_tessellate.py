@@ -96,7 +96,7 @@ the splinekit default, serial) at the same MEASURED deviation, as in part 2: the
 the exact surface point at each triangle's parametric centre and each edge's parametric midpoint
 (from the triangle corners' (u, v)) and the flat triangle's/edge's point, over all triangles, the
 same code for both meshes; OCC's linear deflection is searched (:func:`match_occ`) until OCC's
-deviation is at most splinekit's. Times are the best of several calls (see :func:`measure`),
+deviation is at most splinekit's. Times are the best CPU times of several calls (see :func:`measure`),
 excluding building the input (and, for OCC, building the faces and clearing the previous
 triangulation).
 
@@ -240,19 +240,25 @@ def occ_triangles(shape):
 # --------------------------------------------------------------------------------------
 
 
+clock = time.process_time
+"""The benchmark's clock: the CPU time of this process (all its threads). Both meshers run
+serially, so on an idle machine it equals the wall time; on a shared one (load averages of 8-17
+on 2 cores while this was written) wall times of the same call varied 3-30x with what other
+processes did, CPU times far less."""
+
+
 def measure(fn, repeats):
-    """Best wall time of ``fn()`` after one warm-up call: at least ``repeats`` calls and, for
-    short calls, as many as fit in about half a second (up to 200). Returns ``(seconds,
-    result)``. The best, not the median: on a shared 2-core machine other processes preempt
-    short calls for several times their length (medians of 1-2 ms calls varied 10x between
-    runs); both meshers are timed this same way."""
+    """Best CPU time (:data:`clock`) of ``fn()`` after one warm-up call: at least ``repeats``
+    calls and, for short calls, as many as fit in about half a second (up to 200). Returns
+    ``(seconds, result)``. The best, not the median: other processes still slow a call down
+    (caches, memory bandwidth), never speed it up; both meshers are timed this same way."""
     result = fn()
     times = []
     while len(times) < repeats or (sum(times) < 0.5 and len(times) < 200):
         gc.collect()
-        t0 = time.perf_counter()
+        t0 = clock()
         result = fn()
-        times.append(time.perf_counter() - t0)
+        times.append(clock() - t0)
         if times[0] > 2.0:
             break
     return min(times), result
@@ -262,9 +268,9 @@ def _cold_call(patches, tol):
     """Seconds of one tessellation of fresh copies of ``patches`` (no cached preparation)."""
     fresh = [pickle.loads(pickle.dumps(p)) for p in patches]
     gc.collect()
-    t0 = time.perf_counter()
+    t0 = clock()
     tessellate(fresh, tol)
-    return time.perf_counter() - t0
+    return clock() - t0
 
 
 def fmt_int(n):
@@ -457,9 +463,9 @@ def occ_brep_mesh(shape, deflection):
 
     BRepTools.Clean_s(shape)
     gc.collect()
-    t0 = time.perf_counter()
+    t0 = clock()
     BRepMesh_IncrementalMesh(shape, deflection, False, 0.5, False)
-    return time.perf_counter() - t0
+    return clock() - t0
 
 
 def occ_brep_triangles(shape, n_faces):
@@ -527,9 +533,9 @@ def brep_main(args):
                 for f in faces:
                     f._cache.pop("tessellate", None)
                 gc.collect()
-                t0 = time.perf_counter()
+                t0 = clock()
                 sk.tessellate(obj, tol)
-                cold.append(time.perf_counter() - t0)
+                cold.append(clock() - t0)
             t_cold = min(cold)
             F = np.asarray(mesh.faces)
             dev_sk = brep_deviation(faces, mesh.corner_uv, mesh.vertices[F], mesh.face_patch)
