@@ -106,6 +106,7 @@ class _Prepared:
         np.maximum.at(self.nsv, self.patch_of, self.span_of[:, 1] + 1)
         self.labels, self.collapsed = node_groups(cellsets, self.patch_of, self.span_of, self.nsv, weld_tol)
         self.bounds = [second_derivative_bounds(cs) for cs in cellsets]
+        self.cell_index = CellIndex(cellsets, self.offsets, self.first, self.n_cells, self.nsv, self.box_of)
 
     @classmethod
     def of(cls, patches, weld_tol):
@@ -228,7 +229,6 @@ def tessellate_patches(patches, tol: float, angle_tol, weld_scale: float) -> Tes
         grow_v = np.minimum(np.ceil(nv * np.minimum(fv * 1.15, 8.0)), MAX_COUNT).astype(np.int64)
         nu = np.where(over_u, np.maximum(grow_u, np.minimum(nu + 1, MAX_COUNT)), nu)
         nv = np.where(over_v, np.maximum(grow_v, np.minimum(nv + 1, MAX_COUNT)), nv)
-    cell_index = CellIndex(cellsets, offsets, first, n_cells, nsv, box_of)
-    mesh, welded, V, T = assemble(grids, record, collapsed, span_of, cell_index, tol, weld_tol)
+    mesh, welded, V, T = assemble(grids, record, collapsed, span_of, prep.cell_index, tol, weld_tol)
     return outward(mesh, welded, V, T)
 
