@@ -90,6 +90,19 @@ calls vary 3-10x and only best-of-N figures repeat):
   ``max_deviation`` (and for this benchmark), which changes the documented contract of
   ``Tessellation.max_deviation``: left for a decision.
 
+Last run (this session, load average 15-18 on 2 cores, CPU times, best of N; time ratio = OCC's
+time / splinekit's at the same measured deviation; triangle ratio = splinekit's / OCC's):
+
+* part 1, NURBS sphere (8 patches): 1e-1 10.3x (8.1x in the run before, OCC's own time varying
+  by 15%), 1e-2 21x, 1e-3 74x, 1e-4 121x, with 0.41-0.54 of OCC's triangles; models b and c at
+  1e-3: 214x and 30x with 0.34 and 0.60 of OCC's triangles;
+* part 2, B-rep sphere 1.2x / 2.1x / 9.5x (1e-1 / 1e-2 / 1e-3; earlier run at 1e-4: 317x, OCC
+  114 s), torus 1.5x / 3.2x / 17.8x, with 0.28-0.41 of OCC's triangles (torus at 1e-1: 1.5x
+  its triangles, at a deviation 0.07 against OCC's 0.12 of the tolerance);
+* small analytic parts at 1e-1 ... 1e-3: 0.4-0.96x (ours 2.9-4.9 ms, OCC 1.1-4.3 ms), at 1e-4
+  2.2-8.8x, at 1e-5 16-113x; filleted box (26 faces) 0.7x, 0.7x, 1.3x, 5.4x (1e-1 ... 1e-4);
+  0.44-1.03 of OCC's triangles everywhere.
+
 Peers (part 1): ``BRepMesh_IncrementalMesh`` on the same geometry (faces built with
 ``splinekit.occ.to_occ`` + ``BRepBuilderAPI_MakeFace``, one compound, angular deflection 0.5 rad =
 the splinekit default, serial) at the same MEASURED deviation, as in part 2: the distance between
