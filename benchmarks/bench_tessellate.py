@@ -99,7 +99,7 @@ time / splinekit's at the same measured deviation; triangle ratio = splinekit's 
 * part 2, B-rep sphere 1.2x / 2.1x / 9.5x (1e-1 / 1e-2 / 1e-3; earlier run at 1e-4: 317x, OCC
   114 s), torus 1.5x / 3.2x / 17.8x, with 0.28-0.41 of OCC's triangles (torus at 1e-1: 1.5x
   its triangles, at a deviation 0.07 against OCC's 0.12 of the tolerance);
-* small analytic parts at 1e-1 ... 1e-3: 0.4-0.96x (ours 2.9-4.9 ms, OCC 1.1-4.3 ms), at 1e-4
+* small analytic parts at 1e-1 ... 1e-3: 0.37-0.96x (ours 2.9-4.9 ms, OCC 1.1-4.3 ms), at 1e-4
   2.2-8.8x, at 1e-5 16-113x; filleted box (26 faces) 0.7x, 0.7x, 1.3x, 5.4x (1e-1 ... 1e-4);
   0.44-1.03 of OCC's triangles everywhere.
 
