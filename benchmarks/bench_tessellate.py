@@ -2,7 +2,7 @@
 
 Run from the repository root::
 
-    python benchmarks/bench_tessellate.py           # full sizes (a few minutes)
+    python benchmarks/bench_tessellate.py           # full sizes (half an hour: OCC at 1e-4 and 1e-5)
     python benchmarks/bench_tessellate.py --quick   # smaller models, fewer repeats
     python benchmarks/bench_tessellate.py --brep    # only part 2, trimmed B-rep solids vs BRepMesh
     python benchmarks/bench_tessellate.py --patches --tols 1e-1,1e-2   # only part 1, two tolerances
