@@ -136,9 +136,9 @@ def test_planar_faces_need_no_interior_points(rel):
 
 
 def test_batch_evaluator_matches_each_surfaces_own_evaluator():
-    # the tessellator's batch evaluator (every face at once, sparse products in blocks of
-    # CHUNK queries) against each surface's own evaluate / derivatives
-    from splinekit.tessellation.batch import CHUNK, SurfaceBatch
+    # the tessellator's batch evaluator (every face at once, in blocks of CHUNK queries) against
+    # each surface's own evaluate / derivatives
+    from splinekit.tessellation.batch import CHUNK, SPARSE_FROM, SurfaceBatch
 
     rng = np.random.default_rng(3)
     surfaces = [f.surface for f in primitives.plate_with_holes(40.0, 30.0, 5.0, [(10, 10, 4)]).faces]
@@ -147,20 +147,21 @@ def test_batch_evaluator_matches_each_surfaces_own_evaluator():
     net = np.stack([*np.meshgrid(g, g, indexing="ij"), 0.2 * rng.standard_normal((7, 7))], axis=-1)
     surfaces.append(sk.NurbsSurface(3, 2, [0, 0, 0, 0, 0.3, 0.6, 0.8, 1, 1, 1, 1], [0, 0, 0, 0.2, 0.4, 0.5, 0.7, 1, 1, 1],
                                     net, rng.uniform(0.5, 2.0, (7, 7))))  # fmt: skip
-    n = 2 * CHUNK + 123
-    k = rng.integers(0, len(surfaces), n)
-    dom = np.array([s.domain for s in surfaces])
-    u = rng.uniform(dom[k, 0, 0], dom[k, 0, 1])
-    v = rng.uniform(dom[k, 1, 0], dom[k, 1, 1])
     batch = SurfaceBatch(surfaces)
-    X = batch.evaluate(k, u, v)
-    S, Su, Sv = batch.partials(k, u, v)
-    for i, s in enumerate(surfaces):
-        sel = k == i
-        D = s.derivatives(u[sel], v[sel], 1)
-        scale = np.abs(s.control_points).max()
-        for got, want in ((X[sel], D[0, 0]), (S[sel], D[0, 0]), (Su[sel], D[1, 0]), (Sv[sel], D[0, 1])):
-            np.testing.assert_allclose(got, want, rtol=0, atol=1e-11 * scale * max(1.0, np.abs(want).max() / scale))
+    dom = np.array([s.domain for s in surfaces])
+    assert 300 < SPARSE_FROM < 2 * CHUNK // 10
+    for n in (300, 2 * CHUNK + 123):  # gathered nets for small blocks, sparse products for large ones
+        k = rng.integers(0, len(surfaces), n)
+        u = rng.uniform(dom[k, 0, 0], dom[k, 0, 1])
+        v = rng.uniform(dom[k, 1, 0], dom[k, 1, 1])
+        X = batch.evaluate(k, u, v)
+        S, Su, Sv = batch.partials(k, u, v)
+        for i, s in enumerate(surfaces):
+            sel = k == i
+            D = s.derivatives(u[sel], v[sel], 1)
+            scale = np.abs(s.control_points).max()
+            for got, want in ((X[sel], D[0, 0]), (S[sel], D[0, 0]), (Su[sel], D[1, 0]), (Sv[sel], D[0, 1])):
+                np.testing.assert_allclose(got, want, rtol=0, atol=1e-11 * scale * max(1.0, np.abs(want).max() / scale))
 
 
 def test_shared_edges_use_the_same_vertices():
