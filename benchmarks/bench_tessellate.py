@@ -100,8 +100,13 @@ time / splinekit's at the same measured deviation; triangle ratio = splinekit's 
   114 s), torus 1.5x / 3.2x / 17.8x, with 0.28-0.41 of OCC's triangles (torus at 1e-1: 1.5x
   its triangles, at a deviation 0.07 against OCC's 0.12 of the tolerance);
 * small analytic parts at 1e-1 ... 1e-3: 0.37-0.96x (ours 2.9-4.9 ms, OCC 1.1-4.3 ms), at 1e-4
-  2.2-8.8x, at 1e-5 16-113x; filleted box (26 faces) 0.7x, 0.7x, 1.3x, 5.4x (1e-1 ... 1e-4);
-  0.44-1.03 of OCC's triangles everywhere.
+  2.2-8.8x, at 1e-5 16-113x; filleted box (26 faces) 0.7x, 0.7x, 1.3x, 5.4x, 16x (1e-1 ...
+  1e-5); foreign STEP files at 1e-3 0.23-1.35x (the slowest, ideas_io1_allbspline: 80 ms
+  against 18.5 ms, not profiled yet); 0.40-0.99 of OCC's triangles where OCC's deviation
+  reached ours. Where it did not (the search is secant steps on a deviation that jumps with
+  the discrete edge counts: box with a hole and box - cylinder at 1e-3, the torus at 1e-1,
+  now marked "(above)"), OCC's mesh is the coarser one and its triangle count (0.97x, 0.89x,
+  0.66x of ours) is not at equal deviation.
 
 Peers (part 1): ``BRepMesh_IncrementalMesh`` on the same geometry (faces built with
 ``splinekit.occ.to_occ`` + ``BRepBuilderAPI_MakeFace``, one compound, angular deflection 0.5 rad =
