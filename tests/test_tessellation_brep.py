@@ -164,6 +164,27 @@ def test_batch_evaluator_matches_each_surfaces_own_evaluator():
                 np.testing.assert_allclose(got, want, rtol=0, atol=1e-11 * scale * max(1.0, np.abs(want).max() / scale))
 
 
+def test_curve_batch_matches_each_curves_own_derivatives():
+    # the pcurve batch (used to project edge samples onto every face's pcurve at once) against
+    # each curve's own evaluate / derivatives: rational and polynomial, several spans and degrees
+    from splinekit.tessellation.batch import CurveBatch
+
+    rng = np.random.default_rng(5)
+    curves = [sk.NurbsCurve(2, [0, 0, 0, 0.5, 0.5, 1, 1, 1], rng.standard_normal((5, 2)), rng.uniform(0.5, 2.0, 5)),
+              sk.BSplineCurve(3, [0, 0, 0, 0, 0.2, 0.7, 1, 1, 1, 1], rng.standard_normal((6, 2))),
+              line((0.0, 1.0), (2.0, -1.0))]  # fmt: skip
+    batch = CurveBatch(curves)
+    k = rng.integers(0, len(curves), 500)
+    dom = np.array([c.domain for c in curves])
+    t = rng.uniform(dom[k, 0], dom[k, 1])
+    C, dC = batch.partials(k, t)
+    np.testing.assert_array_equal(C, batch.evaluate(k, t))
+    for i, c in enumerate(curves):
+        D = c.derivatives(t[k == i], 1)
+        np.testing.assert_allclose(C[k == i], D[0], rtol=0, atol=1e-12)
+        np.testing.assert_allclose(dC[k == i], D[1], rtol=0, atol=1e-11 * max(1.0, np.abs(D[1]).max()))
+
+
 def test_shared_edges_use_the_same_vertices():
     solid = primitives.box_with_hole(20.0, 4.0)
     mesh = sk.tessellate(solid, 1e-2)

@@ -111,20 +111,33 @@ class CurveBatch:
         return p, self.first_row[k] + np.arange(self.breaks.count[k])
 
     def evaluate(self, k, t):
+        """``(n, dim)`` points of curves ``k`` ``(n,)`` at ``t`` ``(n,)`` each."""
+        return self._run(k, t, False)
+
+    def partials(self, k, t):
+        """``(C, dC/dt)`` ``(n, dim)`` each: points and first derivatives in the curves' parameters."""
+        return self._run(k, t, True)
+
+    def _run(self, k, t, partial):
         k = np.asarray(k, dtype=np.int64)
         t = np.asarray(t, dtype=np.float64)
-        out = np.empty((t.size, self.dim))
+        out = [np.empty((t.size, self.dim)) for _ in range(2 if partial else 1)]
         if t.size == 0:
-            return out
+            return tuple(out) if partial else out[0]
         j, s = self.breaks.locate(k, t)
         row = self.breaks.first[k] + (j - self.breaks.start[k])
         deg = self.degree[k]
         for p in np.unique(deg):
             sel = np.flatnonzero(deg == p) if len(self.segs) > 1 else slice(None)
-            B = _bernstein(int(p), s[sel])  # (p + 1, n)
-            h = np.einsum("in,nik->nk", B, self.segs[int(p)][row[sel]])
-            out[sel] = h[:, :-1] / h[:, -1:]
-        return out
+            segs = self.segs[int(p)][row[sel]]
+            h = np.einsum("in,nik->nk", _bernstein(int(p), s[sel]), segs)  # (n, dim + 1) homogeneous
+            C = h[:, :-1] / h[:, -1:]
+            out[0][sel] = C
+            if partial:  # quotient rule, then local -> curve parameter
+                dh = np.einsum("in,nik->nk", _bernstein_d(int(p), s[sel]), segs)
+                width = (self.breaks.b - self.breaks.a)[j[sel]]
+                out[1][sel] = (dh[:, :-1] - dh[:, -1:] * C) / (h[:, -1:] * width[:, None])
+        return tuple(out) if partial else out[0]
 
 
 def _homogeneous(curve):
