@@ -716,3 +716,20 @@ def test_subdivision_surface_with_extraordinary_vertices_tessellates_closed(leve
     m = sk.tessellate(surface, 1e-3, relative=True, levels=levels)
     assert m.max_deviation <= m.tolerance
     assert_closed_manifold(m, genus=1)
+
+
+def test_cached_patch_preparation_matches_a_fresh_one():
+    """The tolerance-independent preparation of a patch set is cached on its first patch: a
+    repeated call, and a call at another tolerance, give the meshes that copies of the same
+    patches (no cache) give, and another patch set sharing the first patch does not reuse it."""
+    patches = sphere_patches()
+    for tol in (1e-2, 1e-3, 1e-2):
+        cached = tessellate(patches, tol)
+        fresh = tessellate([pickle.loads(pickle.dumps(p)) for p in patches], tol)
+        np.testing.assert_array_equal(cached.vertices, fresh.vertices)
+        np.testing.assert_array_equal(np.asarray(cached.faces), np.asarray(fresh.faces))
+        assert cached.is_closed
+    part = tessellate(patches[:3], 1e-2)
+    assert part.n_faces < cached.n_faces and not part.is_closed
+    again = tessellate(patches, 1e-2)
+    np.testing.assert_array_equal(np.asarray(again.faces), np.asarray(cached.faces))

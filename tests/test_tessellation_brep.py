@@ -115,6 +115,76 @@ def test_triangle_count_scales_like_the_inverse_tolerance():
     assert 5 < n2 / n1 < 20
 
 
+@pytest.mark.parametrize("rel", [1e-1, 1e-2, 1e-3, 1e-4, 1e-5])
+def test_planar_faces_need_no_interior_points(rel):
+    # a box: six rectangles, two triangles each, at every tolerance
+    mesh = sk.tessellate(primitives.box(2.0, 3.0, 5.0), rel, relative=True)
+    assert (mesh.n_faces, len(mesh.vertices)) == (12, 8)
+    assert mesh.max_deviation <= 1e-14 * 6.2  # planes: rounding only
+    assert math.isclose(mesh.volume, 30.0, rel_tol=1e-12)
+    # a box with a through hole: every vertex is a corner of the box or lies on the hole's
+    # circle (the planar faces are triangulated from their trims alone), and the volume lies
+    # within the bound the tolerance gives
+    make, volume, area, _ = SOLIDS["box_with_hole"]
+    mesh = sk.tessellate(make(), rel, relative=True)
+    V = mesh.vertices
+    corner = (np.abs(np.abs(V) - 10.0) < 1e-9).all(axis=1)
+    on_hole = np.abs(np.hypot(V[:, 0], V[:, 1]) - 4.0) < 1e-9
+    assert (corner | on_hole).all()
+    assert corner.sum() == 8
+    assert mesh.is_closed and abs(mesh.volume - volume) <= area * mesh.tolerance
+
+
+def test_batch_evaluator_matches_each_surfaces_own_evaluator():
+    # the tessellator's batch evaluator (every face at once, in blocks of CHUNK queries) against
+    # each surface's own evaluate / derivatives
+    from splinekit.tessellation.batch import CHUNK, SPARSE_FROM, SurfaceBatch
+
+    rng = np.random.default_rng(3)
+    surfaces = [f.surface for f in primitives.plate_with_holes(40.0, 30.0, 5.0, [(10, 10, 4)]).faces]
+    surfaces += [primitives.sphere(1.5).faces[0].surface, primitives.torus(2.0, 0.6).faces[0].surface]
+    g = np.linspace(0.0, 1.0, 7)
+    net = np.stack([*np.meshgrid(g, g, indexing="ij"), 0.2 * rng.standard_normal((7, 7))], axis=-1)
+    surfaces.append(sk.NurbsSurface(3, 2, [0, 0, 0, 0, 0.3, 0.6, 0.8, 1, 1, 1, 1], [0, 0, 0, 0.2, 0.4, 0.5, 0.7, 1, 1, 1],
+                                    net, rng.uniform(0.5, 2.0, (7, 7))))  # fmt: skip
+    batch = SurfaceBatch(surfaces)
+    dom = np.array([s.domain for s in surfaces])
+    assert 300 < SPARSE_FROM < 2 * CHUNK // 10
+    for n in (300, 2 * CHUNK + 123):  # gathered nets for small blocks, sparse products for large ones
+        k = rng.integers(0, len(surfaces), n)
+        u = rng.uniform(dom[k, 0, 0], dom[k, 0, 1])
+        v = rng.uniform(dom[k, 1, 0], dom[k, 1, 1])
+        X = batch.evaluate(k, u, v)
+        S, Su, Sv = batch.partials(k, u, v)
+        for i, s in enumerate(surfaces):
+            sel = k == i
+            D = s.derivatives(u[sel], v[sel], 1)
+            scale = np.abs(s.control_points).max()
+            for got, want in ((X[sel], D[0, 0]), (S[sel], D[0, 0]), (Su[sel], D[1, 0]), (Sv[sel], D[0, 1])):
+                np.testing.assert_allclose(got, want, rtol=0, atol=1e-11 * scale * max(1.0, np.abs(want).max() / scale))
+
+
+def test_curve_batch_matches_each_curves_own_derivatives():
+    # the pcurve batch (used to project edge samples onto every face's pcurve at once) against
+    # each curve's own evaluate / derivatives: rational and polynomial, several spans and degrees
+    from splinekit.tessellation.batch import CurveBatch
+
+    rng = np.random.default_rng(5)
+    curves = [sk.NurbsCurve(2, [0, 0, 0, 0.5, 0.5, 1, 1, 1], rng.standard_normal((5, 2)), rng.uniform(0.5, 2.0, 5)),
+              sk.BSplineCurve(3, [0, 0, 0, 0, 0.2, 0.7, 1, 1, 1, 1], rng.standard_normal((6, 2))),
+              line((0.0, 1.0), (2.0, -1.0))]  # fmt: skip
+    batch = CurveBatch(curves)
+    k = rng.integers(0, len(curves), 500)
+    dom = np.array([c.domain for c in curves])
+    t = rng.uniform(dom[k, 0], dom[k, 1])
+    C, dC = batch.partials(k, t)
+    np.testing.assert_array_equal(C, batch.evaluate(k, t))
+    for i, c in enumerate(curves):
+        D = c.derivatives(t[k == i], 1)
+        np.testing.assert_allclose(C[k == i], D[0], rtol=0, atol=1e-12)
+        np.testing.assert_allclose(dC[k == i], D[1], rtol=0, atol=1e-11 * max(1.0, np.abs(D[1]).max()))
+
+
 def test_shared_edges_use_the_same_vertices():
     solid = primitives.box_with_hole(20.0, 4.0)
     mesh = sk.tessellate(solid, 1e-2)

@@ -75,8 +75,9 @@ def initial_counts(cellsets, tol, angle_tol, bounds=None):
             with np.errstate(divide="ignore", invalid="ignore"):
                 a = np.maximum(a, np.where(Lu > 0, Muu / (Lu * angle_tol), 0.0))
                 b = np.maximum(b, np.where(Lv > 0, Mvv / (Lv * angle_tol), 0.0))
-        nu.append(np.clip(np.ceil(np.nan_to_num(a, nan=MAX_COUNT, posinf=MAX_COUNT)), 1, MAX_COUNT))
-        nv.append(np.clip(np.ceil(np.nan_to_num(b, nan=MAX_COUNT, posinf=MAX_COUNT)), 1, MAX_COUNT))
+        # NaN (an unbounded cell) counts as the most steps; clip takes +inf to MAX_COUNT
+        nu.append(np.clip(np.ceil(np.where(np.isnan(a), MAX_COUNT, a)), 1, MAX_COUNT))
+        nv.append(np.clip(np.ceil(np.where(np.isnan(b), MAX_COUNT, b)), 1, MAX_COUNT))
     return np.concatenate(nu).astype(np.int64), np.concatenate(nv).astype(np.int64)
 
 

@@ -206,7 +206,7 @@ def sample_groups(uses, groups, scales, tol, angle_tol, surfaces, pc, memo=None)
         uv = pc.evaluate(ui[who], t)
         pole = surfaces.evaluate(face[ui], ends[:, 0, 0], ends[:, 0, 1])
         cut = np.flatnonzero(np.diff(who)) + 1
-        for k, (tk, uvk) in enumerate(zip(np.split(t, cut), np.split(uv, cut))):
+        for k, (tk, uvk) in enumerate(zip(_pieces(t, cut), _pieces(uv, cut))):
             o = out[dg[k]]
             o.points, o.params, o.uv, o.degenerate = pole[k : k + 1], {int(ui[k]): tk}, {int(ui[k]): uvk}, True
 
@@ -277,11 +277,15 @@ def sample_groups(uses, groups, scales, tol, angle_tol, surfaces, pc, memo=None)
                               np.concatenate([uv[:, 1], mid[:, 1]]))  # fmt: skip
         on, Pm = P[: uv.shape[0]], P[uv.shape[0] :]
         off = np.linalg.norm(on - X[idx], axis=1) > 1e-2 * tol
-        if off.any():  # the affine map misses: project onto those uses' curves
-            for o in np.unique(owner[off]):
-                sel = np.flatnonzero(owner == o)
-                s[sel] = _project(uses[lu[o]], s[sel], X[idx[sel]], c[o], d[o], surfaces)
-                uv[sel] = uses[lu[o]].edge.pcurve.evaluate(s[sel])
+        if off.any():  # the affine map misses: project onto those uses' curves, all at once
+            sel = np.flatnonzero(np.isin(owner, owner[off]))  # every sample of those uses, use after use
+            o = owner[sel]
+            end = np.ones(sel.size, dtype=bool)  # a use's first and last samples are the edge's vertices
+            end[1:-1] = (o[1:-1] != o[:-2]) | (o[1:-1] != o[2:])
+            inner = sel[~end]
+            s[inner] = _project(lu[owner[inner]], s[inner], X[idx[inner]], c[owner[inner]], d[owner[inner]],
+                                face[lu[owner[inner]]], pc, surfaces)  # fmt: skip
+            uv[sel] = pc.evaluate(lu[o], s[sel])
             mid = 0.5 * (uv[useg] + uv[useg + 1])
             Pm = surfaces.evaluate(fu[useg], mid[:, 0], mid[:, 1])
             on = surfaces.evaluate(fu, uv[:, 0], uv[:, 1])
@@ -301,15 +305,22 @@ def sample_groups(uses, groups, scales, tol, angle_tol, surfaces, pc, memo=None)
         t, who = _subdivide(who[seg], t[seg], t[seg + 1], pieces)
 
     cut = np.flatnonzero(np.diff(who)) + 1
-    for k, Xk in enumerate(np.split(X, cut)):
+    for k, Xk in enumerate(_pieces(X, cut)):
         o = out[live[k]]
         o.points, o.degenerate, o.params, o.uv = Xk, False, {}, {}
     ucut = np.flatnonzero(np.diff(owner)) + 1
-    for o, (sk_, uvk) in enumerate(zip(np.split(s, ucut), np.split(uv, ucut))):
+    for o, (sk_, uvk) in enumerate(zip(_pieces(s, ucut), _pieces(uv, ucut))):
         grp = out[live[lg[o]]]
         grp.params[int(lu[o])] = sk_
         grp.uv[int(lu[o])] = uvk
     return out
+
+
+def _pieces(a, cut):
+    """``a`` cut before the indices ``cut`` (as ``np.split``, which costs several numpy calls
+    per piece: this runs for every edge of every call)."""
+    bounds = [0, *cut.tolist(), len(a)]
+    return [a[i:j] for i, j in zip(bounds[:-1], bounds[1:])]
 
 
 def _exact(k, t, has_curve, curve_of, c3, rep, pc, surfaces, face):
@@ -356,23 +367,24 @@ def _live_groups(uses, groups, live, G, face, pdom, surfaces, pc, group_of, dege
     return rep, has_curve, curve_of, c3, dom, lu, lg, flip, span_bounds
 
 
-def _project(use, s, X, c, d, surfaces, rounds: int = 6):
-    """Gauss-Newton steps moving the parameters ``s`` so that the use's surface points approach
-    ``X`` (where the affine guess is off). Surfaces through the batch evaluator, which also
-    answers slightly off the domain (pcurves of files often stray a little)."""
+def _project(k, s, X, c, d, f, pc, surfaces, rounds: int = 6):
+    """Gauss-Newton steps moving the pcurve parameters ``s`` ``(n,)`` (of pcurves ``k`` in the
+    batch ``pc``, on faces ``f``) so that the surface points approach ``X`` ``(n, 3)``, kept in
+    ``[c, d]`` (either order), where the affine guess is off. A point stops once its step is
+    negligible. Surfaces through the batch evaluator, which also answers slightly off the
+    domain (pcurves of files often stray a little)."""
     s = s.copy()
-    idx = np.arange(1, s.size - 1)  # the ends are the edge's vertices: keep them on the domain's ends
-    face = np.full(idx.size, use.f)
+    lo, hi = np.minimum(c, d), np.maximum(c, d)
+    active = np.arange(s.size)
     for _ in range(rounds):
-        if idx.size == 0:
+        if active.size == 0:
             break
-        D = use.edge.pcurve.derivatives(s[idx], 1)  # (2, k, 2)
-        S, Su, Sv = surfaces.partials(face, D[0][:, 0], D[0][:, 1])
-        F1 = Su * D[1][:, :1] + Sv * D[1][:, 1:]
-        r = X[idx] - S
+        P, dP = pc.partials(k[active], s[active])
+        S, Su, Sv = surfaces.partials(f[active], P[:, 0], P[:, 1])
+        F1 = Su * dP[:, :1] + Sv * dP[:, 1:]
+        r = X[active] - S
         denom = np.einsum("ij,ij->i", F1, F1)
         step = np.einsum("ij,ij->i", F1, r) / np.where(denom > 0, denom, 1.0)
-        s[idx] = np.clip(s[idx] + step, min(c, d), max(c, d))
-        if np.all(np.abs(step) <= 1e-14 * (abs(d - c) + 1.0)):
-            break
+        s[active] = np.clip(s[active] + step, lo[active], hi[active])
+        active = active[np.abs(step) > 1e-14 * (hi - lo + 1.0)[active]]
     return s

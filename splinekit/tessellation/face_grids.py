@@ -35,26 +35,42 @@ def face_grids(batch, tol, angle_tol, bounds=None):
     """The interior grid of every surface of ``batch`` (a :class:`.batch.SurfaceBatch`): per knot
     span row (column) the largest a-priori count of its cells, times :data:`GRID_FRACTION`, then
     lowered where the grid's MEASURED chord error allows (:func:`_measured_counts`)
-    (``bounds``: the cell sets' second-derivative bounds, when already known)."""
+    (``bounds``: the cell sets' second-derivative bounds, when already known).
+
+    A face whose every cell needs one step in both directions (a plane, or a surface flat
+    within a small fraction of the tolerance) gets its knot breaks as its grid without further
+    work: lowering never goes below one step, so the result is the same, and the planar faces
+    of a machined part (most of its faces) then cost no per-face Python work here."""
     nu, nv = initial_counts(batch.cellsets, tol, angle_tol, bounds)
     if angle_tol is not None:  # the angle criterion's own counts: a floor for the measured ones
         au, av = initial_counts(batch.cellsets, np.inf, angle_tol, bounds)
     else:
         au, av = np.ones_like(nu), np.ones_like(nv)
-    counts = []
-    for k in range(len(batch.bu)):
+    # faces whose cells all have one step per direction (cells of a face are contiguous)
+    order = np.argsort(batch.first, kind="stable")
+    top = np.maximum.reduceat(np.maximum(nu, nv), batch.first[order])
+    single = np.empty(len(order), dtype=bool)
+    single[order] = top <= 1
+    counts = {}
+    for k in np.flatnonzero(~single):
         cells = slice(batch.first[k], batch.first[k] + batch.nsu[k] * batch.nsv[k])
         shape = (batch.nsu[k], batch.nsv[k])
 
         def per_span(c, axis):
             return np.maximum(np.ceil(c[cells].reshape(shape).max(axis=axis) * GRID_FRACTION), 1).astype(np.int64)
 
-        counts.append((per_span(nu, 1), per_span(nv, 0), per_span(au, 1), per_span(av, 0)))
+        counts[k] = (per_span(nu, 1), per_span(nv, 0), per_span(au, 1), per_span(av, 0))
     lowered = _measured_counts(batch, counts, tol)
     out = []
-    for k, (cu, cv) in enumerate(lowered):
+    for k in range(len(batch.bu)):
         bu, bv = batch.bu[k], batch.bv[k]
         g = FaceGrid()
+        if single[k]:
+            g.us, g.vs = bu, bv
+            g.scale = np.array([(bu.size - 1) / (bu[-1] - bu[0]), (bv.size - 1) / (bv[-1] - bv[0])])
+            out.append(g)
+            continue
+        cu, cv = lowered[k]
         g.us, _ = span_params(bu, cu)
         g.vs, _ = span_params(bv, cv)
         # the scaled plane stays the a-priori one: edges keep their sampling, and Delaunay its
@@ -71,25 +87,26 @@ def _measured_counts(batch, counts, tol):
     so the grid is evaluated once, each span's largest second difference along u (v) gives the
     chord error of its steps (``|second difference| / 8``), and the span's count is scaled so
     that it becomes :data:`MEASURED_FRACTION` of ``tol``, never above the a-priori count nor
-    below the angle criterion's (``counts``: per face ``(cu, cv, angle cu, angle cv)``).
-    One batch evaluation of every face's grid. Returns ``[(cu, cv)]``."""
-    fs, us, vs, grids = [], [], [], []
-    for k, (cu, cv, _, _) in enumerate(counts):
+    below the angle criterion's (``counts``: face index -> ``(cu, cv, angle cu, angle cv)``).
+    One batch evaluation of every face's grid. Returns ``{face: (cu, cv)}``."""
+    if not counts:
+        return {}
+    fs, us, vs, grids = [], [], [], {}
+    for k, (cu, cv, _, _) in counts.items():
         u, _ = span_params(batch.bu[k], cu)
         v, _ = span_params(batch.bv[k], cv)
-        U, V = np.meshgrid(u, v, indexing="ij")
-        fs.append(np.full(U.size, k))
-        us.append(U.ravel())
-        vs.append(V.ravel())
-        grids.append((u, v))
+        fs.append(np.full(u.size * v.size, k))
+        us.append(np.repeat(u, v.size))
+        vs.append(np.tile(v, u.size))
+        grids[k] = (u, v)
     X = batch.evaluate(np.concatenate(fs), np.concatenate(us), np.concatenate(vs))
-    out, start = [], 0
-    for k, (cu, cv, au, av) in enumerate(counts):
+    out, start = {}, 0
+    for k, (cu, cv, au, av) in counts.items():
         u, v = grids[k]
         n = u.size * v.size
         G = X[start : start + n].reshape(u.size, v.size, 3)
         start += n
-        out.append((_lowered(G, u, batch.bu[k], cu, au, tol), _lowered(G.transpose(1, 0, 2), v, batch.bv[k], cv, av, tol)))
+        out[k] = (_lowered(G, u, batch.bu[k], cu, au, tol), _lowered(G.transpose(1, 0, 2), v, batch.bv[k], cv, av, tol))
     return out
 
 

@@ -9,7 +9,7 @@ from __future__ import annotations
 import numpy as np
 
 from .. import _kernels
-from ..basis.bernstein import all_bernstein
+from .batch import _bernstein, _bernstein_d
 
 __all__ = ["CellIndex", "fix_weak_normals"]
 
@@ -41,11 +41,9 @@ class CellIndex:
 
 def _partial_tables(s, t, p, q):
     """Bernstein values and first derivatives ``(2, p + 1, k)``, ``(2, q + 1, k)`` at the
-    local parameters ``s``, ``t`` ``(k,)``."""
-    if p == q:  # one table for both directions (values are per point)
-        B = all_bernstein(p, np.concatenate([s, t]), 1)  # (2, p + 1, 2 k)
-        return B[..., : s.size], B[..., s.size :]
-    return all_bernstein(p, s, 1), all_bernstein(q, t, 1)
+    local parameters ``s``, ``t`` ``(k,)`` (the batch evaluator's unchecked recurrences: a
+    handful of points per call, where the checked public form's argument handling dominates)."""
+    return np.stack([_bernstein(p, s), _bernstein_d(p, s)]), np.stack([_bernstein(q, t), _bernstein_d(q, t)])
 
 
 def _cell_partials(nets, s, t, p, q):

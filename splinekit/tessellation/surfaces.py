@@ -39,7 +39,9 @@ triangles):
 
 Small models spend most of their time in fixed per-call work rather than in
 evaluation, so the bookkeeping avoids sorts, sparse matrices and per-patch
-Python work where a cached table or one whole-array operation does. Once the
+Python work where a cached table or one whole-array operation does; what does
+not depend on the tolerance (steps 1 and 2, and the bounds of step 1) is
+computed once per patch set and kept on its first patch. Once the
 compiled kernels (:mod:`._kernels`) are loaded (:mod:`splinekit._kernels`: a
 large tessellation, or enough work done, loads them), the fused pass, the weld,
 the triangle remap, the vertex gathering, the pole normals and the rational
@@ -56,7 +58,7 @@ import numpy as np
 from .. import _kernels, limits
 from ..tolerances import WELD
 from .assembly import assemble, outward
-from .cells import cells_of_patches
+from .cells import cells_of_patches, second_derivative_bounds
 from .counts import MAX_COUNT, initial_counts, node_groups, propagate
 from .grids import Grid
 from .poles import CellIndex
@@ -80,31 +82,61 @@ PILOT_TARGET = 0.8
 # bounding-box diagonal.
 
 
+class _Prepared:
+    """What a patch set's tessellation needs at any tolerance, computed once per patch set and
+    kept in the first patch's ``_cache`` (surfaces are immutable): the Bézier cells and their
+    per-cell tables, the second-derivative bounds and the linked cell nodes (which depend on the
+    weld distance, i.e. on the model size only)."""
+
+    def __init__(self, patches, weld_tol):
+        self.patches, self.weld_tol = tuple(patches), weld_tol
+        self.cellsets = cellsets = cells_of_patches(patches)
+        sizes = [len(cs) for cs in cellsets]
+        self.offsets = np.concatenate([[0], np.cumsum(sizes)]).astype(np.int64)
+        self.C = C = int(self.offsets[-1])
+        self.set_of = np.repeat(np.arange(len(cellsets)), sizes)
+        self.patch_of = np.concatenate([cs.patch for cs in cellsets])
+        self.span_of = np.concatenate([cs.span for cs in cellsets])
+        self.box_of = np.concatenate([cs.box for cs in cellsets])
+        # cells of one patch are contiguous, in (iu, iv) order with iu major
+        self.n_cells = np.bincount(self.patch_of, minlength=len(patches))
+        self.first = np.full(len(patches), C, dtype=np.int64)
+        np.minimum.at(self.first, self.patch_of, np.arange(C))
+        self.nsv = np.zeros(len(patches), dtype=np.int64)
+        np.maximum.at(self.nsv, self.patch_of, self.span_of[:, 1] + 1)
+        self.labels, self.collapsed = node_groups(cellsets, self.patch_of, self.span_of, self.nsv, weld_tol)
+        self.bounds = [second_derivative_bounds(cs) for cs in cellsets]
+        self.cell_index = CellIndex(cellsets, self.offsets, self.first, self.n_cells, self.nsv, self.box_of)
+
+    @classmethod
+    def of(cls, patches, weld_tol):
+        """The cached preparation of ``patches`` (the same surface objects in the same order and
+        the same weld distance), else a new one, cached."""
+        cache = getattr(patches[0], "_cache", None)
+        prep = cache.get("tessellate_patches") if cache is not None else None
+        if not (prep is not None and prep.weld_tol == weld_tol and len(prep.patches) == len(patches)
+                and all(a is b for a, b in zip(prep.patches, patches))):  # fmt: skip
+            prep = cls(patches, weld_tol)
+            if cache is not None:
+                cache["tessellate_patches"] = prep
+        return prep
+
+
 def tessellate_patches(patches, tol: float, angle_tol, weld_scale: float) -> Tessellation:
     """Tessellate validated 3-D spline patches (see :func:`splinekit.tessellation.tessellate`).
 
     ``tol`` is the absolute chordal tolerance, ``angle_tol`` radians or None,
-    ``weld_scale`` the model size (bounding-box diagonal) used for welding.
+    ``weld_scale`` the model size (bounding-box diagonal) used for welding. The
+    tolerance-independent preparation is cached on the first patch (:class:`_Prepared`).
     """
     weld_tol = WELD * weld_scale
-    cellsets = cells_of_patches(patches)
-    sizes = [len(cs) for cs in cellsets]
-    offsets = np.concatenate([[0], np.cumsum(sizes)]).astype(np.int64)
-    C = int(offsets[-1])
-    set_of = np.repeat(np.arange(len(cellsets)), sizes)
-    patch_of = np.concatenate([cs.patch for cs in cellsets])
-    span_of = np.concatenate([cs.span for cs in cellsets])
-    box_of = np.concatenate([cs.box for cs in cellsets])
-    # cells of one patch are contiguous, in (iu, iv) order with iu major
-    n_cells = np.bincount(patch_of, minlength=len(patches))
-    first = np.full(len(patches), C, dtype=np.int64)
-    np.minimum.at(first, patch_of, np.arange(C))
-    nsv = np.zeros(len(patches), dtype=np.int64)
-    np.maximum.at(nsv, patch_of, span_of[:, 1] + 1)
-    labels, collapsed = node_groups(cellsets, patch_of, span_of, nsv, weld_tol)
+    prep = _Prepared.of(patches, weld_tol)
+    cellsets, offsets, C, set_of = prep.cellsets, prep.offsets, prep.C, prep.set_of
+    patch_of, span_of, box_of, n_cells, first, nsv = prep.patch_of, prep.span_of, prep.box_of, prep.n_cells, prep.first, prep.nsv
+    labels, collapsed = prep.labels, prep.collapsed
     any_collapsed = collapsed.any(axis=1)
     multi = n_cells[patch_of] > 1
-    nu, nv = initial_counts(cellsets, tol, angle_tol)
+    nu, nv = initial_counts(cellsets, tol, angle_tol, prep.bounds)
     done_u = np.zeros(C, dtype=np.int64)  # counts each cell was last evaluated with
     done_v = np.zeros(C, dtype=np.int64)
     record = np.full(C, -1, dtype=np.int64)  # which grid holds each cell's latest evaluation
@@ -197,7 +229,6 @@ def tessellate_patches(patches, tol: float, angle_tol, weld_scale: float) -> Tes
         grow_v = np.minimum(np.ceil(nv * np.minimum(fv * 1.15, 8.0)), MAX_COUNT).astype(np.int64)
         nu = np.where(over_u, np.maximum(grow_u, np.minimum(nu + 1, MAX_COUNT)), nu)
         nv = np.where(over_v, np.maximum(grow_v, np.minimum(nv + 1, MAX_COUNT)), nv)
-    cell_index = CellIndex(cellsets, offsets, first, n_cells, nsv, box_of)
-    mesh, welded, V, T = assemble(grids, record, collapsed, span_of, cell_index, tol, weld_tol)
+    mesh, welded, V, T = assemble(grids, record, collapsed, span_of, prep.cell_index, tol, weld_tol)
     return outward(mesh, welded, V, T)
 

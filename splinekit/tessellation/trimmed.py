@@ -327,17 +327,20 @@ def tessellate_faces(faces, tol: float, angle_tol, size: float) -> Tessellation:
 
     # boundary points and segments (each loop closed on itself)
     pts = _Points()
-    segs, seg_loop = [], []
-    n = 0
+    seg_loop = []
+    sizes = []
     for f, face_loops in enumerate(loops):
         for l, (uv, xyz, vid) in enumerate(face_loops):
-            k = len(uv)
-            idx = np.arange(n, n + k)
-            segs.append(np.column_stack([idx, np.roll(idx, -1)]))
-            seg_loop.append(np.full(k, l))
+            sizes.append(len(uv))
+            seg_loop.append(l)
             pts.add(f, uv, xyz, vid)
-            n += k
-    segs, seg_loop = np.concatenate(segs), np.concatenate(seg_loop)
+    sizes = np.array(sizes)
+    seg_loop = np.repeat(seg_loop, sizes)
+    point = np.arange(int(sizes.sum()))
+    after = point + 1
+    ends = np.cumsum(sizes)
+    after[ends - 1] = ends - sizes  # the last point of a loop is followed by its first
+    segs = np.column_stack([point, after])
     pface, puv, pxyz, pvid = pts.arrays()
     nb = len(pface)
     dense = _densify(layout.place(pface, puv), segs, 0.5 * CLEARANCE)
