@@ -1,0 +1,226 @@
+"""Representations on the surface itself: the exact patches (refined by knot insertion, the same
+surface with more control points) and a point cloud of exact samples with their normals."""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+from ..brep import Shell, Solid, TrimmedFace
+from ..closest import project
+from ..diffgeom import curvature
+from ..mesh.components import genus
+from ..pointcloud.analysis import curvature as cloud_curvature
+from ..surfaces import BSplineSurface, NurbsSurface
+from ..tessellation import tessellate
+from .holder import Holder, bend
+
+__all__ = ["ExactPatches", "PointCloud"]
+
+
+def _as_spline(p):
+    """A Bézier patch as the equal B-spline / NURBS patch (knot insertion needs knots)."""
+    if hasattr(p, "refine"):
+        return p
+    knots_u = [0.0] * (p.degree_u + 1) + [1.0] * (p.degree_u + 1)
+    knots_v = [0.0] * (p.degree_v + 1) + [1.0] * (p.degree_v + 1)
+    if p.weights is None:
+        return BSplineSurface(p.degree_u, p.degree_v, knots_u, knots_v, p.control_points)
+    return NurbsSurface(p.degree_u, p.degree_v, knots_u, knots_v, p.control_points, p.weights)
+
+
+def _with_points(p, points):
+    """Patch ``p`` with its Cartesian control points replaced (weights kept)."""
+    if p.weights is None:
+        return BSplineSurface(p.degree_u, p.degree_v, p.knots_u, p.knots_v, points)
+    return NurbsSurface(p.degree_u, p.degree_v, p.knots_u, p.knots_v, points, p.weights)
+
+
+def _refine(p, spans: int):
+    """``p`` with ``spans - 1`` knots inserted evenly in each direction (the same surface)."""
+    p = _as_spline(p)
+    if spans == 1:
+        return p
+    (u0, u1), (v0, v1) = p.domain
+    t = np.arange(1, spans) / spans
+    return p.refine(u0 + (u1 - u0) * t, "u").refine(v0 + (v1 - v0) * t, "v")
+
+
+def _by_patch(patch, fn, n_out):
+    """``out[i] = fn(patch_index, selection)`` for each patch index present: one batched call per patch."""
+    out = np.empty((len(patch), n_out)) if n_out else np.empty(len(patch))
+    order = np.argsort(patch, kind="stable")
+    bounds = np.flatnonzero(np.diff(patch[order])) + 1
+    for sel in np.split(order, bounds):
+        if sel.size:
+            out[sel] = fn(int(patch[sel[0]]), sel)
+    return out
+
+
+class ExactPatches(Holder):
+    """The exact patches with every knot span split into ``resolution`` spans per direction by
+    knot insertion: the same surface, more control points. Holds control points, weights and
+    knots. Closest points: the patch of the nearest reference triangle, then Newton point
+    inversion on it (:func:`splinekit.project`); inside/outside: B-rep classification
+    (:meth:`splinekit.brep.Solid.contains`)."""
+
+    name = "exact patches"
+    resolution_name = "spans per knot span"
+    default_resolutions = (1, 2, 4)
+    not_applicable = {}
+
+    def __init__(self, shape, reference, resolution):
+        self.resolution = int(resolution)
+        self.reference = reference
+        self.patches = [_refine(p, self.resolution) for p in shape.patches]
+        parts = {"control_points": [p.control_points.ravel() for p in self.patches],
+                 "knots": [np.concatenate([p.knots_u, p.knots_v]) for p in self.patches],
+                 "weights": [p.weights.ravel() for p in self.patches if p.weights is not None]}
+        self.arrays = {k: np.concatenate(v) if v else np.empty(0) for k, v in parts.items()}
+        self.solid = Solid([Shell([TrimmedFace(p) for p in self.patches])])
+        self.solid.contains(reference.points[:1])  # builds the classifier's structures (build time)
+        self.linear = float(self.resolution)
+
+    @staticmethod
+    def estimate_bytes(shape, reference, resolution):
+        return len(shape.patches) * (int(resolution) + 3) ** 2 * 24.0 * 4
+
+    # -- queries ---------------------------------------------------------------------------
+    def random_parameters(self, n, rng):
+        return rng.integers(0, len(self.patches), n), rng.random((n, 2))
+
+    def _uv(self, patch, uv):
+        (u0, u1), (v0, v1) = self.patches[patch].domain
+        return u0 + (u1 - u0) * uv[:, 0], v0 + (v1 - v0) * uv[:, 1]
+
+    def point(self, patch, uv):
+        """Points from parameters: patch index ``(n,)`` and ``(u, v)`` in the unit square ``(n, 2)``."""
+        return _by_patch(patch, lambda i, s: self.patches[i].evaluate(*self._uv(i, uv[s])), 3)
+
+    def inside(self, points):
+        return self.solid.contains(points) > 0
+
+    def _project(self, points):
+        """``(closest points (n, 3), unit normals (n, 3))``: Newton on the patch of the nearest
+        reference triangle."""
+        tri = self.reference.distance.query(points)[2]
+        patch = np.asarray(self.reference.mesh.face_patch)[tri]
+        out = np.empty((len(points), 6))
+
+        def one(i, s):
+            pr = project(self.patches[i], points[s])
+            d = self.patches[i].derivatives(pr.parameters[:, 0], pr.parameters[:, 1], 1)
+            n = np.cross(d[1, 0], d[0, 1])
+            n *= self.reference.flip / np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-300)
+            return np.hstack([pr.points, n])
+
+        out = _by_patch(patch, one, 6)
+        return out[:, :3], out[:, 3:]
+
+    def closest(self, points):
+        return self._project(points)[0]
+
+    def normal(self, points):
+        return self._project(points)[1]
+
+    def _at_reference(self, fn, n_out):
+        ref = self.reference
+        return _by_patch(ref.patch, lambda i, s: fn(self.patches[i], ref.uv[s, 0], ref.uv[s, 1]), n_out)
+
+    def distance(self, points):
+        """At the reference samples only: ``|S(u, v) - S_refined(u, v)|`` at the same parameters
+        (knot insertion keeps the parametrization), an upper bound of the distance."""
+        return np.linalg.norm(self._at_reference(lambda p, u, v: p.evaluate(u, v), 3) - self.reference.points, axis=1)
+
+    def surface_points(self, n, rng):
+        return self.point(*self.random_parameters(n, rng))
+
+    def mean_curvature(self, points):
+        """``|H|`` from the exact second fundamental form at the reference samples' parameters."""
+        return self._at_reference(lambda p, u, v: np.abs(curvature(p, u, v).mean), 0)
+
+    def volume(self):
+        return abs(float(Shell([TrimmedFace(p) for p in self.patches]).volume(1e-8)))
+
+    def genus(self):
+        """Genus of the patches sewn along shared edges (through a coarse tessellation)."""
+        return genus(tessellate(self.patches, 1e-2 * self.reference.diagonal))
+
+    def bent_distance(self, exact_points, radius):
+        """Bend the control points (the usual approximation: a bend is not a projective map, so
+        the bent patches are not the bent surface); ``|bend(S) - S_bent|`` at the same parameters."""
+        bent = [_with_points(p, bend(p.control_points.reshape(-1, 3), radius).reshape(p.control_points.shape))
+                for p in self.patches]
+        ref = self.reference
+        got = _by_patch(ref.patch, lambda i, s: bent[i].evaluate(ref.uv[s, 0], ref.uv[s, 1]), 3)
+        return np.linalg.norm(got - bend(ref.points, radius), axis=1)
+
+
+class PointCloud(Holder):
+    """``resolution`` points drawn uniformly by area on the exact patches, with exact outward
+    normals. Closest point, normal and inside/outside come from the nearest sample (a k-d tree);
+    the cloud has no surface between its samples."""
+
+    name = "point cloud"
+    resolution_name = "points"
+    default_resolutions = (1000, 4000, 16000)
+    not_applicable = {
+        "point": "no parametrization: the samples are unordered",
+        "volume": "bounds no volume without a reconstruction",
+        "genus": "no connectivity, so no topology, without a reconstruction",
+        "render": "the renderer draws surfaces; a cloud needs a reconstruction first (splinekit.convert.points_to_mesh)",
+        "boolean": "no inside/outside region to combine without a reconstruction",
+    }
+
+    def __init__(self, shape, reference, resolution):
+        self.resolution = int(resolution)
+        rng = np.random.default_rng(0)
+        # patch by area (the reference weights), then uniform parameters within it
+        w = np.bincount(reference.patch, weights=reference.weights, minlength=len(shape.patches))
+        patch = rng.choice(len(shape.patches), self.resolution, p=w / w.sum())
+        uv = rng.random((self.resolution, 2))
+
+        def one(i, s):
+            p = shape.patches[i]
+            (u0, u1), (v0, v1) = p.domain
+            c = curvature(p, u0 + (u1 - u0) * uv[s, 0], v0 + (v1 - v0) * uv[s, 1])
+            return np.hstack([c.points, reference.flip * c.normal])
+
+        data = _by_patch(patch, one, 6)
+        self.arrays = {"points": np.ascontiguousarray(data[:, :3]), "normals": np.ascontiguousarray(data[:, 3:])}
+        self.tree = cKDTree(self.arrays["points"])
+        self.linear = float(np.sqrt(self.resolution))
+
+    @staticmethod
+    def estimate_bytes(shape, reference, resolution):
+        return int(resolution) * 400.0
+
+    def _nearest(self, points):
+        return self.tree.query(points)
+
+    def inside(self, points):
+        _, i = self._nearest(points)
+        return np.einsum("nd,nd->n", points - self.arrays["points"][i], self.arrays["normals"][i]) < 0
+
+    def closest(self, points):
+        return self.arrays["points"][self._nearest(points)[1]]
+
+    def normal(self, points):
+        return self.arrays["normals"][self._nearest(points)[1]]
+
+    def distance(self, points):
+        return self._nearest(points)[0]
+
+    def surface_points(self, n, rng):
+        pts = self.arrays["points"]
+        return pts if len(pts) <= n else pts[rng.choice(len(pts), n, replace=False)]
+
+    def mean_curvature(self, points):
+        """``|H|`` of a quadric fitted to the neighbours of the nearest sample (PCA frame)."""
+        est = cloud_curvature(self.arrays["points"], normals=self.arrays["normals"])
+        return np.abs(est.mean)[self._nearest(points)[1]]
+
+    def bent_distance(self, exact_points, radius):
+        """Bending moves every sample exactly (a pointwise map): the cloud's error is unchanged;
+        measured as the distance from the bent exact points to the bent samples."""
+        return cKDTree(bend(self.arrays["points"], radius)).query(bend(exact_points, radius))[0]
