@@ -15,13 +15,17 @@ from ..errors import SplineKitError
 from ..plot import COLOR_MODES, COLOR_SCALES
 from .build import DEFAULT_FORMATS, DEFAULT_OUTPUT, FORMATS, cmd_build
 from .check import cmd_check
+from .compare import DEFAULT_MODEL as COMPARE_MODEL
+from .compare import DEFAULT_OUTPUT as COMPARE_OUTPUT
+from .compare import cmd_compare
 from .console import Console, error_line, first_line, one_line
 from .demo import DEFAULT_PICTURE, cmd_demo
 from .info import cmd_info
 from .listing import cmd_list
 from .render import PICTURE_SUFFIXES, cmd_render
 
-COMMANDS = {"list": cmd_list, "build": cmd_build, "info": cmd_info, "render": cmd_render, "check": cmd_check, "demo": cmd_demo}
+COMMANDS = {"list": cmd_list, "build": cmd_build, "info": cmd_info, "render": cmd_render, "check": cmd_check, "demo": cmd_demo,
+            "compare": cmd_compare}
 """Command name -> ``function(args, console) -> exit status``."""
 
 
@@ -77,6 +81,18 @@ def build_parser() -> argparse.ArgumentParser:
     c.add_argument("model", nargs="?", help="model name (default: the registry's default model)")
     c.add_argument("--all", action="store_true", help="check every model (with its defaults)")
     model_options(c)
+
+    m = sub.add_parser("compare", parents=[common],
+                       help="one shape in every representation: memory, queries, accuracy, operations")
+    m.add_argument("model", nargs="?", help=f"model name, or sphere / torus (default: {COMPARE_MODEL})")
+    model_options(m)
+    m.add_argument("-o", "--output", metavar="DIR", help=f"folder for compare.md, accuracy.png and pictures/ (default: {COMPARE_OUTPUT})")
+    m.add_argument("--resolutions", action="append", metavar="NAME=V1,V2,...", default=[],
+                   help="resolutions of one representation (repeatable), e.g. 'SDF grid=24,48,96'")
+    m.add_argument("--only", metavar="LIST", help="comma-separated representations to run (default: all)")
+    m.add_argument("--samples", type=int, default=2000, help="exact sample points of the accuracy measurement (default: %(default)s)")
+    m.add_argument("--quick", action="store_true", help="two resolutions per representation (a fast smoke run)")
+    m.add_argument("--exact-boolean", action="store_true", help="also run the exact OCC boolean of the patches (slow)")
 
     d = sub.add_parser("demo", parents=[common], help="build a NURBS surface, print what was computed and draw it")
     d.add_argument("-o", "--output", metavar="PICTURE", help=f"picture to write, {pictures} (default: {DEFAULT_PICTURE})")

@@ -9,16 +9,20 @@ import importlib
 import numpy as np
 
 from .._signals import reraise_interrupt
-from ..closest import project
-from ..diffgeom import ImplicitSurface, curvature
+from ..diffgeom import curvature
 from ..implicit import Implicit, from_mesh
 from ..implicit.sampled import BYTES_PER_GRID_POINT
 from ..mesh.components import genus
+from ..tessellation import tessellate
 from .holder import Holder, bend, unbend
 
 __all__ = ["AnalyticImplicit", "NeuralImplicit", "SDFGrid", "neural_module"]
 
 _NO_PARAMETERS = "an implicit surface has no parametrization (points come from root finding)"
+CLOSEST_TOLERANCE = 1e-7
+"""Residual ``|F|`` (a distance, as a fraction of the diagonal) of the closest-point iteration."""
+MESH_FRACTION = 0.02
+"""Chordal tolerance of the mesh an SDF grid is sampled from, as a fraction of about its spacing."""
 MESH_CELLS = 96
 """Cells along the longest side of the box the analytic and neural zero sets are meshed in."""
 
@@ -52,7 +56,8 @@ class ImplicitHolder(Holder):
         return self.f(points) < 0
 
     def closest(self, points):
-        return project(self.f, points).points
+        """Newton steps along the gradient to ``|F| <=`` :data:`CLOSEST_TOLERANCE` x diagonal."""
+        return self.f.closest_points(points, tol=CLOSEST_TOLERANCE * self.diagonal)
 
     def normal(self, points):
         return self.f.normal(points)
@@ -87,17 +92,19 @@ class ImplicitHolder(Holder):
 
     def bent_distance(self, exact_points, radius):
         """A bend of an implicit is a domain warp ``F(unbend(x))``: its zero set is exactly the
-        bent zero set, though it is no longer a distance. Measured: ``|x - q|`` for the bent
-        exact points ``x``, ``q`` the warped function's zero-set point found from ``x``."""
-        warped = ImplicitSurface(lambda x: self.f(unbend(x, radius)))
+        bent zero set, though it is no longer a distance. Measured: the warp evaluated at the
+        bent exact points, and ``|bend(p) - bend(q)|`` with ``q`` the zero-set point nearest
+        ``p`` (``bend(q)`` lies on the warped zero set: an upper bound of the distance)."""
         x = bend(exact_points, radius)
-        return np.linalg.norm(x - project(warped, x).points, axis=1)
+        self.f(unbend(x, radius))  # what using the bent shape costs: one warped evaluation
+        return np.linalg.norm(x - bend(self.closest(exact_points), radius), axis=1)
 
 
 class SDFGrid(ImplicitHolder):
-    """Exact signed distances of the reference tessellation sampled on a grid with
-    ``resolution`` samples along the longest side (:func:`splinekit.implicit.from_mesh`),
-    trilinear between samples; tricubic (Catmull-Rom) for curvature, which needs a Hessian."""
+    """Exact signed distances of a tessellation sampled on a grid with ``resolution`` samples
+    along the longest side (:func:`splinekit.implicit.from_mesh`), trilinear between samples;
+    tricubic (Catmull-Rom) for curvature, which needs a Hessian. The tessellation's tolerance is
+    :data:`MESH_FRACTION` of the spacing (fewer triangles: from_mesh's cost grows with them)."""
 
     name = "SDF grid"
     resolution_name = "samples per side"
@@ -105,7 +112,9 @@ class SDFGrid(ImplicitHolder):
 
     def __init__(self, shape, reference, resolution):
         self.resolution = int(resolution)
-        self.f = from_mesh(reference.mesh, self.resolution)
+        self.diagonal = reference.diagonal
+        tolerance = max(reference.tolerance, MESH_FRACTION * reference.diagonal / self.resolution)
+        self.f = from_mesh(tessellate(list(shape.patches), tolerance), self.resolution)
         self.spacing = float(self.f.spacing.max())
         self.arrays = {"values": self.f.values}
         self._zero_set(self.spacing)
@@ -128,6 +137,7 @@ class AnalyticImplicit(ImplicitHolder):
 
     def __init__(self, shape, reference, resolution):
         self.resolution = 1
+        self.diagonal = reference.diagonal
         self.f = shape.implicit
         numbers = [np.asarray(v, dtype=float) for k, v in vars(self.f).items()
                    if not k.startswith("_") and isinstance(v, (float, np.ndarray))]  # centre, axis, radii
@@ -160,6 +170,7 @@ class NeuralImplicit(ImplicitHolder):
         if module is None:
             raise RuntimeError(why)
         self.resolution = int(resolution)
+        self.diagonal = reference.diagonal
         model = module.NeuralSDF.fit(reference.mesh, steps=self.resolution, seed=0)
         self.model = model
         self.f = model if isinstance(model, Implicit) else _Callable(model, _padded(reference.bounds))

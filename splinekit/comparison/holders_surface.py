@@ -37,13 +37,17 @@ def _with_points(p, points):
 
 
 def _refine(p, spans: int):
-    """``p`` with ``spans - 1`` knots inserted evenly in each direction (the same surface)."""
+    """``p`` with every knot span split into ``spans`` equal spans in each direction (the same surface)."""
     p = _as_spline(p)
     if spans == 1:
         return p
-    (u0, u1), (v0, v1) = p.domain
     t = np.arange(1, spans) / spans
-    return p.refine(u0 + (u1 - u0) * t, "u").refine(v0 + (v1 - v0) * t, "v")
+
+    def inside(knots, degree):
+        breaks = np.unique(knots[degree:len(knots) - degree])
+        return (breaks[:-1, None] + np.diff(breaks)[:, None] * t).ravel()
+
+    return p.refine(inside(p.knots_u, p.degree_u), "u").refine(inside(p.knots_v, p.degree_v), "v")
 
 
 def _by_patch(patch, fn, n_out):
