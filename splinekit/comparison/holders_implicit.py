@@ -10,6 +10,7 @@ import numpy as np
 
 from .._signals import reraise_interrupt
 from ..diffgeom import curvature
+from ..errors import ConvergenceError
 from ..implicit import Implicit, from_mesh
 from ..implicit.sampled import BYTES_PER_GRID_POINT
 from ..mesh.components import genus
@@ -21,6 +22,7 @@ __all__ = ["AnalyticImplicit", "NeuralImplicit", "SDFGrid", "neural_module"]
 _NO_PARAMETERS = "an implicit surface has no parametrization (points come from root finding)"
 CLOSEST_TOLERANCE = 1e-7
 """Residual ``|F|`` (a distance, as a fraction of the diagonal) of the closest-point iteration."""
+FALLBACK_STEPS = 20
 MESH_FRACTION = 0.02
 """Chordal tolerance of the mesh an SDF grid is sampled from, as a fraction of about its spacing."""
 MESH_CELLS = 96
@@ -56,8 +58,19 @@ class ImplicitHolder(Holder):
         return self.f(points) < 0
 
     def closest(self, points):
-        """Newton steps along the gradient to ``|F| <=`` :data:`CLOSEST_TOLERANCE` x diagonal."""
-        return self.f.closest_points(points, tol=CLOSEST_TOLERANCE * self.diagonal)
+        """Newton steps along the gradient to ``|F| <=`` :data:`CLOSEST_TOLERANCE` x diagonal
+        (:meth:`Implicit.closest_points`). Where they do not get there (a trilinear grid is
+        only C0: the steps can cycle across a cell face), the iterates after
+        :data:`FALLBACK_STEPS` plain steps stand as the answer: the measured errors then
+        include how far from the zero set they stopped."""
+        try:
+            return self.f.closest_points(points, tol=CLOSEST_TOLERANCE * self.diagonal)
+        except ConvergenceError:
+            q = np.array(points, dtype=float)
+            for _ in range(FALLBACK_STEPS):
+                F, g = self.f(q), self.f.gradient(q)
+                q -= (F / np.maximum(np.einsum("nd,nd->n", g, g), 1e-300))[:, None] * g
+            return q
 
     def normal(self, points):
         return self.f.normal(points)

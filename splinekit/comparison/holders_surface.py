@@ -4,15 +4,15 @@ surface with more control points) and a point cloud of exact samples with their 
 from __future__ import annotations
 
 import numpy as np
+from scipy.sparse import coo_matrix
+from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
 
 from ..brep import Shell, Solid, TrimmedFace
 from ..closest import project
 from ..diffgeom import curvature
-from ..mesh.components import genus
 from ..pointcloud.analysis import curvature as cloud_curvature
 from ..surfaces import BSplineSurface, NurbsSurface
-from ..tessellation import tessellate
 from .holder import Holder, bend
 
 __all__ = ["ExactPatches", "PointCloud"]
@@ -61,17 +61,48 @@ def _by_patch(patch, fn, n_out):
     return out
 
 
+def patch_set_genus(patches, tolerance: float) -> float:
+    """Genus of a closed, connected set of patches sewn where corners and edge midpoints
+    coincide within ``tolerance``: ``chi = V - E + F`` with ``V`` the distinct corners, ``E``
+    the distinct edges that do not collapse to a point (a sphere's poles), ``F`` the patches;
+    ``genus = (2 - chi) / 2``. Assumes patches meet edge to edge (no T-junctions)."""
+    corners_uv = np.array([[0, 0], [1, 0], [1, 1], [0, 1]], dtype=float)
+    mids_uv = np.array([[0.5, 0], [1, 0.5], [0.5, 1], [0, 0.5]])
+    corners, mids, ends = [], [], []
+    for p in patches:  # eight points per patch
+        (u0, u1), (v0, v1) = p.domain
+        uv = np.vstack([corners_uv, mids_uv])
+        pts = p.evaluate(u0 + (u1 - u0) * uv[:, 0], v0 + (v1 - v0) * uv[:, 1])
+        corners.append(pts[:4])
+        mids.append(pts[4:])
+        ends.append(np.stack([pts[:4], np.roll(pts[:4], -1, axis=0)], axis=1))
+    corners, mids, ends = np.concatenate(corners), np.concatenate(mids), np.concatenate(ends)
+
+    def distinct(points):  # groups of points closer than the tolerance, chained
+        pairs = cKDTree(points).query_pairs(tolerance, output_type="ndarray")
+        graph = coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(len(points),) * 2)
+        return connected_components(graph, directed=False)[0]
+
+    collapsed = (np.linalg.norm(ends[:, 0] - mids, axis=1) <= tolerance) & (np.linalg.norm(ends[:, 1] - mids, axis=1) <= tolerance)
+    chi = distinct(corners) - distinct(mids[~collapsed]) + len(patches)
+    return (2 - chi) / 2
+
+
 class ExactPatches(Holder):
     """The exact patches with every knot span split into ``resolution`` spans per direction by
     knot insertion: the same surface, more control points. Holds control points, weights and
     knots. Closest points: the patch of the nearest reference triangle, then Newton point
-    inversion on it (:func:`splinekit.project`); inside/outside: B-rep classification
-    (:meth:`splinekit.brep.Solid.contains`)."""
+    inversion on it (:func:`splinekit.project`); inside/outside: the side of the exact normal at
+    that closest point (right for points nearer the surface than its thinnest part; the B-rep
+    ray classification, :meth:`splinekit.brep.Solid.contains`, is right everywhere but spends
+    about 35 s setting up on the mug's 536 patches). Accuracy is measured at the reference
+    samples' own parameters (knot insertion keeps the parametrization)."""
 
     name = "exact patches"
     resolution_name = "spans per knot span"
     default_resolutions = (1, 2, 4)
     not_applicable = {}
+    query_points = 50  # one Newton projection per patch touched: the slowest queries here
 
     def __init__(self, shape, reference, resolution):
         self.resolution = int(resolution)
@@ -82,7 +113,6 @@ class ExactPatches(Holder):
                  "weights": [p.weights.ravel() for p in self.patches if p.weights is not None]}
         self.arrays = {k: np.concatenate(v) if v else np.empty(0) for k, v in parts.items()}
         self.solid = Solid([Shell([TrimmedFace(p) for p in self.patches])])
-        self.solid.contains(reference.points[:1])  # builds the classifier's structures (build time)
         self.linear = float(self.resolution)
 
     @staticmethod
@@ -102,7 +132,8 @@ class ExactPatches(Holder):
         return _by_patch(patch, lambda i, s: self.patches[i].evaluate(*self._uv(i, uv[s])), 3)
 
     def inside(self, points):
-        return self.solid.contains(points) > 0
+        close, normal = self._project(points)
+        return np.einsum("nd,nd->n", points - close, normal) < 0
 
     def _project(self, points):
         """``(closest points (n, 3), unit normals (n, 3))``: Newton on the patch of the nearest
@@ -139,6 +170,15 @@ class ExactPatches(Holder):
     def surface_points(self, n, rng):
         return self.point(*self.random_parameters(n, rng))
 
+    def reference_normals(self):
+        """Exact unit normals at the reference samples' parameters."""
+        def normals(p, u, v):
+            d = p.derivatives(u, v, 1)
+            n = np.cross(d[1, 0], d[0, 1])
+            return n / np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-300)
+
+        return self.reference.flip * self._at_reference(normals, 3)
+
     def mean_curvature(self, points):
         """``|H|`` from the exact second fundamental form at the reference samples' parameters."""
         return self._at_reference(lambda p, u, v: np.abs(curvature(p, u, v).mean), 0)
@@ -147,8 +187,8 @@ class ExactPatches(Holder):
         return abs(float(Shell([TrimmedFace(p) for p in self.patches]).volume(1e-8)))
 
     def genus(self):
-        """Genus of the patches sewn along shared edges (through a coarse tessellation)."""
-        return genus(tessellate(self.patches, 1e-2 * self.reference.diagonal))
+        """Genus of the patch set from its own corners and edges (:func:`patch_set_genus`)."""
+        return patch_set_genus(self.patches, 1e-6 * self.reference.diagonal)
 
     def bent_distance(self, exact_points, radius):
         """Bend the control points (the usual approximation: a bend is not a projective map, so

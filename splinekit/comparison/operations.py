@@ -17,7 +17,7 @@ from ..implicit import primitives as implicit_primitives
 from ..interop.booleans import difference
 from ..interop.exact_booleans import cut
 from ..plot import render_mesh, render_patches
-from .measure import near_points
+from .measure import QUERY_POINTS, near_points
 
 __all__ = ["BEND_RADIUS", "EXACT_BOOLEAN_NOTE", "OPERATIONS", "run_operation", "second_body"]
 
@@ -93,7 +93,7 @@ def _curvature(holder, reference):
 
 
 def _closest(holder, reference, rng):
-    exact, query = near_points(reference, 200, rng)
+    exact, query = near_points(reference, getattr(holder, "query_points", QUERY_POINTS), rng)
     seconds, got = _timed(lambda: holder.closest(query))
     return {"seconds": seconds / len(query), "error": float(np.linalg.norm(got - exact, axis=1).max()),
             "note": "seconds per point; error: largest distance from the known closest point"}

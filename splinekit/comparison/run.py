@@ -141,7 +141,7 @@ def compare(shape=None, *, representations=None, resolutions=None, samples: int 
     samples = as_int(samples, "samples", minimum=50)
     names = list(representations) if representations is not None else list(REPRESENTATIONS)
     plan = _resolutions(names, resolutions)
-    reference = Reference(shape, samples)
+    reference = Reference(shape, samples, seed)
     applicable = {name: _skip_reason(REPRESENTATIONS[name], shape) for name in names}
     for name, values in plan.items():  # every size is checked before any work
         if applicable[name] is None:

@@ -94,17 +94,19 @@ def as_shape(obj, name: str | None = None) -> Shape:
     return Shape(name or "patches", tuple(items))
 
 
-def _grid_samples(patches, per_patch: int):
-    """Exact points, unit normals, |mean curvature| and area weights on a ``k x k`` grid of cell
-    centres of every patch (``(n, 3)``, ``(n, 3)``, ``(n,)``, ``(n,)``), and ``(patch (n,), uv (n, 2))``."""
-    t = (np.arange(per_patch) + 0.5) / per_patch
+def _grid_samples(patches, per_patch: int, rng):
+    """Exact points, unit normals, |mean curvature| and area weights at one random point in each
+    cell of a ``k x k`` parameter grid of every patch (jittered: samples at cell centres would
+    line up with the vertices or face centres of a mesh made on the same grid and flatter it):
+    ``(n, 3)``, ``(n, 3)``, ``(n,)``, ``(n,)``, and ``(patch (n,), uv (n, 2))``."""
+    i, j = np.meshgrid(np.arange(per_patch), np.arange(per_patch), indexing="ij")
     out = {"points": [], "normals": [], "mean": [], "weights": [], "patch": [], "uv": []}
-    for index, p in enumerate(patches):  # one batched grid evaluation per patch
+    for index, p in enumerate(patches):  # one batched evaluation per patch
         (u0, u1), (v0, v1) = np.asarray(p.domain, dtype=float).reshape(2, 2)
-        us, vs = u0 + (u1 - u0) * t, v0 + (v1 - v0) * t
-        c = curvature(p, us, vs, grid=True)
+        U = u0 + (u1 - u0) * (i.ravel() + rng.random(i.size)) / per_patch
+        V = v0 + (v1 - v0) * (j.ravel() + rng.random(j.size)) / per_patch
+        c = curvature(p, U, V)
         area = np.sqrt(np.maximum(c.E * c.G - c.F**2, 0.0)) * (u1 - u0) * (v1 - v0) / per_patch**2
-        U, V = np.meshgrid(us, vs, indexing="ij")
         out["points"].append(c.points.reshape(-1, 3))
         out["normals"].append(c.normal.reshape(-1, 3))
         out["mean"].append(np.abs(c.mean).ravel())
@@ -143,7 +145,7 @@ class Reference:
     inside/outside and signed distances, which need a closed shape).
     """
 
-    def __init__(self, shape: Shape, samples: int = 2000):
+    def __init__(self, shape: Shape, samples: int = 2000, seed: int = 0):
         self.shape = shape
         coarse = tessellate(list(shape.patches), None, relative=False)
         if not coarse.is_closed:
@@ -158,7 +160,7 @@ class Reference:
         self.distance = MeshDistance.of_mesh(self.mesh)
         per_patch = max(2, math.ceil(math.sqrt(samples / len(shape.patches))))
         limits.check(per_patch**2 * len(shape.patches) * 120, f"{per_patch}^2 reference samples on each of {len(shape.patches)} patches")
-        s = _grid_samples(shape.patches, per_patch)
+        s = _grid_samples(shape.patches, per_patch, np.random.default_rng(seed))
         signed = Shell([TrimmedFace(p) for p in shape.patches]).volume(1e-8)
         self.flip = -1.0 if signed < 0 else 1.0  # patches facing inward: normals flipped to point out
         self.points, self.normals, self.mean_curvature = s["points"], self.flip * s["normals"], s["mean"]
