@@ -28,6 +28,11 @@ def accuracy_chart(table, path: str, title: str | None = None) -> str:
         drawn += 1
     if not drawn:
         raise ParameterError("the table has no row with both bytes and hausdorff to draw")
+    reference = getattr(table, "reference", None)
+    if reference is not None:  # distances below the reference tessellation's tolerance are not resolved
+        ax.axhline(reference.tolerance, color="0.5", linestyle="--", linewidth=0.8)
+        ax.annotate("measurement floor (reference tessellation)", (0.01, reference.tolerance), xycoords=("axes fraction", "data"),
+                    xytext=(0, 3), textcoords="offset points", fontsize=7, color="0.4")
     ax.set_xscale("log")
     ax.set_yscale("log")
     ax.set_xlabel("bytes held")

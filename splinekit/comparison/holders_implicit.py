@@ -176,7 +176,7 @@ class NeuralImplicit(ImplicitHolder):
 
     name = "neural SDF"
     resolution_name = "training steps"
-    default_resolutions = (300, 1000, 3000)
+    default_resolutions = (250, 500, 1000)
 
     def __init__(self, shape, reference, resolution):
         module, why = neural_module()
