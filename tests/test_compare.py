@@ -146,9 +146,9 @@ def test_subdivision_rows_converge_to_the_mug(mug_shape):
 # -- the whole run ------------------------------------------------------------------------------------
 def test_compare_on_the_sphere_reports_every_representation():
     t0 = time.perf_counter()
-    table = compare(sphere(), resolutions={"triangle mesh": (1e-2, 3e-3), "SDF grid": (16, 32),
+    table = compare(sphere(), resolutions={"triangle mesh": (1e-2, 3e-3), "SDF grid": (16, 24),
                                            "point cloud": (300, 1200), "exact patches": (1, 2)},
-                    samples=300)
+                    samples=200)
     assert time.perf_counter() - t0 < 120
     names = list(dict.fromkeys(table["representation"]))
     assert names == list(REPRESENTATIONS)
@@ -208,7 +208,7 @@ def test_command_writes_tables_and_chart(tmp_path):
     out = tmp_path / "cmp"
     cpu0 = _child_cpu_seconds()
     result = subprocess.run([sys.executable, "-m", "splinekit.cli", "compare", "sphere", "--quick", "--samples", "200",
-                             "--only", "triangle mesh,SDF grid,analytic implicit", "-o", str(out)],
+                             "--only", "triangle mesh,analytic implicit", "-o", str(out)],
                             capture_output=True, text=True, timeout=600)
     cpu = _child_cpu_seconds() - cpu0
     assert result.returncode == 0, result.stderr

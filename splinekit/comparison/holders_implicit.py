@@ -131,7 +131,7 @@ class SDFGrid(ImplicitHolder):
         self.spacing = float(self.f.spacing.max())
         self.arrays = {"values": self.f.values}
         self._zero_set(self.spacing)
-        self.linear = float(self.resolution)
+        self.linear = float(max(self.f.shape))  # samples along the longest side, padding included
 
     @staticmethod
     def estimate_bytes(shape, reference, resolution):
