@@ -73,12 +73,14 @@ class SubdivisionCage(MeshHolder):
     def __init__(self, shape, reference, resolution):
         self.resolution = int(resolution)
         self.surface = shape.subdivision
-        mesh, fine_surface = _refined(self.surface, self.resolution)
-        if self._limit:
-            mesh = mesh.with_vertices(fine_surface.limit_points())
-        self._index(mesh)
+        self._index(self._mesh_of(self.surface))
         self.arrays = _mesh_arrays(self.mesh)
         self.linear = 2.0**self.resolution
+
+    def _mesh_of(self, surface):
+        """The mesh this representation holds for ``surface`` at its level."""
+        mesh, fine_surface = _refined(surface, self.resolution)
+        return mesh.with_vertices(fine_surface.limit_points()) if self._limit else mesh
 
     @staticmethod
     def estimate_bytes(shape, reference, resolution):
@@ -86,12 +88,10 @@ class SubdivisionCage(MeshHolder):
 
     def bent_distance(self, exact_points, radius):
         """Bend the cage (what a modeller moves), refine, compare with the bent exact surface."""
-        from_cage = SubdivisionSurface(self.surface.mesh.with_vertices(_bend_vertices(self.surface.mesh, radius)),
-                                       "catmull-clark", **_creases_of(self.surface))
-        mesh, fine_surface = _refined(from_cage, self.resolution)
-        if self._limit:
-            mesh = mesh.with_vertices(fine_surface.limit_points())
-        return _bent_mesh_distance(mesh, exact_points, radius)
+        cage = self.surface.mesh
+        bent = SubdivisionSurface(cage.with_vertices(bend(cage.vertices, radius)), "catmull-clark",
+                                  creases=_sharp_edges(self.surface))
+        return MeshDistance.of_mesh(self._mesh_of(bent)).query(bend(exact_points, radius))[0]
 
 
 class SubdivisionLimit(SubdivisionCage):
@@ -110,15 +110,7 @@ class SubdivisionLimit(SubdivisionCage):
         return self.surface.evaluate(face, uv[:, 0], uv[:, 1])[0]
 
 
-def _creases_of(surface: SubdivisionSurface) -> dict:
+def _sharp_edges(surface: SubdivisionSurface):
     """The control mesh's edge sharpness, per edge (None when no edge is sharp)."""
     sharpness = surface.refinement(0).edge_sharpness[0]
-    return {"creases": sharpness if np.any(sharpness) else None}
-
-
-def _bend_vertices(mesh, radius):
-    return bend(mesh.vertices, radius)
-
-
-def _bent_mesh_distance(mesh, exact_points, radius):
-    return MeshDistance.of_mesh(mesh).query(bend(exact_points, radius))[0]
+    return sharpness if np.any(sharpness) else None
