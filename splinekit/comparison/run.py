@@ -58,11 +58,12 @@ def _resolutions(names, given) -> dict:
         values = [values] if np.isscalar(values) else list(values)
         if not values:
             raise ParameterError(f"representation {name!r} needs at least one resolution")
+        smallest = 0 if REPRESENTATIONS[name].resolution_name == "levels" else None  # level 0 is the cage itself
         for v in values:
-            if isinstance(v, bool) or not isinstance(v, (int, float, np.integer, np.floating)) or not math.isfinite(v) or v <= 0:
-                if not (v == 0 and REPRESENTATIONS[name].resolution_name == "levels"):
-                    raise ParameterError(f"resolution {v!r} of {name!r} must be a finite number > 0 "
-                                         f"({REPRESENTATIONS[name].resolution_name})")
+            number = isinstance(v, (int, float, np.integer, np.floating)) and not isinstance(v, bool)
+            if not (number and math.isfinite(v) and (v > 0 or v == smallest)):
+                raise ParameterError(f"resolution {v!r} of {name!r} must be a finite number > 0 "
+                                     f"({REPRESENTATIONS[name].resolution_name})")
         out[name] = values
     return out
 
