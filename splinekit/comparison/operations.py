@@ -66,8 +66,8 @@ def _boolean(holder, reference, exact_boolean, expected):
         return {"seconds": seconds, "error": abs(volume - expected()) / expected(), "note": "exact B-rep cut (OCC)"}
     if hasattr(holder, "f"):
         def csg():
-            cut = holder.f - body
-            return cut.to_mesh(getattr(holder, "spacing", reference.diagonal / 96))
+            remaining = holder.f - body
+            return remaining.to_mesh(getattr(holder, "spacing", reference.diagonal / 96))
 
         seconds, mesh = _timed(csg)
         return {"seconds": seconds, "error": abs(mesh.volume - expected()) / expected(),
