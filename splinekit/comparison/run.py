@@ -75,9 +75,10 @@ def _growth_class(slope: float, fixed: bool) -> str:
     return f"O(N^{half:g})" if half != 1 else "O(N)"
 
 
-def _growth(rows) -> list:
+def _growth(rows, floor: float) -> list:
     """One row per representation: log-log slopes of bytes and query time against the linear
-    resolution N, with the complexity class they indicate."""
+    resolution N, with the complexity class they indicate, and of bytes against the Hausdorff
+    distance (left out when a distance is within twice ``floor``, the reference's tolerance)."""
     out = []
     for name in dict.fromkeys(r["representation"] for r in rows):
         mine = [r for r in rows if r["representation"] == name and r.get("bytes")]
@@ -91,7 +92,8 @@ def _growth(rows) -> list:
                 row[f"{col}_slope"] = slope
                 row[f"{col}_class"] = _growth_class(slope, fixed and key == "bytes")
             errs = [r["hausdorff"] for r in mine if r.get("hausdorff")]
-            if len(errs) == len(mine) and np.ptp(np.log(errs)) > 0:
+            resolved = len(errs) == len(mine) and min(errs) > 2 * floor  # at the floor the error is the reference's
+            if resolved and np.ptp(np.log(errs)) > 0:
                 row["bytes_per_accuracy_slope"] = float(np.polyfit(np.log(errs), np.log([r["bytes"] for r in mine]), 1)[0])
         else:
             row["memory_class"] = "O(parameters)" if name == AnalyticImplicit.name else None
@@ -171,7 +173,7 @@ def compare(shape=None, *, representations=None, resolutions=None, samples: int 
                     middle[name] = holder
                 bar.advance()
     table = Table(rows, COLUMNS, UNITS)
-    table.growth = Table(_growth(rows))
+    table.growth = Table(_growth(rows, reference.tolerance))
     table.reference, table.shape = reference, shape
     table.operations = _operations(middle, names, applicable, reference, rng, folder, exact_boolean) if operations else None
     for r in table.rows:
