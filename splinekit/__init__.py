@@ -90,20 +90,31 @@ _siblings.install()  # splinekit's own imports of models/exporters refuse anothe
 # Subpackages imported on first attribute access, keeping ``import splinekit`` fast; ``splinekit.occ``
 # (the OpenCascade bridge, splinekit.interop.occ under its short name) loads the B-rep layer with it
 # (brep comes with the tessellation, which pairs the edges of trimmed faces with its helpers)
-_LAZY_SUBMODULES = ("analysis", "batch", "brep", "convert", "implicit", "levelset", "occ", "plot", "pointcloud")
+_LAZY_SUBMODULES = ("analysis", "batch", "brep", "comparison", "convert", "implicit", "levelset", "occ", "plot",
+                    "pointcloud")
+# Functions of lazily loaded subpackages, by name -> (subpackage, function). ``compare`` lives in
+# the package ``comparison`` (not ``compare``: importing a subpackage sets it as an attribute of
+# its parent, which would replace the function ``splinekit.compare``).
+_LAZY_FUNCTIONS = {"compare": ("comparison", "compare")}
 
 
 def __getattr__(name):
     """``splinekit.brep``, ``.implicit``, ``.pointcloud``, ``.levelset``, ``.convert``, ``.occ``,
-    ``.plot`` and ``.batch`` are imported on first use."""
+    ``.plot``, ``.analysis``, ``.batch`` and ``.comparison`` are imported on first use, and so is
+    ``splinekit.compare``."""
     if name in _LAZY_SUBMODULES:
         return _importlib.import_module(f"{__name__}.{name}")
+    if name in _LAZY_FUNCTIONS:
+        package, function = _LAZY_FUNCTIONS[name]
+        value = getattr(_importlib.import_module(f"{__name__}.{package}"), function)
+        globals()[name] = value  # later look-ups skip __getattr__
+        return value
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
 def __dir__():
-    """The module's names plus the lazily loaded subpackages (for ``dir()`` and tab completion)."""
-    return sorted(set(globals()) | set(_LAZY_SUBMODULES))
+    """The module's names plus the lazily loaded subpackages and functions (for ``dir()`` and tab completion)."""
+    return sorted(set(globals()) | set(_LAZY_SUBMODULES) | set(_LAZY_FUNCTIONS))
 
 
 __version__ = "0.1.0"
@@ -180,3 +191,5 @@ _PUBLIC = [
     "intersection",
     "union_all",
 ]
+# ``compare`` is public too, but resolved on first access (``_LAZY_FUNCTIONS``): a star import
+# would have to import the comparison package to give it, so it is left out of the list above.

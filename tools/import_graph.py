@@ -39,7 +39,7 @@ LAYERS: tuple[tuple[str, tuple[str, ...]], ...] = (
     ("tessellation", ("splinekit.tessellation",)),
     ("convert/analysis/plot", ("splinekit.convert", "splinekit.analysis", "splinekit.plot")),
     ("interop", ("splinekit.interop",)),
-    ("optional", ("splinekit.neural", "splinekit.batch", "splinekit.compare")),
+    ("optional", ("splinekit.neural", "splinekit.batch", "splinekit.comparison")),
     ("package", ("splinekit",)),
     ("exporters", ("exporters",)),
     ("models", ("models",)),

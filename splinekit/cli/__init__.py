@@ -13,6 +13,7 @@ Subcommands::
                     [--scheduler tcp://host:8786] [--force]
                                                      a parameter sweep on Dask: every variant
                                                      built, measured, exported; results table
+    splinekit compare [MODEL] [-o DIR]               one shape in every representation, measured
 
 Files go to the folder ``out`` unless ``-o`` names another place. ``--quiet`` silences
 everything but errors, ``--verbose`` adds detail and tracebacks. Errors are one line on stderr
@@ -26,7 +27,7 @@ names another module with the same registry interface (``MODELS``, ``DEFAULT_MOD
 ``get_model``, ``build_model``).
 
 One module per command (:mod:`.listing`, :mod:`.build`, :mod:`.info`, :mod:`.render`,
-:mod:`.check`, :mod:`.demo`, :mod:`.sweep`, :mod:`.analyze`), each a thin mapping from arguments to
+:mod:`.check`, :mod:`.demo`, :mod:`.sweep`, :mod:`.analyze`, :mod:`.compare`), each a thin mapping from arguments to
 library calls;
 :mod:`.app` holds the parser and :func:`main`, :mod:`.console` the output formatting,
 :mod:`.registry` the model registry.

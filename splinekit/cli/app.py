@@ -16,6 +16,9 @@ from ..plot import COLOR_MODES, COLOR_SCALES
 from .analyze import cmd_analyze
 from .build import DEFAULT_FORMATS, DEFAULT_OUTPUT, FORMATS, cmd_build
 from .check import cmd_check
+from .compare import DEFAULT_MODEL as COMPARE_MODEL
+from .compare import DEFAULT_OUTPUT as COMPARE_OUTPUT
+from .compare import cmd_compare
 from .console import Console, error_line, first_line, one_line
 from .demo import DEFAULT_PICTURE, cmd_demo
 from .info import cmd_info
@@ -25,7 +28,7 @@ from .sweep import DEFAULT_OUTPUT as SWEEP_OUTPUT
 from .sweep import cmd_sweep
 
 COMMANDS = {"list": cmd_list, "build": cmd_build, "info": cmd_info, "render": cmd_render, "check": cmd_check, "demo": cmd_demo,
-            "sweep": cmd_sweep, "analyze": cmd_analyze}
+            "sweep": cmd_sweep, "analyze": cmd_analyze, "compare": cmd_compare}
 """Command name -> ``function(args, console) -> exit status``."""
 
 
@@ -120,6 +123,17 @@ def build_parser() -> argparse.ArgumentParser:
     a.add_argument("--tolerance", metavar="T", help="chordal tolerance of the sampling in model units (default: 1e-3 of the model size)")
     a.add_argument("--size", default="1000x800", metavar="WxH", help="picture size in pixels (default: %(default)s)")
     a.add_argument("--view", default="28,-58", metavar="ELEV,AZIM", help="view angles in degrees (default: %(default)s)")
+    m = sub.add_parser("compare", parents=[common],
+                       help="one shape in every representation: memory, queries, accuracy, operations")
+    m.add_argument("model", nargs="?", help=f"model name, or sphere / torus (default: {COMPARE_MODEL})")
+    model_options(m)
+    m.add_argument("-o", "--output", metavar="DIR", help=f"folder for compare.md, accuracy.png and pictures/ (default: {COMPARE_OUTPUT})")
+    m.add_argument("--resolutions", action="append", metavar="NAME=V1,V2,...", default=[],
+                   help="resolutions of one representation (repeatable), e.g. 'SDF grid=24,48,96'")
+    m.add_argument("--only", metavar="LIST", help="comma-separated representations to run (default: all)")
+    m.add_argument("--samples", type=int, default=2000, help="exact sample points of the accuracy measurement (default: %(default)s)")
+    m.add_argument("--quick", action="store_true", help="two resolutions per representation (a fast smoke run)")
+    m.add_argument("--exact-boolean", action="store_true", help="also run the exact OCC boolean of the patches (slow)")
 
     d = sub.add_parser("demo", parents=[common], help="build a NURBS surface, print what was computed and draw it")
     d.add_argument("-o", "--output", metavar="PICTURE", help=f"picture to write, {pictures} (default: {DEFAULT_PICTURE})")
