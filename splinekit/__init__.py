@@ -88,12 +88,12 @@ _siblings.install()  # splinekit's own imports of models/exporters refuse anothe
 # Subpackages imported on first attribute access, keeping ``import splinekit`` fast; ``splinekit.occ``
 # (the OpenCascade bridge, splinekit.interop.occ under its short name) loads the B-rep layer with it
 # (brep comes with the tessellation, which pairs the edges of trimmed faces with its helpers)
-_LAZY_SUBMODULES = ("brep", "convert", "implicit", "levelset", "occ", "plot", "pointcloud")
+_LAZY_SUBMODULES = ("brep", "convert", "implicit", "levelset", "neural", "occ", "plot", "pointcloud")
 
 
 def __getattr__(name):
     """``splinekit.brep``, ``.implicit``, ``.pointcloud``, ``.levelset``, ``.convert``, ``.occ``
-    and ``.plot`` are imported on first use."""
+    ``.plot`` and ``.neural`` (optional extra: JAX) are imported on first use."""
     if name in _LAZY_SUBMODULES:
         return _importlib.import_module(f"{__name__}.{name}")
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
