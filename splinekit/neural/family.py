@@ -25,7 +25,7 @@ __all__ = ["DEFAULT_LATENT", "NeuralSDFFamily", "load"]
 
 DEFAULT_LATENT = 16
 """Length of a shape's latent code."""
-STEPS_PER_SHAPE = 1000
+STEPS_PER_SHAPE = 400
 """Default steps of a family fit per shape (at least 2000 in all)."""
 CODE_STEPS = 500
 """Default steps of :meth:`NeuralSDFFamily.fit_code`."""
@@ -122,7 +122,7 @@ class NeuralSDFFamily:
         norm = Normalization.of_box(lo, hi)
         pools = [draw_samples(t, norm, samples, seed + k) for k, t in enumerate(targets)]
         params, codes, losses = fit_network(arch, "sdf", pools, settings, seed, callback)
-        info = {"steps": settings.steps, "seed": seed, "loss": losses[-1][1], "seconds": time.perf_counter() - t0}
+        info = {"steps": settings.steps, "seed": seed, "first_loss": losses[0][1], "loss": losses[-1][1], "seconds": time.perf_counter() - t0}
         return cls(arch, params, codes, norm, info)
 
     def save(self, path) -> str:

@@ -32,9 +32,9 @@ from .training import Settings, fit_network
 
 __all__ = ["DEFAULT_SAMPLES", "DEFAULT_STEPS", "MESH_CELLS", "NeuralImplicit", "NeuralOccupancy", "NeuralSDF"]
 
-DEFAULT_STEPS = 2000
+DEFAULT_STEPS = 1000
 DEFAULT_SAMPLES = 100_000
-"""Surface points (and as many near points, and half as many uniform ones) drawn per shape."""
+"""Surface points (and as many near points and uniform points) drawn per shape."""
 MESH_CELLS = 128
 """Grid cells across the training cube of :meth:`NeuralImplicit.to_mesh` without an edge length."""
 OCCUPANCY_BOX = 100.0
@@ -132,7 +132,7 @@ class NeuralImplicit(Implicit):
     # -- training --------------------------------------------------------------------------------
     @classmethod
     def fit(cls, shape, *, steps: int = DEFAULT_STEPS, seed: int = 0, encoding: str | None = None,
-            width: int = 64, depth: int = 3, samples: int = DEFAULT_SAMPLES, batch: int = 1024,
+            width: int = 64, depth: int = 3, omega: float = 30.0, samples: int = DEFAULT_SAMPLES, batch: int = 1024,
             lr: float | None = None, tolerance=None, callback=None):
         """Train a network on a closed shape and return it.
 
@@ -148,7 +148,7 @@ class NeuralImplicit(Implicit):
         seed : int
             Seeds the samples, the initial weights and the minibatches: equal inputs and seed
             give equal weights.
-        encoding, width, depth
+        encoding, width, depth, omega
             The network (:class:`~splinekit.neural.network.Architecture`; default encoding
             :data:`~splinekit.neural.network.DEFAULT_ENCODING`).
         samples : int
@@ -159,14 +159,14 @@ class NeuralImplicit(Implicit):
             ``callback(step, steps, loss)`` after every block of steps (progress bars).
         """
         seed = as_int(seed, "seed", minimum=0)
-        arch = Architecture(**({} if encoding is None else {"encoding": encoding}), width=width, depth=depth)
+        arch = Architecture(**({} if encoding is None else {"encoding": encoding}), width=width, depth=depth, omega=omega)
         settings = Settings(steps=steps, batch=batch, lr=lr)
         t0 = time.perf_counter()
         target = as_target(shape, tolerance)
         norm = Normalization.of_box(*target.box)
         pool = draw_samples(target, norm, samples, seed)
         params, _, losses = fit_network(arch, cls.KIND, [pool], settings, seed, callback)
-        info = {"steps": settings.steps, "seed": seed, "loss": losses[-1][1], "seconds": time.perf_counter() - t0}
+        info = {"steps": settings.steps, "seed": seed, "first_loss": losses[0][1], "loss": losses[-1][1], "seconds": time.perf_counter() - t0}
         return cls(arch, params, norm, None, info)
 
 

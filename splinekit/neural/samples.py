@@ -186,9 +186,9 @@ BYTES_PER_SAMPLE = 400
 
 
 def draw_samples(target: Target, norm: Normalization, n: int, seed: int) -> SamplePool:
-    """``n`` surface points, ``n`` near points and ``n // 2`` uniform points of ``target``."""
+    """``n`` surface points, ``n`` near points and ``n`` uniform points of ``target``."""
     n = as_int(n, "samples", minimum=64)
-    limits.check(BYTES_PER_SAMPLE * 2.5 * n, f"{n:,} neural training samples per kind")
+    limits.check(BYTES_PER_SAMPLE * 3 * n, f"{n:,} neural training samples per kind")
     rng = np.random.default_rng(seed)
     mesh = PolyMesh(target.vertices, target.triangles)
     surface, tri = sample_mesh(mesh, n, rng, return_faces=True)
@@ -199,7 +199,7 @@ def draw_samples(target: Target, norm: Normalization, n: int, seed: int) -> Samp
     unit = norm.to_unit(surface)
     sigmas = np.asarray(NEAR_SIGMAS)[rng.integers(0, len(NEAR_SIGMAS), n)]
     near = unit + rng.normal(size=(n, 3)) * sigmas[:, None]
-    uniform = rng.uniform(-1.0, 1.0, size=(n // 2, 3))
+    uniform = rng.uniform(-1.0, 1.0, size=(n, 3))
     space = np.concatenate([near, uniform])
     distance = np.asarray(target.distance(norm.to_model(space)), dtype=np.float64) / norm.scale
     for name, arr in (("surface point", unit), ("surface normal", normals), ("signed distance", distance)):
