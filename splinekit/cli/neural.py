@@ -19,7 +19,6 @@ import splinekit
 
 from .._atomic import checked_path
 from .._progress import progress
-from .._validate import as_int, as_real
 from ..errors import FileFormatError, ParameterError
 from ..mesh.components import genus
 from .console import Console, count, size_text
@@ -49,6 +48,19 @@ def add_parser(sub, common) -> None:
     m.add_argument("--shape", default="0", metavar="I", help="which shape of a family file (default: %(default)s)")
 
 
+def _number(text, name: str, kind=int, minimum=None):
+    """A command-line number: ``kind(text)``, finite and at least ``minimum``; ParameterError else."""
+    try:
+        value = kind(str(text).strip())
+    except ValueError:
+        value = None
+    if value is None or value != value or value in (float("inf"), float("-inf")) or (minimum is not None and value < minimum):
+        what = "an integer" if kind is int else "a number"
+        bound = "" if minimum is None else f" >= {minimum}"
+        raise ParameterError(f"{name} must be {what}{bound}, got {text!r}")
+    return value
+
+
 def _output(path, suffixes, what) -> str:
     suffix = os.path.splitext(str(path))[1].lower()
     if suffix not in suffixes:
@@ -61,8 +73,8 @@ def cmd_neural(args, console: Console) -> int:
 
 
 def _fit(args, console: Console) -> int:
-    steps = as_int(args.steps, "--steps", minimum=1)
-    seed = as_int(args.seed, "--seed", minimum=0)
+    steps = _number(args.steps, "--steps", minimum=1)
+    seed = _number(args.seed, "--seed", minimum=0)
     out = _output(args.output, (MODEL_SUFFIX,), "neural model")
     neural = splinekit.neural  # loads JAX (or names the install command)
     reg = registry()
@@ -91,13 +103,13 @@ def _mesh(args, console: Console) -> int:
         raise FileFormatError(f"{args.file!r} does not exist or is not a file")
     loaded = splinekit.neural.load(args.file)
     if isinstance(loaded, splinekit.neural.NeuralSDFFamily):
-        loaded = loaded.shape(as_int(args.shape, "--shape"))
+        loaded = loaded.shape(_number(args.shape, "--shape"))
     if args.edge_length is not None:
-        edge = as_real(args.edge_length, "--edge-length")
+        edge = _number(args.edge_length, "--edge-length", float, minimum=0.0)
         if not edge > 0:
             raise ParameterError(f"--edge-length must be > 0, got {args.edge_length!r}")
     else:
-        cells = as_int(args.cells, "--cells", minimum=8)
+        cells = _number(args.cells, "--cells", minimum=8)
         edge = 2.0 * loaded.normalization.scale / cells
     t0 = time.perf_counter()
     mesh = loaded.to_mesh(edge)

@@ -26,6 +26,7 @@ from ..implicit.base import Implicit
 from ..implicit.meshing import mesh_implicit
 from . import fileio
 from ._backend import jnp
+from .meshing import band_mesh
 from .network import Architecture, Evaluator, box_distance, parameter_count
 from .samples import Normalization, as_target, draw_samples
 from .training import Settings, fit_network
@@ -174,6 +175,16 @@ class NeuralSDF(NeuralImplicit):
     """A network trained as a signed distance: ``|grad F|`` is about 1 (the eikonal term)."""
 
     KIND = "sdf"
+
+    def to_mesh(self, edge_length=None, bounds=None):
+        """The zero set as a closed triangle mesh; default edge length: the training cube /
+        ``MESH_CELLS``. Over its own bounds the network is sampled in a narrow band around the
+        surface only (:func:`~splinekit.neural.meshing.band_mesh`); with ``bounds`` on the full grid."""
+        if bounds is not None:
+            return super().to_mesh(edge_length, bounds)
+        if edge_length is None:
+            edge_length = 2.0 * self.normalization.scale / MESH_CELLS
+        return band_mesh(self, edge_length)
 
 
 class NeuralOccupancy(NeuralImplicit):
