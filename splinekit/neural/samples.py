@@ -25,13 +25,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .. import limits
+from .. import _kernels, limits
 from .._validate import as_int
 from ..errors import DomainError, NotManifoldError, ParameterError
 from ..implicit.base import Implicit
 from ..mesh.components import concatenate
 from ..mesh.geometry import triangulate
 from ..mesh.polymesh import PolyMesh
+from ..pointcloud.meshdistance import KERNELS as MESH_KERNELS
 from ..pointcloud.meshdistance import MeshDistance
 from ..pointcloud.sampling import sample_mesh
 from ..tessellation import tessellate
@@ -159,6 +160,11 @@ def as_target(shape, tolerance=None) -> Target:
 
 def _signed(md: MeshDistance):
     def distance(points):
+        if len(points) >= _kernels.MIN_WORK:
+            # a training pool is one large job, and numpy's search is the wrong tool for it: random
+            # points inside a thin-walled body (a vase) are far from every triangle, and its
+            # exhaustive fallback then gathers thousands of candidates per point (gigabytes)
+            _kernels.load(MESH_KERNELS)
         return md.signed(points)[0]
 
     return distance
