@@ -20,6 +20,7 @@ training; evaluation runs on float64 copies (see :class:`Evaluator`).
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import asdict, dataclass
 
@@ -164,6 +165,25 @@ FLOATS_PER_UNIT = {"value": 4, "gradient": 12, "hessian": 120}
 derivatives, the Hessian's forward-over-reverse tangents), for the memory budget."""
 
 
+@functools.lru_cache(maxsize=64)
+def _compiled(arch: Architecture, field):
+    """Jitted ``(value, value_grad, hessian)`` of ``(params, x, z)`` for one architecture and field,
+    shared by every model of that architecture (the shapes of a family, their blends)."""
+
+    def value(p, x, z):
+        return field(x, apply(arch, p, x, z))
+
+    def value_grad(p, x, z):
+        f, pull = jax.vjp(lambda y: value(p, y, z), x)
+        return f, pull(jnp.ones_like(f))[0]
+
+    def hessian(p, x, z):
+        one = lambda y: value(p, y[None], z)[0]  # noqa: E731 - a point -> a number
+        return jax.vmap(jax.hessian(one))(x)
+
+    return jax.jit(value), jax.jit(value_grad), jax.jit(hessian)
+
+
 class Evaluator:
     """Jitted, chunked float64 evaluation of one network at one latent code.
 
@@ -175,21 +195,7 @@ class Evaluator:
         self.arch = arch
         self.params = jax.tree_util.tree_map(lambda a: jnp.asarray(np.asarray(a), jnp.float64), params)
         self.latent = None if latent is None else jnp.asarray(np.asarray(latent), jnp.float64)
-
-        def value(p, x, z):
-            return field(x, apply(arch, p, x, z))
-
-        def value_grad(p, x, z):
-            f, pull = jax.vjp(lambda y: value(p, y, z), x)
-            return f, pull(jnp.ones_like(f))[0]
-
-        def hessian(p, x, z):
-            one = lambda y: value(p, y[None], z)[0]  # noqa: E731 - a point -> a number
-            return jax.vmap(jax.hessian(one))(x)
-
-        self._value = jax.jit(value)
-        self._value_grad = jax.jit(value_grad)
-        self._hessian = jax.jit(hessian)
+        self._value, self._value_grad, self._hessian = _compiled(arch, field)
 
     def _bucket(self, n: int, what: str) -> int:
         per_point = 8.0 * FLOATS_PER_UNIT[what] * self.arch.width * (self.arch.depth + 1)
