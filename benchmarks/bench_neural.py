@@ -50,6 +50,8 @@ from splinekit.neural import NeuralSDF, NeuralSDFFamily
 from splinekit.pointcloud import MeshDistance, sample_mesh, sample_surface
 
 SAMPLES = 20_000
+VASE_REFERENCE = 3e-5
+"""Relative tessellation tolerance of the vases' reference surfaces."""
 VASES = [dict(height=h, wall=w) for h in (100.0, 130.0, 160.0, 190.0) for w in (4.0, 6.0)]
 
 
@@ -72,9 +74,9 @@ def implicit_reference(name, implicit, volume, g):
     return Reference(name, implicit, volume, g, float(np.linalg.norm(hi - lo)), lambda p: np.abs(implicit(p)), samples)
 
 
-def patch_reference(name, model, g):
+def patch_reference(name, model, g, tolerance=1e-5):
     patches = [p for body in model.bodies for p in body]
-    tess = sk.tessellate(patches, 1e-5, relative=True)
+    tess = sk.tessellate(patches, tolerance, relative=True)
     md = MeshDistance.of_mesh(tess)
     V = np.asarray(tess.vertices)
 
@@ -113,13 +115,11 @@ def query_time(model, n=100_000):
     return (time.perf_counter() - t0) / n
 
 
-def references():
-    sphere = si.sphere(radius=40.0)
-    torus = si.torus(major=40.0, minor=14.0)
-    mug = build_model("mug")
-    return [implicit_reference("sphere", sphere, 4 / 3 * np.pi * 40.0**3, 0),
-            implicit_reference("torus", torus, 2 * np.pi**2 * 40.0 * 14.0**2, 1),
-            patch_reference("mug", mug, 1)]
+def references(names=("sphere", "torus", "mug")):
+    make = {"sphere": lambda: implicit_reference("sphere", si.sphere(radius=40.0), 4 / 3 * np.pi * 40.0**3, 0),
+            "torus": lambda: implicit_reference("torus", si.torus(major=40.0, minor=14.0), 2 * np.pi**2 * 40.0 * 14.0**2, 1),
+            "mug": lambda: patch_reference("mug", build_model("mug"), 1)}
+    return [make[name]() for name in names]
 
 
 def fit_and_measure(ref, **options):
@@ -175,14 +175,15 @@ def bench_encodings(refs, steps):
 def bench_family():
     print(f"\n## Eight vases in one network (NeuralSDFFamily) against eight single networks\n")
     models = [build_model("vase", **v) for v in VASES]
-    refs = [patch_reference(f"vase h={v['height']:g} w={v['wall']:g}", m, 0) for v, m in zip(VASES, models)]
     t0 = time.perf_counter()
     family = NeuralSDFFamily.fit(models)
     family_s = time.perf_counter() - t0
     cells = 128
     edge = 2.0 * family.normalization.scale / cells
     rows, single_bytes = [], 0
-    for i, ref in enumerate(refs):
+    for i, v in enumerate(VASES):
+        # one reference at a time, at 3e-5 of the size: eight at 1e-5 held ~10 GB
+        ref = patch_reference(f"vase h={v['height']:g} w={v['wall']:g}", models[i], 0, VASE_REFERENCE)
         fam = measure_mesh(family.shape(i).to_mesh(edge), ref)
         t0 = time.perf_counter()
         single = NeuralSDF.fit(models[i])
@@ -214,6 +215,7 @@ def main():
     parser.add_argument("--family", action="store_true", help="only the eight vases")
     parser.add_argument("--encodings", action="store_true", help="sine vs Fourier features at equal steps")
     parser.add_argument("--steps", type=int, default=1000, help="steps of the --encodings comparison")
+    parser.add_argument("--shapes", default="sphere,torus,mug", help="single shapes to run (comma-separated)")
     args = parser.parse_args()
     load0 = os.getloadavg()[0]
     t0 = time.perf_counter()
@@ -222,10 +224,10 @@ def main():
     print(f"splinekit neural benchmark: jax {jax.__version__}, numpy {np.__version__}, Python {platform.python_version()}, "
           f"{platform.machine()}, {os.cpu_count()} CPUs")
     if args.encodings:
-        bench_encodings(references(), args.steps)
+        bench_encodings(references(args.shapes.split(",")), args.steps)
     else:
         if not args.family:
-            bench_single(references())
+            bench_single(references(args.shapes.split(",")))
         if not args.single:
             bench_family()
     print(f"\nload average at start {load0:.2f}, at end {os.getloadavg()[0]:.2f} (other processes share the "

@@ -25,7 +25,7 @@ __all__ = ["DEFAULT_LATENT", "NeuralSDFFamily", "load"]
 
 DEFAULT_LATENT = 16
 """Length of a shape's latent code."""
-STEPS_PER_SHAPE = 400
+STEPS_PER_SHAPE = 250
 """Default steps of a family fit per shape (at least 2000 in all)."""
 CODE_STEPS = 500
 """Default steps of :meth:`NeuralSDFFamily.fit_code`."""
