@@ -92,7 +92,7 @@ _LAZY_SUBMODULES = ("brep", "convert", "implicit", "levelset", "neural", "occ", 
 
 
 def __getattr__(name):
-    """``splinekit.brep``, ``.implicit``, ``.pointcloud``, ``.levelset``, ``.convert``, ``.occ``
+    """``splinekit.brep``, ``.implicit``, ``.pointcloud``, ``.levelset``, ``.convert``, ``.occ``,
     ``.plot`` and ``.neural`` (optional extra: JAX) are imported on first use."""
     if name in _LAZY_SUBMODULES:
         return _importlib.import_module(f"{__name__}.{name}")

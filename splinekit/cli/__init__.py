@@ -8,6 +8,8 @@ Subcommands::
     splinekit render MODEL|FILE [-o picture.png|.jpg] [--color ...] [--size WxH]
     splinekit check MODEL                            cross-check a model against OpenCascade
     splinekit demo [-o picture.png]                  a NURBS surface, timed and drawn
+    splinekit neural fit MODEL -o m.nsdf [--steps N] a neural SDF trained on a model (extra: JAX)
+    splinekit neural mesh m.nsdf -o out.stl          the zero set of a trained model as a mesh
 
 Files go to the folder ``out`` unless ``-o`` names another place. ``--quiet`` silences
 everything but errors, ``--verbose`` adds detail and tracebacks. Errors are one line on stderr
@@ -21,7 +23,7 @@ names another module with the same registry interface (``MODELS``, ``DEFAULT_MOD
 ``get_model``, ``build_model``).
 
 One module per command (:mod:`.listing`, :mod:`.build`, :mod:`.info`, :mod:`.render`,
-:mod:`.check`, :mod:`.demo`), each a thin mapping from arguments to library calls;
+:mod:`.check`, :mod:`.demo`, :mod:`.neural`), each a thin mapping from arguments to library calls;
 :mod:`.app` holds the parser and :func:`main`, :mod:`.console` the output formatting,
 :mod:`.registry` the model registry.
 """
