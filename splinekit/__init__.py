@@ -90,8 +90,8 @@ _siblings.install()  # splinekit's own imports of models/exporters refuse anothe
 # Subpackages imported on first attribute access, keeping ``import splinekit`` fast; ``splinekit.occ``
 # (the OpenCascade bridge, splinekit.interop.occ under its short name) loads the B-rep layer with it
 # (brep comes with the tessellation, which pairs the edges of trimmed faces with its helpers)
-_LAZY_SUBMODULES = ("analysis", "batch", "brep", "comparison", "convert", "implicit", "levelset", "occ", "plot",
-                    "pointcloud")
+_LAZY_SUBMODULES = ("analysis", "batch", "brep", "comparison", "convert", "implicit", "levelset", "neural", "occ",
+                    "plot", "pointcloud")
 # Functions of lazily loaded subpackages, by name -> (subpackage, function). ``compare`` lives in
 # the package ``comparison`` (not ``compare``: importing a subpackage sets it as an attribute of
 # its parent, which would replace the function ``splinekit.compare``).
@@ -100,8 +100,8 @@ _LAZY_FUNCTIONS = {"compare": ("comparison", "compare")}
 
 def __getattr__(name):
     """``splinekit.brep``, ``.implicit``, ``.pointcloud``, ``.levelset``, ``.convert``, ``.occ``,
-    ``.plot``, ``.analysis``, ``.batch`` and ``.comparison`` are imported on first use, and so is
-    ``splinekit.compare``."""
+    ``.plot``, ``.analysis``, ``.batch``, ``.comparison`` and ``.neural`` (optional extra: JAX) are
+    imported on first use, and so is ``splinekit.compare``."""
     if name in _LAZY_SUBMODULES:
         return _importlib.import_module(f"{__name__}.{name}")
     if name in _LAZY_FUNCTIONS:

@@ -232,7 +232,7 @@ def test_the_former_library_names_of_the_cli_still_resolve_with_a_deprecation_wa
     assert area(surface) > 4.0  # the wavy roof spans [-1, 1]^2 and is not flat
     with pytest.raises(AttributeError):
         cli.no_such_name  # noqa: B018
-    assert set(cli.COMMANDS) == {"list", "build", "info", "render", "check", "demo", "sweep", "analyze", "compare"}
+    assert set(cli.COMMANDS) == {"list", "build", "info", "render", "check", "demo", "sweep", "analyze", "compare", "neural"}
 
 
 def test_render_creates_a_missing_folder_but_not_below_a_file(in_process, capsys, tmp_path):

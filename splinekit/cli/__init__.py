@@ -14,6 +14,8 @@ Subcommands::
                                                      a parameter sweep on Dask: every variant
                                                      built, measured, exported; results table
     splinekit compare [MODEL] [-o DIR]               one shape in every representation, measured
+    splinekit neural fit MODEL -o m.nsdf [--steps N] a neural SDF trained on a model (extra: JAX)
+    splinekit neural mesh m.nsdf -o out.stl          the zero set of a trained model as a mesh
 
 Files go to the folder ``out`` unless ``-o`` names another place. ``--quiet`` silences
 everything but errors, ``--verbose`` adds detail and tracebacks. Errors are one line on stderr
@@ -27,8 +29,8 @@ names another module with the same registry interface (``MODELS``, ``DEFAULT_MOD
 ``get_model``, ``build_model``).
 
 One module per command (:mod:`.listing`, :mod:`.build`, :mod:`.info`, :mod:`.render`,
-:mod:`.check`, :mod:`.demo`, :mod:`.sweep`, :mod:`.analyze`, :mod:`.compare`), each a thin mapping from arguments to
-library calls;
+:mod:`.check`, :mod:`.demo`, :mod:`.sweep`, :mod:`.analyze`, :mod:`.compare`, :mod:`.neural`), each a thin mapping
+from arguments to library calls;
 :mod:`.app` holds the parser and :func:`main`, :mod:`.console` the output formatting,
 :mod:`.registry` the model registry.
 """

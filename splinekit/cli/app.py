@@ -23,12 +23,14 @@ from .console import Console, error_line, first_line, one_line
 from .demo import DEFAULT_PICTURE, cmd_demo
 from .info import cmd_info
 from .listing import cmd_list
+from .neural import add_parser as add_neural_parser
+from .neural import cmd_neural
 from .render import PICTURE_SUFFIXES, cmd_render
 from .sweep import DEFAULT_OUTPUT as SWEEP_OUTPUT
 from .sweep import cmd_sweep
 
 COMMANDS = {"list": cmd_list, "build": cmd_build, "info": cmd_info, "render": cmd_render, "check": cmd_check, "demo": cmd_demo,
-            "sweep": cmd_sweep, "analyze": cmd_analyze, "compare": cmd_compare}
+            "sweep": cmd_sweep, "analyze": cmd_analyze, "compare": cmd_compare, "neural": cmd_neural}
 """Command name -> ``function(args, console) -> exit status``."""
 
 
@@ -137,6 +139,8 @@ def build_parser() -> argparse.ArgumentParser:
 
     d = sub.add_parser("demo", parents=[common], help="build a NURBS surface, print what was computed and draw it")
     d.add_argument("-o", "--output", metavar="PICTURE", help=f"picture to write, {pictures} (default: {DEFAULT_PICTURE})")
+
+    add_neural_parser(sub, common)
     return parser
 
 

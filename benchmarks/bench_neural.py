@@ -1,0 +1,238 @@
+#!/usr/bin/env python
+"""Neural implicit benchmark: single-shape networks on a sphere, a torus and the mug, and one
+network for eight vases, measured against the exact surfaces in one run.
+
+Run from the repository root::
+
+    python benchmarks/bench_neural.py               # everything with default settings (tens of minutes)
+    python benchmarks/bench_neural.py --single      # sphere, torus, mug only
+    python benchmarks/bench_neural.py --encodings   # sine vs Fourier features on the three shapes
+
+Shapes: a sphere of radius 40 and a torus R = 40, r = 14 (the exact implicits, which are their own
+signed distances), and the mug (``models/mug.py``, genus 1: 536 bicubic patches, trained on their
+tessellation). Each is fitted with ``NeuralSDF.fit(shape)`` at default settings, then meshed with
+``to_mesh()`` (128 grid cells across the training cube) and measured:
+
+* training time (wall clock, including sampling and JIT compilation); parameters and bytes;
+* query time per point: F at 100,000 random points in the bounds (after a warm-up call);
+* Chamfer distance, ``(mean d(mesh -> exact) + mean d(exact -> mesh)) / 2`` over 20,000 area-uniform
+  samples each way, as % of the exact shape's bounding-box diagonal. Distances to the exact
+  surface: ``|F|`` of the exact SDF (sphere, torus), exact point-to-triangle distance to a
+  tessellation at 1e-5 of the model size (mug; its own error is far below the figures);
+  distances to the mesh: exact point-to-triangle (MeshDistance);
+* normal consistency: mean ``|n_exact . n_mesh|`` at the exact samples (exact normal of the
+  implicit or of the patch, normal of the nearest mesh triangle);
+* volume error of the mesh (exact: closed forms; the mug: its Gauss-Legendre reference volume);
+* genus of the mesh (expected 0, 1, 1).
+
+Multi-shape: eight vases (heights 100-190 mm, walls 4 and 6 mm) in one ``NeuralSDFFamily``,
+each against a single-shape network of its own (default settings); every shape meshed at 128
+cells across its network's cube. Interpolated shapes (codes halfway between pairs) must mesh
+watertight. Targets (from the issue): Chamfer <= 0.5 % of the diagonal (sphere, torus), 1 %
+(mug), genus kept, training under 3 minutes per shape; family shapes within 1.5 x their
+single-shape Chamfer, in fewer bytes than eight single networks.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import platform
+import time
+
+import numpy as np
+
+import splinekit as sk
+import splinekit.implicit as si
+from models import build_model
+from splinekit.mesh.components import genus
+from splinekit.neural import NeuralSDF, NeuralSDFFamily
+from splinekit.pointcloud import MeshDistance, sample_mesh, sample_surface
+
+SAMPLES = 20_000
+VASE_REFERENCE = 3e-5
+"""Relative tessellation tolerance of the vases' reference surfaces."""
+VASES = [dict(height=h, wall=w) for h in (100.0, 130.0, 160.0, 190.0) for w in (4.0, 6.0)]
+
+
+class Reference:
+    """An exact surface to measure against: distances, area-uniform samples and their normals."""
+
+    def __init__(self, name, shape, volume, genus, diagonal, distance, samples):
+        self.name, self.shape, self.volume, self.genus, self.diagonal = name, shape, volume, genus, diagonal
+        self.distance, self.samples = distance, samples
+
+
+def implicit_reference(name, implicit, volume, g):
+    lo, hi = implicit.bounds
+    fine = implicit.to_mesh(float(np.max(hi - lo)) / 200)
+
+    def samples(n, rng):
+        p = implicit.closest_points(sample_mesh(fine, n, rng))
+        return p, implicit.normal(p)
+
+    return Reference(name, implicit, volume, g, float(np.linalg.norm(hi - lo)), lambda p: np.abs(implicit(p)), samples)
+
+
+def patch_reference(name, model, g, tolerance=1e-5):
+    patches = [p for body in model.bodies for p in body]
+    tess = sk.tessellate(patches, tolerance, relative=True)
+    md = MeshDistance.of_mesh(tess)
+    V = np.asarray(tess.vertices)
+
+    def samples(n, rng):
+        p, patch, uv = sample_surface(patches, n, rng, return_parameters=True)
+        normals = np.empty_like(p)
+        for k in np.unique(patch):
+            sel = patch == k
+            d = patches[k].derivatives(uv[sel, 0], uv[sel, 1], 1)
+            normals[sel] = np.cross(d[1, 0], d[0, 1])
+        return p, normals / np.linalg.norm(normals, axis=1, keepdims=True)
+
+    return Reference(name, model, model.checks["volume"][0], g, float(np.linalg.norm(V.max(0) - V.min(0))),
+                     lambda p: md.query(p)[0], samples)
+
+
+def measure_mesh(mesh, ref: Reference, seed=0):
+    """Chamfer (% of diagonal), normal consistency, volume error (%), genus of ``mesh``."""
+    rng = np.random.default_rng(seed)
+    on_mesh = sample_mesh(mesh, SAMPLES, rng)
+    exact, normals = ref.samples(SAMPLES, rng)
+    d_out = ref.distance(on_mesh)
+    d_in, _, tri = MeshDistance.of_mesh(mesh).query(exact)
+    chamfer = 0.5 * (d_out.mean() + d_in.mean())
+    consistency = float(np.abs(np.einsum("ij,ij->i", normals, np.asarray(mesh.face_normals)[tri])).mean())
+    return {"chamfer_%": 100 * chamfer / ref.diagonal, "normals": consistency,
+            "volume_%": 100 * abs(mesh.volume - ref.volume) / ref.volume, "genus": genus(mesh)}
+
+
+def query_time(model, n=100_000):
+    lo, hi = model.bounds
+    p = np.random.default_rng(3).uniform(lo, hi, (n, 3))
+    model(p)  # compile for this batch size first
+    t0 = time.perf_counter()
+    model(p)
+    return (time.perf_counter() - t0) / n
+
+
+def references(names=("sphere", "torus", "mug")):
+    make = {"sphere": lambda: implicit_reference("sphere", si.sphere(radius=40.0), 4 / 3 * np.pi * 40.0**3, 0),
+            "torus": lambda: implicit_reference("torus", si.torus(major=40.0, minor=14.0), 2 * np.pi**2 * 40.0 * 14.0**2, 1),
+            "mug": lambda: patch_reference("mug", build_model("mug"), 1)}
+    return [make[name]() for name in names]
+
+
+def fit_and_measure(ref, **options):
+    t0 = time.perf_counter()
+    model = NeuralSDF.fit(ref.shape, **options)
+    seconds = time.perf_counter() - t0
+    row = {"shape": ref.name, "train_s": seconds, "params": model.parameter_count, "bytes": model.nbytes,
+           "query_us": 1e6 * query_time(model)}
+    row.update(measure_mesh(model.to_mesh(), ref))
+    return row, model
+
+
+def print_table(rows, columns):
+    fmt = {"train_s": "{:.0f}", "query_us": "{:.2f}", "chamfer_%": "{:.3f}", "normals": "{:.4f}",
+           "volume_%": "{:.2f}", "params": "{:,}", "bytes": "{:,}", "genus": "{:g}", "ratio": "{:.2f}"}
+    text = [[fmt.get(c, "{}").format(r[c]) if r.get(c) is not None else "-" for c in columns] for r in rows]
+    widths = [max(len(c), *(len(t[i]) for t in text)) for i, c in enumerate(columns)]
+    print("| " + " | ".join(c.ljust(w) for c, w in zip(columns, widths)) + " |")
+    print("|" + "|".join("-" * (w + 2) for w in widths) + "|")
+    for t in text:
+        print("| " + " | ".join(x.rjust(w) for x, w in zip(t, widths)) + " |")
+
+
+SINGLE_COLUMNS = ["shape", "train_s", "params", "bytes", "query_us", "chamfer_%", "normals", "volume_%", "genus"]
+
+
+def bench_single(refs):
+    print("\n## Single shapes (NeuralSDF.fit with default settings)\n")
+    rows = []
+    for ref in refs:
+        row, _ = fit_and_measure(ref)
+        rows.append(row)
+        print(f"  {ref.name}: {row['train_s']:.0f} s, Chamfer {row['chamfer_%']:.3f} % of diagonal, genus {row['genus']:g} "
+              f"(exact {ref.genus}), load {os.getloadavg()[0]:.1f}", flush=True)
+    print()
+    print_table(rows, SINGLE_COLUMNS)
+    return rows
+
+
+def bench_encodings(refs, steps):
+    print(f"\n## Encodings at equal size and steps ({steps} steps, 3 x 64)\n")
+    rows = []
+    for ref in refs:
+        for encoding in ("sine", "fourier"):
+            row, _ = fit_and_measure(ref, encoding=encoding, steps=steps)
+            row["shape"] = f"{ref.name} {encoding}"
+            rows.append(row)
+            print(f"  {row['shape']}: Chamfer {row['chamfer_%']:.3f} %", flush=True)
+    print()
+    print_table(rows, SINGLE_COLUMNS)
+
+
+def bench_family():
+    print(f"\n## Eight vases in one network (NeuralSDFFamily) against eight single networks\n")
+    models = [build_model("vase", **v) for v in VASES]
+    t0 = time.perf_counter()
+    family = NeuralSDFFamily.fit(models)
+    family_s = time.perf_counter() - t0
+    cells = 128
+    edge = 2.0 * family.normalization.scale / cells
+    rows, single_bytes = [], 0
+    for i, v in enumerate(VASES):
+        # one reference at a time, at 3e-5 of the size: eight at 1e-5 held ~10 GB
+        ref = patch_reference(f"vase h={v['height']:g} w={v['wall']:g}", models[i], 0, VASE_REFERENCE)
+        fam = measure_mesh(family.shape(i).to_mesh(edge), ref)
+        t0 = time.perf_counter()
+        single = NeuralSDF.fit(models[i])
+        s_seconds = time.perf_counter() - t0
+        single_bytes += single.nbytes
+        one = measure_mesh(single.to_mesh(2.0 * single.normalization.scale / cells), ref)
+        rows.append({"shape": ref.name, "single_chamfer_%": one["chamfer_%"], "single_s": s_seconds,
+                     "family_chamfer_%": fam["chamfer_%"], "ratio": fam["chamfer_%"] / one["chamfer_%"],
+                     "family_genus": fam["genus"], "family_volume_%": fam["volume_%"]})
+        print(f"  {ref.name}: single {one['chamfer_%']:.3f} % ({s_seconds:.0f} s), family {fam['chamfer_%']:.3f} %, "
+              f"load {os.getloadavg()[0]:.1f}", flush=True)
+    print()
+    fmt_cols = ["shape", "single_chamfer_%", "family_chamfer_%", "ratio", "family_volume_%", "family_genus"]
+    for r in rows:
+        for c in ("single_chamfer_%", "family_chamfer_%", "family_volume_%"):
+            r[c] = f"{r[c]:.3f}"
+    print_table(rows, fmt_cols)
+    print(f"\nfamily: {len(family)} shapes, {family.parameter_count:,} parameters, {family.nbytes:,} bytes, "
+          f"trained in {family_s:.0f} s; eight single networks: {single_bytes:,} bytes "
+          f"({single_bytes / family.nbytes:.1f} x the family)")
+    for i, j in ((0, 7), (1, 6), (2, 5)):
+        mesh = family.interpolate(i, j, 0.5).to_mesh(edge)
+        print(f"interpolated {i}-{j} at t = 0.5: {mesh.n_faces:,} triangles, closed {mesh.is_closed}, genus {genus(mesh)}")
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--single", action="store_true", help="only the sphere, torus and mug")
+    parser.add_argument("--family", action="store_true", help="only the eight vases")
+    parser.add_argument("--encodings", action="store_true", help="sine vs Fourier features at equal steps")
+    parser.add_argument("--steps", type=int, default=1000, help="steps of the --encodings comparison")
+    parser.add_argument("--shapes", default="sphere,torus,mug", help="single shapes to run (comma-separated)")
+    args = parser.parse_args()
+    load0 = os.getloadavg()[0]
+    t0 = time.perf_counter()
+    import jax
+
+    print(f"splinekit neural benchmark: jax {jax.__version__}, numpy {np.__version__}, Python {platform.python_version()}, "
+          f"{platform.machine()}, {os.cpu_count()} CPUs")
+    if args.encodings:
+        bench_encodings(references(args.shapes.split(",")), args.steps)
+    else:
+        if not args.family:
+            bench_single(references(args.shapes.split(",")))
+        if not args.single:
+            bench_family()
+    print(f"\nload average at start {load0:.2f}, at end {os.getloadavg()[0]:.2f} (other processes share the "
+          f"{os.cpu_count()} CPUs and slow every timing); total {time.perf_counter() - t0:.0f} s")
+
+
+if __name__ == "__main__":
+    main()
