@@ -216,7 +216,10 @@ def main():
     parser.add_argument("--encodings", action="store_true", help="sine vs Fourier features at equal steps")
     parser.add_argument("--steps", type=int, default=1000, help="steps of the --encodings comparison")
     parser.add_argument("--shapes", default="sphere,torus,mug", help="single shapes to run (comma-separated)")
+    parser.add_argument("--quick", action="store_true", help="the sphere alone (no family)")
     args = parser.parse_args()
+    if args.quick:
+        args.shapes, args.single = "sphere", True
     load0 = os.getloadavg()[0]
     t0 = time.perf_counter()
     import jax

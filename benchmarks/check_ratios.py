@@ -36,12 +36,15 @@ REPO = os.path.dirname(HERE)
 BENCHMARKS = {
     "booleans": (["--quick"], 600),
     "cold_start": (["--quick"], 900),
+    "continuity": (["--quick"], 900),
     "curvature": (["--quick"], 600),
+    "deviation": (["--quick"], 900),
     "eval": (["--quick"], 900),
     "export": (["--quick"], 900),
     "implicit": (["--quick"], 900),
     "mass": (["--quick"], 900),
     "meshing": (["--quick"], 1500),
+    "neural": (["--quick"], 1200),
     "ply": (["--quick"], 600),
     "pointcloud": (["--quick"], 900),
     "project": (["--quick"], 600),
@@ -49,6 +52,7 @@ BENCHMARKS = {
     "step": (["--quick"], 900),
     "subdiv": (["--quick"], 1200),
     "subdiv_compose": (["--quick"], 600),
+    "sweep": (["--quick"], 900),
     "tessellate": (["--quick"], 1200),
 }
 RATIO = re.compile(PATTERN)
