@@ -278,6 +278,11 @@ def _refine(sources, P, foot, tri_face, tri_corners, mesh):
         best.update(who[ok], d[ok], f[ok], new_uv[ok], which[ok])
         if sources.faces is not None:  # 3. a face that Newton left: the closest point on its trims
             _on_trims(sources, P, who[~ok], which[~ok], best)
+    # 3. on a patch closed on itself (a sphere's or cylinder's seam) an answer stuck on the seam
+    # may be the other side's: Newton again from just across the seam
+    for who, which, seeds in _across_seams(surfaces, best):
+        ok, d, f, new_uv = _newton_pairs(sources, P, who, which, seeds)
+        best.update(who[ok], d[ok], f[ok], new_uv[ok], which[ok])
     # a point left with no answer keeps the mesh's (within the tessellation's deviation)
     lost = ~np.isfinite(best.dist)
     best.dist[lost] = np.linalg.norm(P[lost] - foot[lost], axis=1)
@@ -287,6 +292,30 @@ def _refine(sources, P, foot, tri_face, tri_corners, mesh):
     for p, rows in _groups(best.patch, len(surfaces)):
         normal[rows] = part.patch_sign[p] * surfaces[p].normal(best.uv[rows, 0], best.uv[rows, 1])
     return best.dist, best.foot, normal
+
+
+def _across_seams(surfaces, best, step: float = 1e-3):
+    """``(who, which, seeds)`` batches: the points whose answer lies on a side of its patch's
+    domain where the patch closes on itself (the surface at ``u0`` equals the surface at ``u1``,
+    or the same in ``v``), seeded ``step`` of the width inside the opposite side."""
+    for p, rows in _groups(best.patch, len(surfaces)):
+        surface = surfaces[p]
+        (u0, u1), (v0, v1) = surface.domain
+        t = np.linspace(0.0, 1.0, 7)
+        size = float(np.ptp(surface.control_points.reshape(-1, surface.control_points.shape[-1])[:, :3], axis=0).max())
+        for k, (a, b), (c, d) in ((0, (u0, u1), (v0, v1)), (1, (v0, v1), (u0, u1))):
+            x = c + (d - c) * t
+            lo = surface.evaluate(np.full(7, a), x) if k == 0 else surface.evaluate(x, np.full(7, a))
+            hi = surface.evaluate(np.full(7, b), x) if k == 0 else surface.evaluate(x, np.full(7, b))
+            if np.abs(lo - hi).max() > 1e-9 * max(size, 1e-300):
+                continue  # not closed in this direction
+            uv = best.uv[rows]
+            at_lo, at_hi = uv[:, k] <= a + 1e-9 * (b - a), uv[:, k] >= b - 1e-9 * (b - a)
+            sel = at_lo | at_hi
+            if sel.any():
+                seeds = uv[sel].copy()
+                seeds[:, k] = np.where(at_lo[sel], b - step * (b - a), a + step * (b - a))
+                yield rows[sel], np.full(int(sel.sum()), p), seeds
 
 
 @dataclass
