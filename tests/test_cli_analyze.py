@@ -103,3 +103,35 @@ def test_help_lists_analyze():
     assert result.returncode == 0
     for option in ("--zebra", "--isophotes", "--curvature", "--continuity", "--draft", "--min-draft", "--deviation", "-o"):
         assert option in result.stdout
+
+
+def test_curvature_combs_of_a_part_s_edges(here, capsys):
+    """`--combs` draws every edge curve of the part at one scale: the box with a hole (R 4) has
+    12 straight edges, the hole's two circles and its seam; the largest curvature is 1/4."""
+    exporters.export_step(here / "part.step", [primitives.box_with_hole(20, 4)])
+    assert main(["analyze", "part.step", "--combs", "--size", "200x160"]) == 0
+    out = capsys.readouterr().out
+    m = re.search(r"curvature combs: (\d+) edge curves, largest curvature ([0-9.e+-]+)", out)
+    assert m is not None, out
+    assert int(m[1]) == 15 and float(m[2]) == pytest.approx(0.25, rel=1e-6)
+    assert picture_size(here / "out" / "part-combs.png") == (200, 160)
+
+
+def test_combs_need_exact_curves(here, capsys):
+    exporters.export_stl(here / "box.stl", mesh_primitives.box(2.0))
+    assert main(["analyze", "box.stl", "--combs"]) == 1
+    assert "a mesh has none" in capsys.readouterr().err
+
+
+def test_curvature_combs_share_one_scale():
+    """Two circles (radius 1 and 2): at one scale the small circle's teeth are twice as long (its
+    curvature is twice as large), and the longest tooth is COMB_LENGTH of all samples' diagonal."""
+    from splinekit.construct import circle
+
+    small, large = circle((0, 0, 0), (0, 0, 1), 1.0), circle((5, 0, 0), (0, 0, 1), 2.0)
+    a, b = analysis.curvature_combs([small, large], samples=64)
+    la, lb = (np.linalg.norm(c.comb, axis=1) for c in (a, b))
+    assert a.scale == b.scale
+    assert la.max() == pytest.approx(2 * lb.max(), rel=1e-9)
+    P = np.concatenate([a.points, b.points])
+    assert la.max() == pytest.approx(analysis.curves.COMB_LENGTH * np.linalg.norm(np.ptp(P, axis=0)), rel=1e-9)

@@ -9,7 +9,7 @@ between a part and a point cloud or mesh (a scan); pictures of all of them, and 
 
 from .comb_pictures import render_curvature_comb
 from .continuity import EdgeContinuity, NoSharedEdgeError, edge_continuity
-from .curves import CurvatureComb, CurveContinuity, curvature_comb, curve_continuity, inflections
+from .curves import CurvatureComb, CurveContinuity, curvature_comb, curvature_combs, curve_continuity, inflections
 from .deviation import Deviation, deviation
 from .maps import CURVATURE_KINDS, DraftMap, SurfaceMap, curvature_map, draft_angle, isophotes, zebra
 from .sampling import SampledPart, Sources, sample_part, sample_sources

@@ -22,7 +22,8 @@ from ..errors import ParameterError
 from ..tolerances import CONTINUITY_ANGLE, CONTINUITY_CURVATURE, CONTINUITY_GAP
 from .compare import LEVELS, tolerance_value
 
-__all__ = ["COMB_LENGTH", "CurvatureComb", "CurveContinuity", "curvature_comb", "curve_continuity", "inflections"]
+__all__ = ["COMB_LENGTH", "CurvatureComb", "CurveContinuity", "curvature_comb", "curvature_combs", "curve_continuity",
+           "inflections"]
 
 COMB_LENGTH = 0.2
 """Default comb scale: the longest tooth is this fraction of the curve's bounding-box diagonal."""
@@ -123,6 +124,27 @@ def _end_data(curve, at_end: bool):
     pad = np.zeros(3)
     pad[: len(T)] = T
     return P, pad, float(abs(kappa[0])), K
+
+
+
+def curvature_combs(curves, samples: int = 100, *, scale=None) -> list:
+    """Curvature combs of several curves at one scale, so their teeth compare (a part's edges).
+
+    ``scale`` as in :func:`curvature_comb`; default: the longest tooth of all is
+    :data:`COMB_LENGTH` of the diagonal of all the curves' samples. Returns a list of
+    :class:`CurvatureComb`, one per curve, in order."""
+    combs = [curvature_comb(c, samples, scale=1.0) for c in curves]
+    if not combs:
+        raise ParameterError("curvature_combs got no curves")
+    if scale is None:
+        P = np.concatenate([c.points for c in combs])
+        diagonal = float(np.linalg.norm(P.max(axis=0) - P.min(axis=0)))
+        largest = max(float(np.abs(c.curvature).max()) for c in combs)
+        scale = COMB_LENGTH * diagonal / largest if largest > 0 else 1.0
+    else:
+        scale = tolerance_value(scale, "scale", 1.0)
+    return [CurvatureComb(c.params, c.points, c.curvature, c.comb * scale, c.points + c.comb * scale, float(scale))
+            for c in combs]
 
 
 def curve_continuity(c0, c1, *, gap_tol=None, angle_tol=None, curvature_tol=None) -> CurveContinuity:

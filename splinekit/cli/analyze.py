@@ -18,7 +18,7 @@ import exporters
 
 from .. import analysis
 from ..brep import Shell, Solid, TrimmedFace
-from ..errors import FileFormatError, ParameterError
+from ..errors import FileFormatError, ParameterError, SplineKitError
 from ..mesh import PolyMesh
 from .console import Console, count
 from .info import MESH_SUFFIXES, STEP_SUFFIXES
@@ -133,10 +133,11 @@ def _model_part(target, sets, console):
 def _wanted(args) -> list:
     chosen = [name for name, on in (("zebra", args.zebra), ("isophotes", args.isophotes),
                                     ("curvature", args.curvature is not None), ("continuity", args.continuity),
-                                    ("draft", args.draft is not None), ("deviation", args.deviation is not None)) if on]
+                                    ("draft", args.draft is not None), ("deviation", args.deviation is not None),
+                                    ("combs", args.combs)) if on]
     if not chosen:
         raise ParameterError("nothing to analyse: give one or more of --zebra, --isophotes, --curvature KIND, "
-                             "--continuity, --draft X,Y,Z, --deviation SCAN")
+                             "--continuity, --draft X,Y,Z, --deviation SCAN, --combs")
     return chosen
 
 
@@ -204,6 +205,23 @@ def cmd_analyze(args, console: Console) -> int:
                     f" ({'exact' if d.exact else 'to the mesh'}) -> {maps}, {hist}")
     if "continuity" in wanted:
         _continuity(obj, console)
+    if "combs" in wanted:
+        curves, skipped = [], 0
+        for curve in edge_curves(obj):  # a collapsed side (a pole) has no curvature: left out
+            try:
+                analysis.curvature_comb(curve, 8)
+            except SplineKitError:
+                skipped += 1
+                continue
+            curves.append(curve)
+        if not curves:
+            raise ParameterError("--combs found no edge curve with a curvature (all collapse to points)")
+        combs = analysis.curvature_combs(curves)
+        path = analysis.render_curvature_comb(combs, out("combs"), size=size, view=view,
+                                              title=f"curvature combs of {count(len(combs), 'edge curve')}")
+        k = max(float(np.abs(c.curvature).max()) for c in combs)
+        left = f" ({count(skipped, 'collapsed curve')} left out)" if skipped else ""
+        console.out(f"curvature combs: {count(len(combs), 'edge curve')}{left}, largest curvature {k:.4g} -> {path}")
     console.detail(f"analysed in {time.perf_counter() - t0:.2f} s")
     return 0
 
@@ -235,3 +253,32 @@ def _continuity(obj, console: Console) -> None:
                     f"{s['free_edges']} free; worst {s['worst']}; max gap {s['max_gap']:.3g}, "
                     f"max angle {np.degrees(s['max_angle']):.3g} deg, max curvature jump {s['max_curvature_jump']:.3g}")
         console.detail(result.table())
+
+
+def edge_curves(obj) -> list:
+    """The 3-D curves a part's edges run along: each B-rep edge once (its first use's curve; poles
+    and edges without a 3-D curve left out), or the four boundary curves of every patch. A mesh
+    has none (ParameterError)."""
+    items = obj if isinstance(obj, (list, tuple)) else [obj]
+    curves = []
+    for item in items:
+        if isinstance(item, PolyMesh):
+            raise ParameterError("--combs draws the curvature of exact edge curves; a mesh has none")
+        if isinstance(item, TrimmedFace):
+            curves += [e.curve for e in item.edges if e.curve is not None and not e.degenerate]
+            continue
+        shells = item.shells if isinstance(item, Solid) else [item] if isinstance(item, Shell) else None
+        if shells is not None:
+            for shell in shells:
+                for group in shell.edges:
+                    f, lp, e = group.uses[0]
+                    edge = shell.faces[f].boundary_loops()[lp][e]
+                    if edge.curve is not None and not group.degenerate:
+                        curves.append(edge.curve)
+            continue
+        patch = item.to_bspline() if not hasattr(item, "isocurve") else item  # Bézier patches
+        (u0, u1), (v0, v1) = patch.domain
+        curves += [patch.isocurve(u=u0), patch.isocurve(u=u1), patch.isocurve(v=v0), patch.isocurve(v=v1)]
+    if not curves:
+        raise ParameterError("--combs found no edge curves in this part")
+    return curves

@@ -121,6 +121,7 @@ def build_parser() -> argparse.ArgumentParser:
     a.add_argument("--draft", metavar="X,Y,Z", help="draft-angle map for this pull direction, under-cuts marked")
     a.add_argument("--min-draft", default="0", metavar="DEG", help="least draft a face needs, in degrees (default: 0)")
     a.add_argument("--continuity", action="store_true", help="G0/G1/G2 of every shared edge (printed)")
+    a.add_argument("--combs", action="store_true", help="curvature combs of the part's edge curves (one scale for all)")
     a.add_argument("--deviation", metavar="SCAN", help="signed deviation of a scan (.stl/.ply/.obj/... or .xyz points) from the part")
     a.add_argument("--tolerance", metavar="T", help="chordal tolerance of the sampling in model units (default: 1e-3 of the model size)")
     a.add_argument("--size", default="1000x800", metavar="WxH", help="picture size in pixels (default: %(default)s)")
