@@ -26,22 +26,25 @@ from .sampled import SampledSDF, _check_count, _grid_layout, _interp_name
 __all__ = ["from_mesh"]
 
 
-def _closed_triangles(mesh):
-    """``(V (n, 3), T (m, 3))`` of a closed, consistently oriented mesh (quads fan-split)."""
+def closed_triangles(mesh, what: str = "the mesh", needs: str = "a signed distance"):
+    """``(V (n, 3), T (m, 3))`` of a closed, consistently oriented mesh (quads fan-split).
+
+    ``what`` names the mesh and ``needs`` what it is for in the error messages: a mesh that is not
+    a non-empty 3-D PolyMesh (whose vertices PolyMesh keeps finite) with no boundary edge is refused."""
     if not isinstance(mesh, PolyMesh):
-        raise ParameterError(f"mesh must be a PolyMesh, got {type(mesh).__name__}")
+        raise ParameterError(f"{what} must be a PolyMesh, got {type(mesh).__name__}")
     V = np.asarray(mesh.vertices, dtype=np.float64)
-    if V.shape[1] != 3:
-        raise ParameterError(f"mesh must have 3-D vertices, got dimension {V.shape[1]}")
+    if V.ndim != 2 or V.shape[1] != 3:
+        raise ParameterError(f"{what} must have 3-D vertices, got vertices of shape {V.shape}")
     if mesh.n_faces == 0:
-        raise NotManifoldError("the mesh has no faces; a signed distance needs a closed mesh")
+        raise NotManifoldError(f"{what} has no faces; {needs} needs a closed mesh")
     topo = mesh.topology
     be = np.flatnonzero(topo.boundary_edges)
     if be.size:
         a, b = (int(v) for v in topo.edges[be[0]])
         raise NotManifoldError(
-            f"the mesh is open: edge ({a}, {b}) has one face ({be.size} boundary edges in all); "
-            "a signed distance needs a closed mesh"
+            f"{what} is open: edge ({a}, {b}) bounds one face only ({be.size} boundary edges in all); "
+            f"{needs} needs a closed mesh"
         )
     T, _ = triangulate(topo)
     return V, np.ascontiguousarray(T, dtype=np.int64)
@@ -75,7 +78,7 @@ def from_mesh(mesh, resolution, *, band=None, padding: float = 0.1, interpolatio
     """
     pad = positive(padding, "padding", allow_zero=True)
     _interp_name(interpolation)
-    V, T = _closed_triangles(mesh)
+    V, T = closed_triangles(mesh)
     lo, hi = V.min(axis=0), V.max(axis=0)
     with np.errstate(over="ignore"):
         size = float((hi - lo).max())

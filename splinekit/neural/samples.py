@@ -27,15 +27,18 @@ import numpy as np
 
 from .. import _kernels, limits
 from .._validate import as_int
-from ..errors import DomainError, NotManifoldError, ParameterError
+from ..errors import DomainError, ParameterError
 from ..implicit.base import Implicit
+from ..implicit.frommesh import closed_triangles
 from ..mesh.components import concatenate
-from ..mesh.geometry import triangulate
 from ..mesh.polymesh import PolyMesh
 from ..pointcloud.meshdistance import KERNELS as MESH_KERNELS
 from ..pointcloud.meshdistance import MeshDistance
 from ..pointcloud.sampling import sample_mesh
 from ..tessellation import tessellate
+
+_NEEDS = "a signed distance or occupancy"
+"""What a training mesh must be closed for (error messages)."""
 
 __all__ = ["FILL", "NEAR_SIGMAS", "Normalization", "SamplePool", "Target", "as_target", "draw_samples"]
 
@@ -92,25 +95,6 @@ class Target:
         return self.vertices.min(axis=0), self.vertices.max(axis=0)
 
 
-def _closed_mesh(mesh: PolyMesh, what: str):
-    V = np.asarray(mesh.vertices, dtype=np.float64)
-    if V.ndim != 2 or V.shape[1] != 3 or mesh.n_faces == 0:
-        raise ParameterError(f"{what} must be a non-empty 3-D mesh, got vertices of shape {V.shape}")
-    if not np.isfinite(V).all():
-        i = int(np.flatnonzero(~np.isfinite(V).all(axis=1))[0])
-        raise DomainError(f"{what} has a non-finite vertex: vertices[{i}] = {V[i].tolist()}")
-    topo = mesh.topology
-    be = np.flatnonzero(topo.boundary_edges)
-    if be.size:
-        a, b = (int(v) for v in topo.edges[be[0]])
-        raise NotManifoldError(
-            f"{what} is open: edge ({a}, {b}) bounds one face only ({be.size} boundary edges); "
-            "a signed distance or occupancy needs a closed shape"
-        )
-    T, _ = triangulate(topo)
-    return V, np.ascontiguousarray(T, dtype=np.int64)
-
-
 def _mesh_of(shape, tolerance):
     """A closed PolyMesh of ``shape`` (module notes) and a name for messages."""
     if isinstance(shape, PolyMesh):
@@ -150,11 +134,11 @@ def as_target(shape, tolerance=None) -> Target:
         mesh = shape.to_mesh(edge)
         if mesh.n_faces == 0:
             raise ParameterError(f"{type(shape).__name__} has no surface (F has no zero crossing in its bounds)")
-        V, T = _closed_mesh(mesh, f"the mesh of {type(shape).__name__}")
+        V, T = closed_triangles(mesh, f"the mesh of {type(shape).__name__}", _NEEDS)
         oracle = shape if shape.is_exact_sdf else _signed(MeshDistance(V, T))
         return Target(V, T, oracle, shape)
     mesh, what = _mesh_of(shape, tolerance)
-    V, T = _closed_mesh(mesh, what)
+    V, T = closed_triangles(mesh, what, _NEEDS)
     return Target(V, T, _signed(MeshDistance(V, T)))
 
 
