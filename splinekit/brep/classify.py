@@ -8,15 +8,25 @@ Faces (:func:`contains_uv`)
     surface's largest parametric speed, so every ON point is within ``tolerance`` in 3-D.
 
 Solids (:func:`contains`)
-    A bounding-box prefilter, then the generalized winding number of the boundary on a triangle
-    mesh of each face (solid angles of the triangles; 1 inside, 0 outside). Points close to the
-    mesh, where the mesh's chord error could flip the answer, are decided exactly from their
-    closest boundary point: on a face (the surface's closest point, when it lies inside the face's
-    trims) the sign of the outward normal, on an edge the sum of the two faces' normals there; ON
-    when that distance is within the tolerance.
+    A bounding-box prefilter, then the side of the solid's closed tessellation: its exact signed
+    distance, one nearest-triangle search per point (:mod:`splinekit.tessellation.inside`, which
+    shows why that sign is the solid's beyond the tessellation's deviation). Points within the
+    deviation plus the tolerance of the mesh are decided exactly from their closest boundary point:
+    on a face (the surface's closest point, when it lies inside the face's trims) the sign of the
+    outward normal, on an edge the sum of the two faces' normals there; ON when that distance is
+    within the tolerance.
+
+    When the tessellation is not closed (or fails), the slow path: the generalized winding number
+    of the boundary on a coarse triangle mesh of each face (solid angles of the triangles; 1
+    inside, 0 outside), points near those meshes settled exactly as above. Profiled on a box with
+    a through hole, that path spent 5.7 s of 7.5 s per 100,000 points in the winding numbers
+    (every point against every triangle of the faces whose box holds it); the mesh path takes
+    about a tenth of a second.
 """
 
 from __future__ import annotations
+
+import importlib
 
 import numpy as np
 
@@ -144,28 +154,46 @@ def contains(solid, points, tolerance: float | None = None) -> np.ndarray:
     if cand.size == 0:
         return out[0] if single else out
     Q = P[cand]
-    w = _solid_winding_numbers(solid, Q, tol)
-    out[cand] = np.where(np.rint(w) % 2 == 1, np.int8(INSIDE), np.int8(OUTSIDE))
+    sides = _mesh_sides(solid, Q, tol)
+    if sides is not None:
+        codes, near, bound = sides
+        near = np.flatnonzero(near)
+    else:  # no closed tessellation: winding numbers of the faces' coarse meshes (slow)
+        w = _solid_winding_numbers(solid, Q, tol)
+        codes = np.where(np.rint(w) % 2 == 1, np.int8(INSIDE), np.int8(OUTSIDE))
+        near = np.flatnonzero(_near_mesh(solid, Q, tol))
+        bound = None
+    out[cand] = codes
     # near the mesh, its chord error may decide wrongly: settle those points exactly
-    near = np.flatnonzero(_near_mesh(solid, Q, tol))
     if near.size:
-        out[cand[near]] = _closest_feature_side(solid, Q[near], tol, out[cand[near]], project)
+        out[cand[near]] = _closest_feature_side(solid, Q[near], tol, codes[near], project,
+                                                None if bound is None else bound[near])
     return out[0] if single else out
 
 
-def _closest_feature_side(solid, Q, tol, fallback, project):
+def _mesh_sides(solid, Q, tol):
+    """:func:`splinekit.tessellation.inside.mesh_sides`: ``(codes, near, bound)`` or None.
+
+    The tessellation sits below brep in the layer order (it meshes brep's faces), so it is found
+    at run time, as brep's ``fuse``/``cut`` find interop, instead of imported here."""
+    return importlib.import_module("splinekit.tessellation.inside").mesh_sides(solid, Q, tol)
+
+
+def _closest_feature_side(solid, Q, tol, fallback, project, bound=None):
     """Location codes of points ``Q`` near the boundary from their closest boundary point: a
     face's interior foot (sign of the outward normal) or an edge (sign of the two faces' normals
-    summed). Points whose closest feature is a vertex keep ``fallback`` (the winding number)."""
+    summed). Points whose closest feature is a vertex keep ``fallback`` (the mesh's answer).
+    ``bound`` ``(n,)``: upper bounds of the points' distances to the boundary (faces and edges
+    whose box is farther are skipped); by default from the coarse meshes' vertices."""
     n = len(Q)
     best = np.full(n, np.inf)
     side = np.zeros(n)
     faces = solid.faces
-    # the mesh's vertices lie on the boundary: their nearest one bounds the closest distance, so
-    # faces and edges whose box is further away are skipped
-    V, _ = _solid_mesh(solid)
-    from scipy.spatial import cKDTree  # on use: scipy.spatial takes ~0.15 s to import, ten times all of brep
-    bound = cKDTree(V).query(Q)[0] * (1.0 + 1e-9) + tol
+    if bound is None:
+        # the mesh's vertices lie on the boundary: their nearest one bounds the closest distance
+        V, _ = _solid_mesh(solid)
+        from scipy.spatial import cKDTree  # on use: scipy.spatial takes ~0.15 s to import, ten times all of brep
+        bound = cKDTree(V).query(Q)[0] * (1.0 + 1e-9) + tol
     for f in faces:
         sel = np.flatnonzero(_box_distance(Q, f.surface.control_points.reshape(-1, 3)) < np.minimum(best, bound))
         if sel.size == 0:

@@ -315,14 +315,17 @@ class MeshDistance:
             )
         return dist, close, tri
 
-    def signed(self, points, max_distance=np.inf):
+    def signed(self, points, max_distance=np.inf, *, kernels=None):
         """``(signed distance (m,), found (m,))`` in model units, negative inside, for finite
         ``points`` ``(m, 3)``; points farther than ``max_distance`` get ``inf`` and no sign
         (``found`` False). The mesh must be closed and consistently oriented (NotManifoldError
-        otherwise); a mesh oriented inside out as a whole gets negated distances."""
+        otherwise); a mesh oriented inside out as a whole gets negated distances. ``kernels``:
+        the compiled module :data:`KERNELS`, to search with it whatever the query's size (for a
+        caller that has asked the loader itself because its own alternative costs far more per
+        point than the numpy search); by default the query's size decides."""
         fn, en, vn = self.pseudo_normals
         P = (np.asarray(points, dtype=np.float64) - self._shift) / self._scale
-        d, tri, cp, feature = self._nearest(P, max_distance / self._scale)
+        d, tri, cp, feature = self._nearest(P, max_distance / self._scale, kernels)
         found = tri >= 0
         t, f = tri[found], feature[found]
         normal = fn[t]
@@ -357,10 +360,12 @@ class MeshDistance:
                             b.tri, b.n_leaves, b.m, fn, en, vn, out)
         return (out * self._scale).reshape(shape)
 
-    def _nearest(self, P, max_distance):
+    def _nearest(self, P, max_distance, kernels=None):
         """Nearest triangle of unit-box points ``P``: ``(d, triangle, closest, feature)``; beyond
-        ``max_distance`` ``d`` is inf and the triangle -1. Compiled search for large queries."""
-        kernels = _kernels.load(KERNELS, work=len(P) * QUERY_WORK)
+        ``max_distance`` ``d`` is inf and the triangle -1. Compiled search for large queries
+        (or whenever ``kernels`` is given)."""
+        if kernels is None:
+            kernels = _kernels.load(KERNELS, work=len(P) * QUERY_WORK)
         if kernels is not None:
             return self.bvh.nearest(kernels, P, max_distance)
         dist, close, tri, feature = self._search(P)
