@@ -36,6 +36,7 @@ REPO = os.path.dirname(HERE)
 BENCHMARKS = {
     "booleans": (["--quick"], 600),
     "cold_start": (["--quick"], 900),
+    "contains": (["--quick"], 900),
     "continuity": (["--quick"], 900),
     "curvature": (["--quick"], 600),
     "deviation": (["--quick"], 900),

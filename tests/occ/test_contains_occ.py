@@ -62,8 +62,10 @@ def _edge_points(solid, rng, per_edge):
     return np.concatenate(out)
 
 
-def _probe_points(solid, shape, rng, n_random=300, per_face=6, per_edge=2):
-    """Random points in the box (5% margin), points on and 1e-3 / 1e-6 off the faces, on the edges."""
+def _probe_points(solid, shape, rng, n_random=300, per_face=None, per_edge=2):
+    """Random points in the box (5% margin), points on and 1e-3 / 1e-6 off the faces (``per_face``
+    each, default about 120 in all), on the edges."""
+    per_face = max(4, 120 // len(solid.faces)) if per_face is None else per_face
     bb = shape.bounding_box()
     lo, hi = np.array([bb.min.X, bb.min.Y, bb.min.Z]), np.array([bb.max.X, bb.max.Y, bb.max.Z])
     pad = 0.05 * (hi - lo)
