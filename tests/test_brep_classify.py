@@ -16,10 +16,12 @@ import pytest
 from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
+from splinekit import _kernels
 from splinekit.brep import TrimmedFace, box, box_with_hole, cone, cylinder, sphere, torus
 from splinekit.brep.classify import INSIDE, ON, OUTSIDE
 from splinekit.construct import circle, line
 from splinekit.errors import SplineKitError
+from splinekit.pointcloud.meshdistance import KERNELS
 from splinekit.surfaces import BSplineSurface
 
 PLANE = BSplineSurface(1, 1, [0, 0, 1, 1], [0, 0, 1, 1],
@@ -118,8 +120,23 @@ CASES = {
 }
 
 
+@pytest.fixture(params=["mesh", "winding"])
+def path(request, monkeypatch):
+    """Both classification paths: the tessellation's signed distance (compiled search, switched
+    on at once) and the coarse meshes' winding numbers (compiled code off)."""
+    monkeypatch.setenv("SPLINEKIT_NUMBA", "1" if request.param == "mesh" else "0")
+    if request.param == "mesh" and _kernels.load(KERNELS) is None:  # loaded: serves every size
+        pytest.skip("numba is not installed")
+    return request.param
+
+
+def _used(solid, path):
+    """The mesh path answered when it was asked to (its mesh is cached on the solid)."""
+    return path == "winding" or solid._cache.get("inside_mesh") is not None
+
+
 @pytest.mark.parametrize("name", list(CASES))
-def test_solid_contains_against_closed_forms(name):
+def test_solid_contains_against_closed_forms(name, path):
     solid, sdf = CASES[name]
     rng = np.random.default_rng(3)
     lo, hi = np.array([-12.0, -12.0, -12.0]), np.array([12.0, 12.0, 12.0])
@@ -129,10 +146,13 @@ def test_solid_contains_against_closed_forms(name):
     d = sdf(p)
     p, d = p[np.abs(d) > 1e-6], d[np.abs(d) > 1e-6]
     got = solid.contains(p)
-    assert np.array_equal(got, np.where(d < 0, INSIDE, OUTSIDE))
+    assert np.array_equal(got, np.where(d < 0, INSIDE, OUTSIDE)) and _used(solid, path)
+    # far from the boundary only: every point settled by the mesh (or its distance grid) alone
+    far = np.abs(d) > 0.5
+    assert np.array_equal(solid.contains(p[far]), np.where(d[far] < 0, INSIDE, OUTSIDE))
 
 
-def test_solid_contains_near_and_on_the_surface():
+def test_solid_contains_near_and_on_the_surface(path):
     s = sphere(3.0)
     rng = np.random.default_rng(4)
     dirs = rng.normal(size=(300, 3))
@@ -150,5 +170,6 @@ def test_solid_contains_near_and_on_the_surface():
                     [10, 10, 10], [10, 0, 0], [0, 0, 0], [0, 0, 10.5], [4 * math.cos(0.3), 4 * math.sin(0.3), 10]])
     assert b.contains(pts).tolist() == [OUTSIDE, INSIDE, INSIDE, ON, ON, OUTSIDE, OUTSIDE, ON]
     assert b.contains([100.0, 0.0, 0.0]) == OUTSIDE
+    assert _used(s, path) and _used(b, path)
     with pytest.raises(SplineKitError):
         b.contains(np.zeros((2, 2)))

@@ -60,6 +60,13 @@ starts from the previous point's triangle, and neighbours in the query order the
 (100,000 random points against a filleted box's 16,600 triangles: 0.42 s sorted, 0.86 s not)."""
 
 
+GRID_SAMPLES = 1 << 18
+"""Samples of the grid of the mesh's signed distances kept beside it (cubic cells over the solid's
+box, about this many): a point whose nearest sample's distance exceeds the point's distance to
+that sample plus the band takes the sample's sign (the signed distance is 1-Lipschitz), so only
+the points in the cells along the boundary need a nearest-triangle search."""
+
+
 def solid_mesh_distance(solid):
     """``(MeshDistance, dev_bound)`` of the solid's closed tessellation, or None when the
     tessellation is not closed or fails (then the caller classifies without it). Cached on the
@@ -96,13 +103,49 @@ def mesh_sides(solid, points, tolerance: float):
     if found is None:
         return None
     md, dev_bound = found
-    limits.check(n * 8 * 16, "signed distances to the classification mesh")
-    order = _spatial_order(points)
+    band = dev_bound + tolerance
+    limits.check(n * 8 * 24, "signed distances to the classification mesh")
     d = np.empty(n)
-    d[order] = md.signed(points[order], kernels=kernels)[0]
+    # the grid's nearest sample settles the points well away from the boundary
+    grid = _distance_grid(solid, md)
+    if grid is not None:
+        origin, h, values = grid
+        idx = np.clip(np.rint((points - origin) / h).astype(np.intp), 0, np.array(values.shape) - 1)
+        r = np.linalg.norm(points - (origin + idx * h), axis=1)
+        d = values[idx[:, 0], idx[:, 1], idx[:, 2]]
+        ask = np.flatnonzero(np.abs(d) <= r + band)
+        d[ask] = _signed(md, points[ask], kernels)
+    else:
+        d = _signed(md, points, kernels)
     a = np.abs(d)
     codes = np.where(d < 0, np.int8(INSIDE), np.int8(OUTSIDE))
-    return codes, a <= dev_bound + tolerance, a + dev_bound + tolerance
+    return codes, a <= band, a + band
+
+
+def _signed(md, points, kernels):
+    """Signed distances ``(n,)`` of ``points`` to the mesh, the points searched in grid-cell order."""
+    d = np.empty(len(points))
+    if len(points) == 0:
+        return d
+    order = _spatial_order(points)
+    d[order] = md.signed(points[order], kernels=kernels)[0]
+    return d
+
+
+def _distance_grid(solid, md):
+    """``(origin (3,), spacing h, values (i, j, k))``: the mesh's signed distances at the samples
+    ``origin + (i, j, k) h`` of a grid over the solid's box (:data:`GRID_SAMPLES`), cached beside
+    the mesh; None when the compiled grid kernel does not serve."""
+    cache = solid._cache
+    if "inside_grid" not in cache:
+        lo, hi = md.V.min(axis=0), md.V.max(axis=0)
+        ext = np.maximum(hi - lo, 1e-9 * float((hi - lo).max()))
+        h = float(np.cbrt(np.prod(ext) / GRID_SAMPLES))
+        shape = np.ceil(ext / h).astype(np.intp) + 1
+        limits.check(int(np.prod(shape)) * 8 * 2, "the classification mesh's distance grid")
+        values = md.grid_signed(lo, np.full(3, h), shape)
+        cache["inside_grid"] = None if values is None else (lo, h, values)
+    return cache["inside_grid"]
 
 
 def _spatial_order(points):
