@@ -69,7 +69,8 @@ the points in the cells along the boundary need a nearest-triangle search."""
 
 def solid_mesh_distance(solid):
     """``(MeshDistance, dev_bound)`` of the solid's closed tessellation, or None when the
-    tessellation is not closed or fails (then the caller classifies without it). Cached on the
+    tessellation is not closed, encloses a negative volume (faces turned inward) or fails (then
+    the caller classifies without it: winding numbers do not depend on the orientation). Cached on the
     solid (``solid._cache["inside_mesh"]``)."""
     cache = solid._cache
     if "inside_mesh" not in cache:
@@ -77,6 +78,9 @@ def solid_mesh_distance(solid):
             mesh = tessellate(solid, MESH_RTOL, relative=True)
             md = MeshDistance(mesh.vertices, np.asarray(mesh.faces))
             md.pseudo_normals  # NotManifoldError when an edge has not two triangles
+            a, b, c = (md.unit_vertices[md.tris[:, k]] for k in range(3))
+            if not np.einsum("ij,ij->", a, np.cross(b, c)) > 0:  # six times the signed volume
+                raise SplineKitError("the solid's tessellation is not oriented outward")
             # the requested tolerance as a floor: a curved trim on a plane has no surface error
             # to measure, but its chords stand off the trim by up to the tolerance
             dev = max(float(mesh.max_deviation), float(mesh.tolerance))
