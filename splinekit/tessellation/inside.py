@@ -69,8 +69,10 @@ the points in the cells along the boundary need a nearest-triangle search."""
 
 def solid_mesh_distance(solid):
     """``(MeshDistance, dev_bound)`` of the solid's closed tessellation, or None when the
-    tessellation is not closed, encloses a negative volume (faces turned inward) or fails (then
-    the caller classifies without it: winding numbers do not depend on the orientation). Cached on the
+    tessellation is not closed, encloses a negative volume (faces turned inward, against the
+    contract of :class:`~splinekit.brep.Solid`) or fails; then the caller classifies without it,
+    as before this module (winding numbers of coarse face meshes; near the boundary those also
+    trust the faces' normals, so a solid turned inside out is classified wrongly there). Cached on the
     solid (``solid._cache["inside_mesh"]``)."""
     cache = solid._cache
     if "inside_mesh" not in cache:
