@@ -27,6 +27,8 @@ DEFAULT_LATENT = 16
 """Length of a shape's latent code."""
 STEPS_PER_SHAPE = 250
 """Default steps of a family fit per shape (at least 2000 in all)."""
+CODE_LR = 1.0
+"""Learning rate of the latent codes while a family trains, as a multiple of the weights' rate."""
 CODE_STEPS = 500
 """Default steps of :meth:`NeuralSDFFamily.fit_code`."""
 
@@ -104,7 +106,7 @@ class NeuralSDFFamily:
     @classmethod
     def fit(cls, shapes, *, steps: int | None = None, seed: int = 0, encoding: str | None = None,
             width: int = 96, depth: int = 3, latent: int = DEFAULT_LATENT, samples: int = DEFAULT_SAMPLES // 2,
-            batch: int = 1024, lr: float | None = None, tolerance=None, callback=None):
+            batch: int = 1024, lr: float | None = None, code_lr: float = CODE_LR, tolerance=None, callback=None):
         """Train one network and one code per shape of ``shapes`` (closed shapes, as
         :meth:`NeuralSDF.fit` takes); default ``steps``: ``STEPS_PER_SHAPE`` per shape, at least 2000."""
         shapes = list(shapes)
@@ -114,7 +116,7 @@ class NeuralSDFFamily:
         steps = max(2000, STEPS_PER_SHAPE * len(shapes)) if steps is None else steps
         arch = Architecture(**({} if encoding is None else {"encoding": encoding}), width=width, depth=depth,
                             latent=as_int(latent, "latent", minimum=1))
-        settings = Settings(steps=steps, batch=batch, lr=lr)
+        settings = Settings(steps=steps, batch=batch, lr=lr, code_lr=code_lr)
         t0 = time.perf_counter()
         targets = [as_target(s, tolerance) for s in shapes]
         lo = np.min([t.box[0] for t in targets], axis=0)
