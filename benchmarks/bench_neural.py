@@ -178,35 +178,38 @@ def bench_family():
     t0 = time.perf_counter()
     family = NeuralSDFFamily.fit(models)
     family_s = time.perf_counter() - t0
-    cells = 128
-    edge = 2.0 * family.normalization.scale / cells
-    rows, single_bytes = [], 0
+    print(f"  family trained in {family_s:.0f} s, load {os.getloadavg()[0]:.1f}", flush=True)
+    rows, single_bytes, single_s = [], 0, 0.0
     for i, v in enumerate(VASES):
         # one reference at a time, at 3e-5 of the size: eight at 1e-5 held ~10 GB
         ref = patch_reference(f"vase h={v['height']:g} w={v['wall']:g}", models[i], 0, VASE_REFERENCE)
-        fam = measure_mesh(family.shape(i).to_mesh(edge), ref)
+        shape = family.shape(i)
+        fam = measure_mesh(shape.to_mesh(), ref)  # default edge: the one its single network uses
         t0 = time.perf_counter()
         single = NeuralSDF.fit(models[i])
         s_seconds = time.perf_counter() - t0
         single_bytes += single.nbytes
-        one = measure_mesh(single.to_mesh(2.0 * single.normalization.scale / cells), ref)
-        rows.append({"shape": ref.name, "single_chamfer_%": one["chamfer_%"], "single_s": s_seconds,
+        single_s += s_seconds
+        one = measure_mesh(single.to_mesh(), ref)
+        rows.append({"shape": ref.name, "edge_mm": shape.default_edge(), "single_chamfer_%": one["chamfer_%"],
                      "family_chamfer_%": fam["chamfer_%"], "ratio": fam["chamfer_%"] / one["chamfer_%"],
-                     "family_genus": fam["genus"], "family_volume_%": fam["volume_%"]})
+                     "single_genus": one["genus"], "family_genus": fam["genus"], "family_volume_%": fam["volume_%"]})
         print(f"  {ref.name}: single {one['chamfer_%']:.3f} % ({s_seconds:.0f} s), family {fam['chamfer_%']:.3f} %, "
               f"load {os.getloadavg()[0]:.1f}", flush=True)
     print()
-    fmt_cols = ["shape", "single_chamfer_%", "family_chamfer_%", "ratio", "family_volume_%", "family_genus"]
     for r in rows:
-        for c in ("single_chamfer_%", "family_chamfer_%", "family_volume_%"):
+        for c in ("single_chamfer_%", "family_chamfer_%", "family_volume_%", "edge_mm"):
             r[c] = f"{r[c]:.3f}"
-    print_table(rows, fmt_cols)
+    print_table(rows, ["shape", "edge_mm", "single_chamfer_%", "family_chamfer_%", "ratio", "single_genus",
+                       "family_genus", "family_volume_%"])
     print(f"\nfamily: {len(family)} shapes, {family.parameter_count:,} parameters, {family.nbytes:,} bytes, "
           f"trained in {family_s:.0f} s; eight single networks: {single_bytes:,} bytes "
-          f"({single_bytes / family.nbytes:.1f} x the family)")
+          f"({single_bytes / family.nbytes:.1f} x the family), trained in {single_s:.0f} s")
     for i, j in ((0, 7), (1, 6), (2, 5)):
-        mesh = family.interpolate(i, j, 0.5).to_mesh(edge)
-        print(f"interpolated {i}-{j} at t = 0.5: {mesh.n_faces:,} triangles, closed {mesh.is_closed}, genus {genus(mesh)}")
+        for t in (0.25, 0.5, 0.75):
+            mesh = family.interpolate(i, j, t).to_mesh()
+            print(f"interpolated {i}-{j} at t = {t}: {mesh.n_faces:,} triangles, closed {mesh.is_closed}, "
+                  f"genus {genus(mesh):g}", flush=True)
 
 
 def main():

@@ -5,6 +5,11 @@ is the zero set of ``f(., z_i)``. All shapes share one normalization (their comm
 into the cube), so codes can be mixed: :meth:`~NeuralSDFFamily.interpolate` blends two codes
 linearly. A new shape gets a code by optimizing only the code against its samples, with the
 network held fixed (:meth:`~NeuralSDFFamily.fit_code`).
+
+A shape's ``to_mesh()`` defaults to the edge a network of its own would use (its own box across
+``MESH_CELLS``, kept in ``info["mesh_edges"]``), not the family's cube: in a family of vases 100
+to 190 mm tall the cube's 128 cells are 1.9 mm, coarser than the 2.8 mm floor corner of a 4 mm
+wall can take (the marching mesher opened it into a handle); alone the shortest gets 1.0 mm.
 """
 
 from __future__ import annotations
@@ -16,7 +21,7 @@ import numpy as np
 from .._validate import as_int, as_real
 from ..errors import FileFormatError, ParameterError
 from . import fileio
-from .model import DEFAULT_SAMPLES, NeuralOccupancy, NeuralSDF
+from .model import DEFAULT_SAMPLES, MESH_CELLS, NeuralOccupancy, NeuralSDF
 from .network import Architecture, parameter_count
 from .samples import Normalization, as_target, draw_samples
 from .training import Settings, fit_codes, fit_network
@@ -68,23 +73,37 @@ class NeuralSDFFamily:
         """Bytes of the numbers that define every shape (float32)."""
         return 4 * self.parameter_count
 
-    def _with_code(self, code, **info) -> NeuralSDF:
-        return NeuralSDF(self.architecture, self.params, self.normalization, code, {**self.info, **info})
+    def _with_code(self, code, mesh_edge=None, **info) -> NeuralSDF:
+        info = {k: v for k, v in {**self.info, **info}.items() if k != "mesh_edges"}
+        if mesh_edge is not None:
+            info["mesh_edge"] = mesh_edge
+        return NeuralSDF(self.architecture, self.params, self.normalization, code, info)
+
+    def _mesh_edge(self, i: int):
+        """Default mesh edge of shape ``i``: what a network of its own would use (its box, not the
+        family's, across ``MESH_CELLS``), so a small shape's thin walls are not meshed coarser
+        than they would be alone; None for families saved without the boxes."""
+        edges = self.info.get("mesh_edges")
+        return None if edges is None or len(edges) != len(self) else float(edges[i])
 
     def shape(self, i: int) -> NeuralSDF:
         """Shape ``i`` as an implicit (the network with code ``i``)."""
         i = as_int(i, "i")
         if not -len(self) <= i < len(self):
             raise ParameterError(f"shape index {i} out of range for a family of {len(self)}")
-        return self._with_code(self.codes[i], shape=i % len(self))
+        i %= len(self)
+        return self._with_code(self.codes[i], self._mesh_edge(i), shape=i)
 
     def interpolate(self, i: int, j: int, t: float) -> NeuralSDF:
-        """The shape of code ``(1 - t) z_i + t z_j`` (``t`` in [0, 1] interpolates)."""
-        a, b = self.shape(i).latent, self.shape(j).latent
+        """The shape of code ``(1 - t) z_i + t z_j`` (``t`` in [0, 1] interpolates); meshed by
+        default at the finer of the two shapes' edges."""
+        a, b = self.shape(i), self.shape(j)
         t = as_real(t, "t")
         if not np.isfinite(t):
             raise ParameterError(f"t must be finite, got {t!r}")
-        return self._with_code((1.0 - t) * a + t * b, interpolated=[int(i), int(j), t])
+        edges = [e for e in (a.info.get("mesh_edge"), b.info.get("mesh_edge")) if e is not None]
+        return self._with_code((1.0 - t) * a.latent + t * b.latent, min(edges) if edges else None,
+                               interpolated=[int(i), int(j), t])
 
     def fit_code(self, shape, *, steps: int = CODE_STEPS, seed: int = 0, samples: int = DEFAULT_SAMPLES // 4,
                  tolerance=None, callback=None) -> NeuralSDF:
@@ -101,7 +120,7 @@ class NeuralSDFFamily:
         pool = draw_samples(target, self.normalization, samples, seed)
         t0 = time.perf_counter()
         code, losses = fit_codes(self.architecture, self.params, pool, Settings(steps=steps), seed, callback)
-        return self._with_code(code, code_steps=steps, code_loss=losses[-1][1], code_seconds=time.perf_counter() - t0)
+        return self._with_code(code, 2.0 * Normalization.of_box(lo, hi).scale / MESH_CELLS, code_steps=steps, code_loss=losses[-1][1], code_seconds=time.perf_counter() - t0)
 
     @classmethod
     def fit(cls, shapes, *, steps: int | None = None, seed: int = 0, encoding: str | None = None,
@@ -124,7 +143,9 @@ class NeuralSDFFamily:
         norm = Normalization.of_box(lo, hi)
         pools = [draw_samples(t, norm, samples, seed + k) for k, t in enumerate(targets)]
         params, codes, losses = fit_network(arch, "sdf", pools, settings, seed, callback)
-        info = {"steps": settings.steps, "seed": seed, "first_loss": losses[0][1], "loss": losses[-1][1], "seconds": time.perf_counter() - t0}
+        info = {"steps": settings.steps, "seed": seed, "first_loss": losses[0][1], "loss": losses[-1][1],
+                "seconds": time.perf_counter() - t0,
+                "mesh_edges": [2.0 * Normalization.of_box(*t.box).scale / MESH_CELLS for t in targets]}
         return cls(arch, params, codes, norm, info)
 
     def save(self, path) -> str:
