@@ -172,12 +172,26 @@ def bench_encodings(refs, steps):
     print_table(rows, SINGLE_COLUMNS)
 
 
-def bench_family():
+def cached(cache, name, cls, fit):
+    """``cls.load(cache/name)`` when it is there, else ``fit()`` (saved there when ``cache``);
+    its training seconds are the model's own record (``info["seconds"]``)."""
+    path = None if cache is None else os.path.join(cache, name)
+    if path is not None and os.path.exists(path):
+        model = cls.load(path)
+        print(f"  {name}: loaded from the cache (trained in {model.info['seconds']:.0f} s)", flush=True)
+        return model
+    model = fit()
+    if path is not None:
+        os.makedirs(cache, exist_ok=True)
+        model.save(path)
+    return model
+
+
+def bench_family(cache=None):
     print(f"\n## Eight vases in one network (NeuralSDFFamily) against eight single networks\n")
     models = [build_model("vase", **v) for v in VASES]
-    t0 = time.perf_counter()
-    family = NeuralSDFFamily.fit(models)
-    family_s = time.perf_counter() - t0
+    family = cached(cache, "family-8-vases.nsdf", NeuralSDFFamily, lambda: NeuralSDFFamily.fit(models))
+    family_s = family.info["seconds"]
     print(f"  family trained in {family_s:.0f} s, load {os.getloadavg()[0]:.1f}", flush=True)
     rows, single_bytes, single_s = [], 0, 0.0
     for i, v in enumerate(VASES):
@@ -185,9 +199,8 @@ def bench_family():
         ref = patch_reference(f"vase h={v['height']:g} w={v['wall']:g}", models[i], 0, VASE_REFERENCE)
         shape = family.shape(i)
         fam = measure_mesh(shape.to_mesh(), ref)  # default edge: the one its single network uses
-        t0 = time.perf_counter()
-        single = NeuralSDF.fit(models[i])
-        s_seconds = time.perf_counter() - t0
+        single = cached(cache, f"vase-h{v['height']:g}-w{v['wall']:g}.nsdf", NeuralSDF, lambda: NeuralSDF.fit(models[i]))
+        s_seconds = single.info["seconds"]
         single_bytes += single.nbytes
         single_s += s_seconds
         one = measure_mesh(single.to_mesh(), ref)
@@ -220,6 +233,8 @@ def main():
     parser.add_argument("--steps", type=int, default=1000, help="steps of the --encodings comparison")
     parser.add_argument("--shapes", default="sphere,torus,mug", help="single shapes to run (comma-separated)")
     parser.add_argument("--quick", action="store_true", help="the sphere alone (no family)")
+    parser.add_argument("--cache", default=None, help="directory to keep the family's and single vase networks in "
+                        "(loaded from there when present: measure again without training again)")
     args = parser.parse_args()
     if args.quick:
         args.shapes, args.single = "sphere", True
@@ -235,7 +250,7 @@ def main():
         if not args.family:
             bench_single(references(args.shapes.split(",")))
         if not args.single:
-            bench_family()
+            bench_family(args.cache)
     print(f"\nload average at start {load0:.2f}, at end {os.getloadavg()[0]:.2f} (other processes share the "
           f"{os.cpu_count()} CPUs and slow every timing); total {time.perf_counter() - t0:.0f} s")
 

@@ -30,9 +30,10 @@ __all__ = ["DEFAULT_LATENT", "NeuralSDFFamily", "load"]
 
 DEFAULT_LATENT = 16
 """Length of a shape's latent code."""
-STEPS_PER_SHAPE = 250
-"""Default steps of a family fit per shape (at least 2000 in all)."""
-CODE_LR = 1.0
+STEPS_PER_SHAPE = 1000
+"""Default steps of a family fit per shape (at least 2000 in all): a step draws its batch from all
+shapes, so this many give each shape as many samples as a single network's default fit sees."""
+CODE_LR = 10.0
 """Learning rate of the latent codes while a family trains, as a multiple of the weights' rate."""
 CODE_STEPS = 500
 """Default steps of :meth:`NeuralSDFFamily.fit_code`."""
