@@ -8,8 +8,9 @@ network held fixed (:meth:`~NeuralSDFFamily.fit_code`).
 
 A shape's ``to_mesh()`` defaults to the edge a network of its own would use (its own box across
 ``MESH_CELLS``, kept in ``info["mesh_edges"]``), not the family's cube: in a family of vases 100
-to 190 mm tall the cube's 128 cells are 1.9 mm, coarser than the 2.8 mm floor corner of a 4 mm
-wall can take (the marching mesher opened it into a handle); alone the shortest gets 1.0 mm.
+to 190 mm tall the cube's 128 cells are 1.9 mm, under two cells across the 2.8 mm floor corner of
+a 4 mm wall, where a network of the shortest vase alone is meshed at 1.0 mm (the mesh edge alone
+moved a vase's Chamfer distance by a quarter: ``benchmarks/bench_neural.py``).
 """
 
 from __future__ import annotations
