@@ -122,7 +122,9 @@ class NeuralSDFFamily:
         pool = draw_samples(target, self.normalization, samples, seed)
         t0 = time.perf_counter()
         code, losses = fit_codes(self.architecture, self.params, pool, Settings(steps=steps), seed, callback)
-        return self._with_code(code, 2.0 * Normalization.of_box(lo, hi).scale / MESH_CELLS, code_steps=steps, code_loss=losses[-1][1], code_seconds=time.perf_counter() - t0)
+        edge = 2.0 * Normalization.of_box(lo, hi).scale / MESH_CELLS  # as a network of its own
+        return self._with_code(code, edge, code_steps=steps, code_loss=losses[-1][1],
+                               code_seconds=time.perf_counter() - t0)
 
     @classmethod
     def fit(cls, shapes, *, steps: int | None = None, seed: int = 0, encoding: str | None = None,

@@ -182,8 +182,9 @@ class NeuralSDF(NeuralImplicit):
     KIND = "sdf"
 
     def to_mesh(self, edge_length=None, bounds=None):
-        """The zero set as a closed triangle mesh; default edge length :meth:`default_edge`. Over its own bounds the network is sampled in a narrow band around the
-        surface only (:func:`~splinekit.neural.meshing.band_mesh`); with ``bounds`` on the full grid."""
+        """The zero set as a closed triangle mesh; default edge length :meth:`default_edge`. Over
+        its own bounds the network is sampled in a narrow band around the surface only
+        (:func:`~splinekit.neural.meshing.band_mesh`); with ``bounds`` on the full grid."""
         if bounds is not None:
             return super().to_mesh(edge_length, bounds)
         return band_mesh(self, self.default_edge() if edge_length is None else edge_length)
