@@ -10,7 +10,8 @@ A shape's ``to_mesh()`` defaults to the edge a network of its own would use (its
 ``MESH_CELLS``, kept in ``info["mesh_edges"]``), not the family's cube: in a family of vases 100
 to 190 mm tall the cube's 128 cells are 1.9 mm, under two cells across the 2.8 mm floor corner of
 a 4 mm wall, where a network of the shortest vase alone is meshed at 1.0 mm (the mesh edge alone
-moved a vase's Chamfer distance by a quarter: ``benchmarks/bench_neural.py``).
+moved a vase's Chamfer distance by a quarter: ``benchmarks/bench_neural.py``, which also has the
+measured defaults: ``STEPS_PER_SHAPE``, ``CODE_LR``).
 """
 
 from __future__ import annotations
