@@ -1,7 +1,8 @@
 """NeuralSDFFamily: two spheres in one network, codes mixed and a third code fitted alone.
 
-Reference values are the exact radii of the spheres. The training takes tens of seconds on a
-loaded 2-core machine, so the module runs with ``-m slow``.
+Reference values are the exact radii of the spheres and the genus from the Euler characteristic
+of the extracted mesh. One tiny family (seconds) runs in the default run; the larger one, tens of
+seconds on a loaded 2-core machine, runs with ``-m slow``.
 """
 
 import numpy as np
@@ -15,15 +16,36 @@ from splinekit.mesh.components import genus
 from splinekit.neural import NeuralSDF, NeuralSDFFamily
 from splinekit.neural import load as load_any
 
-pytestmark = pytest.mark.slow
-
 RADII = (0.6, 0.9)
 SETTINGS = dict(steps=1200, width=48, depth=2, latent=8, samples=4000, batch=512, lr=1e-3)
+TINY = dict(steps=400, width=32, depth=2, latent=4, samples=2000, batch=256, lr=1e-3)
 
 
 @pytest.fixture(scope="module")
 def family():
     return NeuralSDFFamily.fit([si.sphere(radius=r) for r in RADII], seed=0, **SETTINGS)
+
+
+def _on_sphere(r, n=1000):
+    p = np.random.default_rng(4).normal(size=(n, 3))
+    return r * p / np.linalg.norm(p, axis=1, keepdims=True)
+
+
+def test_tiny_family_holds_both_spheres_and_meshes_each_at_its_own_resolution():
+    fam = NeuralSDFFamily.fit([si.sphere(radius=r) for r in RADII], seed=0, **TINY)
+    for i, r in enumerate(RADII):
+        shape = fam.shape(i)
+        # on its own sphere |F| is small; on the other one it is not (the codes tell them apart)
+        assert np.abs(shape(_on_sphere(r))).mean() < 0.04
+        assert np.abs(shape(_on_sphere(RADII[1 - i]))).mean() > 0.2
+        # default mesh edge: the box of this sphere (side 2 r) filling 0.8 of a cube of 128 cells
+        assert shape.default_edge() == pytest.approx(2.0 * (r / 0.8) / 128, rel=1e-3)  # box of a tessellation
+        mesh = shape.to_mesh()
+        assert mesh.is_closed and genus(mesh) == 0
+    mid = fam.interpolate(0, 1, 0.5)
+    assert mid.default_edge() == pytest.approx(fam.shape(0).default_edge())
+    mesh = mid.to_mesh()
+    assert mesh.is_closed and genus(mesh) == 0
 
 
 def _radius(shape, n=400):
@@ -33,6 +55,7 @@ def _radius(shape, n=400):
     return float(np.linalg.norm(shape.closest_points(0.75 * d), axis=1).mean())
 
 
+@pytest.mark.slow
 def test_each_code_holds_its_sphere(family):
     assert len(family) == 2
     for i, r in enumerate(RADII):
@@ -42,6 +65,7 @@ def test_each_code_holds_its_sphere(family):
         family.shape(2)
 
 
+@pytest.mark.slow
 def test_interpolated_shape_lies_between_and_is_watertight(family):
     mid = family.interpolate(0, 1, 0.5)
     assert RADII[0] + 0.03 < _radius(mid) < RADII[1] - 0.03
@@ -49,6 +73,7 @@ def test_interpolated_shape_lies_between_and_is_watertight(family):
     assert mesh.is_closed and genus(mesh) == 0
 
 
+@pytest.mark.slow
 def test_fit_code_moves_only_the_code(family):
     new = family.fit_code(si.sphere(radius=0.75), steps=300, seed=1)
     assert abs(_radius(new) - 0.75) < 0.05
@@ -56,6 +81,7 @@ def test_fit_code_moves_only_the_code(family):
         assert np.array_equal(a["W"], b["W"]) and np.array_equal(a["b"], b["b"])
 
 
+@pytest.mark.slow
 def test_family_file_round_trip(family, tmp_path):
     path = tmp_path / "two.nsdf"
     family.save(path)

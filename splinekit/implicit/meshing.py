@@ -82,16 +82,19 @@ class ImplicitMesh(PolyMesh):
     def __repr__(self):
         return super().__repr__().replace("PolyMesh(", "ImplicitMesh(", 1)[:-1] + f", deviation={self.deviation:.3g})"
 
+    @classmethod
+    def of_topology(cls, vertices, topology, deviation, edge_length) -> "ImplicitMesh":
+        """A mesh of ``vertices (V, 3)`` and a checked ``Topology`` (adopted, not copied), with
+        its measured ``deviation`` and the grid's ``edge_length`` (for meshers outside this module)."""
+        mesh = cls._adopt(vertices, topology)
+        object.__setattr__(mesh, "deviation", float(deviation))
+        object.__setattr__(mesh, "edge_length", float(edge_length))
+        return mesh
+
 
 def _rebuild(vertices, face_indices, face_offsets, deviation, edge_length):
-    return _wrap(vertices, Topology(len(vertices), face_indices, face_offsets, check=True), deviation, edge_length)
-
-
-def _wrap(vertices, topology, deviation, edge_length) -> ImplicitMesh:
-    mesh = ImplicitMesh._adopt(vertices, topology)
-    object.__setattr__(mesh, "deviation", float(deviation))
-    object.__setattr__(mesh, "edge_length", float(edge_length))
-    return mesh
+    topology = Topology(len(vertices), face_indices, face_offsets, check=True)
+    return ImplicitMesh.of_topology(vertices, topology, deviation, edge_length)
 
 
 def _grid_axes(lo, hi, step):
@@ -234,4 +237,4 @@ def mesh_implicit(implicit, edge_length, bounds=None) -> ImplicitMesh:
     else:
         mesh, V = _closed_off(values, lo, hi, spacing)
     T = mesh.topology.face_indices.reshape(-1, 3)
-    return _wrap(V, mesh.topology, deviation(implicit, V, T), h)
+    return ImplicitMesh.of_topology(V, mesh.topology, deviation(implicit, V, T), h)

@@ -33,7 +33,7 @@ from ..errors import ParameterError, SplineKitError
 from ._checks import check_bounds, origin3, spacing3
 from .base import Implicit
 from .marching import grid_mesh
-from .meshing import _wrap, deviation
+from .meshing import ImplicitMesh, deviation
 
 __all__ = ["BYTES_PER_GRID_POINT", "MAX_GRID_POINTS", "SampledSDF", "sample"]
 
@@ -314,7 +314,7 @@ class SampledSDF(Implicit):
             mesh = grid_mesh(self._grid_dense(), self._origin, self._spacing)
             V = np.asarray(mesh.vertices)
             dev = deviation(self, V, np.asarray(mesh.faces).reshape(-1, 3))
-            return _wrap(V, mesh.topology, dev, float(self._spacing.max()))
+            return ImplicitMesh.of_topology(V, mesh.topology, dev, float(self._spacing.max()))
         if edge_length is None:
             edge_length = float(self._spacing.min())
         return super().to_mesh(edge_length, bounds)

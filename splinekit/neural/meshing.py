@@ -20,7 +20,7 @@ from .. import limits
 from ..errors import ParameterError
 from ..implicit._checks import positive
 from ..implicit.marching import grid_mesh
-from ..implicit.meshing import BYTES_PER_GRID_POINT, MAX_GRID_POINTS, PADDING, _wrap, deviation
+from ..implicit.meshing import BYTES_PER_GRID_POINT, MAX_GRID_POINTS, PADDING, ImplicitMesh, deviation
 
 __all__ = ["BLOCK", "LIPSCHITZ", "band_mesh"]
 
@@ -65,4 +65,4 @@ def band_mesh(implicit, edge_length):
     mesh = grid_mesh(values, lo, spacing)
     V = np.asarray(mesh.vertices)
     T = mesh.topology.face_indices.reshape(-1, 3)
-    return _wrap(V, mesh.topology, deviation(implicit, V, T), h)
+    return ImplicitMesh.of_topology(V, mesh.topology, deviation(implicit, V, T), h)

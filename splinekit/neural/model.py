@@ -109,10 +109,15 @@ class NeuralImplicit(Implicit):
 
     def to_mesh(self, edge_length=None, bounds=None):
         """The zero set as a closed triangle mesh (:func:`~splinekit.implicit.mesh_implicit`);
-        default edge length: the training cube / ``MESH_CELLS``."""
-        if edge_length is None:
-            edge_length = 2.0 * self.normalization.scale / MESH_CELLS
-        return mesh_implicit(self, edge_length, bounds)
+        default edge length :meth:`default_edge`."""
+        return mesh_implicit(self, self.default_edge() if edge_length is None else edge_length, bounds)
+
+    def default_edge(self) -> float:
+        """Edge length of :meth:`to_mesh` without one (model units): the training cube /
+        ``MESH_CELLS``, or ``info["mesh_edge"]`` when the model says (a family's shape occupies
+        part of its cube and is meshed as finely as a network of its own would be)."""
+        edge = self.info.get("mesh_edge")
+        return float(edge) if edge is not None else 2.0 * self.normalization.scale / MESH_CELLS
 
     def save(self, path) -> str:
         """Write weights, code and configuration to one file (:mod:`.fileio`), atomically."""
@@ -177,14 +182,12 @@ class NeuralSDF(NeuralImplicit):
     KIND = "sdf"
 
     def to_mesh(self, edge_length=None, bounds=None):
-        """The zero set as a closed triangle mesh; default edge length: the training cube /
-        ``MESH_CELLS``. Over its own bounds the network is sampled in a narrow band around the
-        surface only (:func:`~splinekit.neural.meshing.band_mesh`); with ``bounds`` on the full grid."""
+        """The zero set as a closed triangle mesh; default edge length :meth:`default_edge`. Over
+        its own bounds the network is sampled in a narrow band around the surface only
+        (:func:`~splinekit.neural.meshing.band_mesh`); with ``bounds`` on the full grid."""
         if bounds is not None:
             return super().to_mesh(edge_length, bounds)
-        if edge_length is None:
-            edge_length = 2.0 * self.normalization.scale / MESH_CELLS
-        return band_mesh(self, edge_length)
+        return band_mesh(self, self.default_edge() if edge_length is None else edge_length)
 
 
 class NeuralOccupancy(NeuralImplicit):

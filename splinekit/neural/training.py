@@ -46,11 +46,14 @@ class Settings:
     """How long and how hard to train.
 
     steps : optimizer steps; batch : surface points and space points per step; lr : Adam's
-    initial learning rate (default by encoding: ``3e-4`` sine, ``1e-3`` fourier)."""
+    initial learning rate (default by encoding: ``3e-4`` sine, ``1e-3`` fourier); code_lr : the
+    latent codes' learning rate as a multiple of ``lr`` (DeepSDF trains codes and weights at
+    different rates)."""
 
     steps: int = 1000
     batch: int = 1024
     lr: float | None = None
+    code_lr: float = 1.0
 
     def __post_init__(self):
         object.__setattr__(self, "steps", as_int(self.steps, "steps", minimum=1))
@@ -61,6 +64,10 @@ class Settings:
             lr = as_real(self.lr, "lr")
             if not (np.isfinite(lr) and lr > 0):
                 raise ParameterError(f"lr must be a finite number > 0, got {self.lr!r}")
+        code_lr = as_real(self.code_lr, "code_lr")
+        if not (np.isfinite(code_lr) and code_lr > 0):
+            raise ParameterError(f"code_lr must be a finite number > 0, got {self.code_lr!r}")
+        object.__setattr__(self, "code_lr", code_lr)
 
     def learning_rate(self, arch: Architecture) -> float:
         if self.lr is not None:
@@ -108,14 +115,20 @@ def _draw(data, key, batch: int):
 
 
 @functools.lru_cache(maxsize=32)
-def _compiled(arch: Architecture, kind: str, mode: str, batch: int, steps: int, lr: float):
+def _compiled(arch: Architecture, kind: str, mode: str, batch: int, steps: int, lr: float, code_lr: float = 1.0):
     """``(optimizer, block)`` for one training configuration, compiled once per process: a
     second fit with the same settings (a test, a benchmark repeat) skips JAX's compilation.
 
     ``block(state, opt_state, fixed, data, key, start, count)`` runs ``count`` Adam steps from
     step ``start``; ``mode`` is ``"network"`` (weights and codes train) or ``"codes"`` (only the
-    codes train, the weights are ``fixed``)."""
-    opt = optax.adam(optax.cosine_decay_schedule(lr, steps, alpha=FINAL_LR))
+    codes train, the weights are ``fixed``); in ``"network"`` mode the codes step at ``code_lr``
+    times the weights' rate (Adam's step does not scale with the gradient, so a separate optimizer)."""
+    adam = lambda rate: optax.adam(optax.cosine_decay_schedule(rate, steps, alpha=FINAL_LR))  # noqa: E731
+    if mode == "network" and arch.latent and code_lr != 1.0:
+        opt = optax.multi_transform({"net": adam(lr), "codes": adam(lr * code_lr)},
+                                    lambda state: {k: jax.tree_util.tree_map(lambda _: k, v) for k, v in state.items()})
+    else:
+        opt = adam(lr)
 
     def loss_of(state, fixed, b):
         net = state["net"] if mode == "network" else fixed
@@ -138,7 +151,7 @@ def _compiled(arch: Architecture, kind: str, mode: str, batch: int, steps: int, 
 
 def _run(arch, kind, mode, state, fixed, data, settings: Settings, lr: float, seed: int, callback):
     """Adam for ``settings.steps`` steps from ``state``; ``(state, losses [(step, mean loss)])``."""
-    opt, block = _compiled(arch, kind, mode, settings.batch, settings.steps, float(lr))
+    opt, block = _compiled(arch, kind, mode, settings.batch, settings.steps, float(lr), settings.code_lr)
     opt_state = opt.init(state)
     key = jax.random.PRNGKey(seed)
     losses = []
