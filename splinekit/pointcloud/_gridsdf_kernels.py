@@ -45,6 +45,19 @@ SLACK = 1e-12
 measures a few more triangles)."""
 
 
+TOL = 1e-9
+"""Absolute margin (unit box) of the half-plane bounds: a triangle lies in its computed plane,
+and on the computed side of the line through its closest point, up to rounding of about
+``1e-16 / WMIN`` times its size; the bounds are lowered by this much."""
+
+WMIN = 1e-6
+"""Shortest in-plane offset (unit box) whose direction is used for the half-plane bound;
+shorter ones (rounding could turn them) bound by the plane alone."""
+
+CHUNKS = 256
+"""Parallel chunks of blocks (each allocates its work arrays once)."""
+
+
 @njit(cache=True, inline="always")
 def _signed(px, py, pz, d2, t, region, cp, fn, en, vn):
     """``sqrt(d2)`` with the sign of ``(p - cp) . n`` for the pseudo-normal ``n`` of the feature
@@ -60,8 +73,30 @@ def _signed(px, py, pz, d2, t, region, cp, fn, en, vn):
     return -d if side < 0.0 else d
 
 
+@njit(cache=True, inline="always")
+def _keep(e, t, reg, dt, q, dx, dy, dz, plane, ct, cd, cq, cn, cw):
+    """Store candidate ``e``: triangle ``t`` whose closest point to the block centre ``c`` is
+    ``q`` (feature ``reg``) at distance ``dt``, ``(dx, dy, dz) = c - q``. With it the half-plane
+    that holds the triangle: its plane (unit normal ``plane[t]``, zero when degenerate) cut by
+    the line through ``q`` across ``w``, the in-plane part of ``c - q`` (zero for a face point:
+    then only the plane bounds)."""
+    nx, ny, nz = plane[t, 0], plane[t, 1], plane[t, 2]
+    ct[e] = t
+    cd[e] = dt
+    cq[e, 0], cq[e, 1], cq[e, 2] = q[0], q[1], q[2]
+    cn[e, 0], cn[e, 1], cn[e, 2] = nx, ny, nz
+    cw[e, 0], cw[e, 1], cw[e, 2] = 0.0, 0.0, 0.0
+    if reg == 0:
+        return
+    a = dx * nx + dy * ny + dz * nz
+    wx, wy, wz = dx - a * nx, dy - a * ny, dz - a * nz
+    lw = np.sqrt(wx * wx + wy * wy + wz * wz)
+    if lw > WMIN:
+        cw[e, 0], cw[e, 1], cw[e, 2] = wx / lw, wy / lw, wz / lw
+
+
 @njit(cache=True, parallel=True)
-def grid_signed(origin, spacing, shape, limit, block, lo, hi, tlo, thi, tri, L, m, fn, en, vn, out):
+def grid_signed(origin, spacing, shape, limit, block, lo, hi, tlo, thi, tri, L, m, fn, en, vn, plane, ball, out):
     """Signed distances (negative inside) of the samples ``origin + (i, j, k) * spacing`` of a
     grid of ``shape`` into ``out`` (flat, C order); ``inf`` for samples whose squared distance
     exceeds ``limit``. Triangles ``tri (m, 3, 3)``, boxes and pseudo-normals (face ``fn (m, 3)``,
@@ -71,15 +106,26 @@ def grid_signed(origin, spacing, shape, limit, block, lo, hi, tlo, thi, tri, L, 
     by = (ny + block - 1) // block
     bz = (nz + block - 1) // block
     n_blocks = bx * by * bz
-    per = 4  # blocks per parallel chunk, consecutive along z so that warm starts carry over
+    # blocks per parallel chunk, consecutive along z so that warm starts carry over; few chunks,
+    # so that the per-chunk work arrays (each as long as the mesh) are allocated rarely
+    per = max(4, (n_blocks + CHUNKS - 1) // CHUNKS)
     reach = np.sqrt(limit)
     for chunk in prange((n_blocks + per - 1) // per):
         stack = np.empty(128, dtype=np.int64)
         q = np.empty(3)
         cp = np.empty(3)
-        ct = np.empty(m, dtype=np.int64)  # the block's candidates: triangle, distance, gradient
+        # the block's candidates (triangle, distance, closest point, plane normal, in-plane
+        # direction away from the triangle), then the same sorted by distance, one row per axis
+        ct = np.empty(m, dtype=np.int64)
         cd = np.empty(m)
-        cg = np.empty((m, 3))
+        cq = np.empty((m, 3))
+        cn = np.empty((m, 3))
+        cw = np.empty((m, 3))
+        st = np.empty(m, dtype=np.int64)
+        sq = np.empty((3, m))
+        sn = np.empty((3, m))
+        sw = np.empty((3, m))
+        lb = np.empty(m)
         prev = -1
         for blk in range(chunk * per, min(n_blocks, (chunk + 1) * per)):
             ib = blk // (by * bz)
@@ -122,6 +168,7 @@ def grid_signed(origin, spacing, shape, limit, block, lo, hi, tlo, thi, tri, L, 
             gx, gy, gz = (cx - cp[0]) / D, (cy - cp[1]) / D, (cz - cp[2]) / D
             eps = r * r / (2.0 * (D - r)) + SLACK * (D + r)
             s = hx * abs(gx) + hy * abs(gy) + hz * abs(gz)
+            hn = np.sqrt(hx * hx + hy * hy + hz * hz)
             R = D + s + eps + r
             R2 = R * R
             # range query: the triangles within R of the centre that pass the block test
@@ -142,7 +189,18 @@ def grid_signed(origin, spacing, shape, limit, block, lo, hi, tlo, thi, tri, L, 
                 for t in range(first, min(first + 4, m)):
                     if box_d2(cx, cy, cz, tlo, thi, t) > R2:
                         continue
-                    closest_on_triangle(cx, cy, cz, tri, t, q)
+                    # the block test from the triangle's bounding sphere (centre b, radius rho)
+                    # before its exact distance: d_t >= |c - b| - rho and
+                    # |g_c - g_t| <= |g_c - (c - b) / |c - b|| + 2 rho / |c - b|
+                    vx, vy, vz = cx - ball[t, 0], cy - ball[t, 1], cz - ball[t, 2]
+                    mc = np.sqrt(vx * vx + vy * vy + vz * vz)
+                    rho = ball[t, 3]
+                    if mc > 2.0 * rho:
+                        ex, ey, ez = gx - vx / mc, gy - vy / mc, gz - vz / mc
+                        turn = np.sqrt(ex * ex + ey * ey + ez * ez) + 2.0 * rho / mc
+                        if mc - rho - D - eps > hn * turn * (1.0 + SLACK):
+                            continue
+                    reg = closest_on_triangle(cx, cy, cz, tri, t, q)
                     dx, dy, dz = cx - q[0], cy - q[1], cz - q[2]
                     d2 = dx * dx + dy * dy + dz * dz
                     if not d2 <= R2:  # also drops the NaN of a degenerate triangle
@@ -150,14 +208,17 @@ def grid_signed(origin, spacing, shape, limit, block, lo, hi, tlo, thi, tri, L, 
                     dt = np.sqrt(d2)
                     ux, uy, uz = dx / dt, dy / dt, dz / dt
                     if dt - D - eps <= hx * abs(gx - ux) + hy * abs(gy - uy) + hz * abs(gz - uz):
-                        ct[nc] = t
-                        cd[nc] = dt
-                        cg[nc, 0], cg[nc, 1], cg[nc, 2] = ux, uy, uz
+                        _keep(nc, t, reg, dt, q, dx, dy, dz, plane, ct, cd, cq, cn, cw)
                         nc += 1
             # candidates by distance from the centre: a sample stops at the first one whose
             # lower bound d_t - |x - c| already exceeds its best
             by_d = np.argsort(cd[:nc])
             sd = cd[by_d]
+            for e in range(nc):  # sorted copies, contiguous for the per-sample loop
+                c = by_d[e]
+                st[e] = ct[c]
+                for a in range(3):
+                    sq[a, e], sn[a, e], sw[a, e] = cq[c, a], cn[c, a], cw[c, a]
             t0 = tc
             for i in range(i0, i1):
                 for j in range(j0, j1):
@@ -179,14 +240,25 @@ def grid_signed(origin, spacing, shape, limit, block, lo, hi, tlo, thi, tri, L, 
                                 cp[0], cp[1], cp[2] = q[0], q[1], q[2]
                         ox, oy, oz = px - cx, py - cy, pz - cz
                         off = np.sqrt(ox * ox + oy * oy + oz * oz)
+                        # the candidates near enough (sphere bound), then their half-plane bounds
+                        # all at once (a branch-free loop the compiler vectorizes)
+                        ne = nc
+                        cut = np.sqrt(b2) * (1.0 + SLACK) + off
                         for e in range(nc):
-                            if sd[e] - off > np.sqrt(b2) * (1.0 + SLACK):
+                            if sd[e] > cut:
+                                ne = e
                                 break
-                            c = by_d[e]
-                            lb = cd[c] + cg[c, 0] * ox + cg[c, 1] * oy + cg[c, 2] * oz
-                            if lb * lb > b2 * (1.0 + SLACK):  # lb > 0: D > 2r bounds |x - c|
+                        for e in range(ne):
+                            ax, ay, az = px - sq[0, e], py - sq[1, e], pz - sq[2, e]
+                            hh = max(abs(ax * sn[0, e] + ay * sn[1, e] + az * sn[2, e]) - TOL, 0.0)
+                            ss = max(ax * sw[0, e] + ay * sw[1, e] + az * sw[2, e] - TOL, 0.0)
+                            lb[e] = hh * hh + ss * ss
+                        for e in range(ne):
+                            if lb[e] > b2:
                                 continue
-                            t = ct[c]
+                            t = st[e]
+                            if t == bt:
+                                continue
                             reg = closest_on_triangle(px, py, pz, tri, t, q)
                             dx, dy, dz = px - q[0], py - q[1], pz - q[2]
                             d2 = dx * dx + dy * dy + dz * dz
