@@ -13,7 +13,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from test_sdf_grid import brute_distance, star_mesh, winding_number
 
-from splinekit import _kernels
+from splinekit import _kernels, limits
+from splinekit.errors import ResourceLimitError
 from splinekit.implicit.frommesh import from_mesh
 from splinekit.mesh import PolyMesh, primitives
 from splinekit.mesh.geometry import triangulate
@@ -167,3 +168,12 @@ def test_a_sliver_triangle_gets_no_plane_and_the_grid_stays_exact(compiled):
     plane, _ = MeshDistance(mesh.vertices, T2)._bvh_planes
     assert int((np.abs(plane).sum(axis=1) == 0).sum()) == 1
     check_random_samples(mesh, from_mesh(mesh, 24), 1500)
+
+
+def test_the_kernels_work_arrays_are_checked_against_the_memory_budget(compiled):
+    dist = MeshDistance.of_mesh(star_mesh())
+    need = meshdistance.GRID_WORK_BYTES * len(dist.tris)
+    with limits.budget(need // 2), pytest.raises(ResourceLimitError, match="work arrays"):
+        dist.grid_signed(np.full(3, -2.0), np.full(3, 0.2), (20, 20, 20))
+    with limits.budget(1 << 30):
+        assert np.isfinite(dist.grid_signed(np.full(3, -2.0), np.full(3, 0.2), (20, 20, 20))).all()

@@ -32,11 +32,12 @@ cross products, which would overflow for meshes of size ~1e77 and underflow for 
 
 from __future__ import annotations
 
+import os
 from functools import cached_property
 
 import numpy as np
 
-from .. import _kernels
+from .. import _kernels, limits
 from ..errors import ControlPointError, NotManifoldError, ParameterError
 from ..mesh.geometry import triangulate
 from ..mesh.polymesh import PolyMesh
@@ -62,6 +63,10 @@ GRID_BLOCK = 4
 THIN = 1e-6
 """A triangle whose edge cross product is shorter than this times its two edges' lengths gets
 no plane in the grid kernel's bounds (it is then always measured exactly)."""
+
+GRID_WORK_BYTES = 176
+"""Bytes per triangle of the grid kernel's work arrays (a block's candidates: triangle, distance,
+closest point, plane, in-plane direction, sorted copies), held once per thread."""
 
 # features of a closest point: 0 face interior, 1-3 vertex 0-2, 4 edge 01, 5 edge 12, 6 edge 20
 FACE, EDGE01, EDGE12, EDGE20 = 0, 4, 5, 6
@@ -368,6 +373,8 @@ class MeshDistance:
         kernels = _kernels.load(GRID_KERNELS, work=total)
         if kernels is None:
             return None
+        limits.check(GRID_WORK_BYTES * len(self.tris) * (os.cpu_count() or 1),
+                     f"the grid distance kernel's work arrays for {len(self.tris):,} triangles")
         fn, en, vn = self._bvh_normals
         b = self.bvh
         o = (np.asarray(origin, dtype=np.float64) - self._shift) / self._scale
