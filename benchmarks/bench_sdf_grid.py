@@ -30,21 +30,30 @@ the output, the float64 grid. Agreement with splinekit (max |difference|, differ
 is printed; on the full case Open3D's ray-parity sign is wrong at a few samples (the
 generalized winding number, by brute force, agrees with splinekit there).
 
-Profile of ``from_mesh`` at 128^3 (81,920 triangles): the compiled grid kernel
-(``splinekit/pointcloud/_gridsdf_kernels.py``) takes about 94 % (pseudo-normals and the
-hierarchy 3 %, the component sign pass 2 %). Before it, a bounding-volume-hierarchy walk per
-sample cost about 1,000 box tests and 100 triangle distances for each sample more than four
-voxels from the surface (most of the grid). The kernel now works by blocks of 4^3 samples:
-one exact query for the block centre, one range query for the triangles that convexity
-bounds leave possible, then per sample about 190 one-line lower-bound tests and 23 exact
-triangle distances (16 % of the samples, those near the surface, still walk the hierarchy
-one by one). That is 2.5-3x faster than the per-sample walk, and 4-5x faster than libigl
-and Open3D, the exact peers. pysdf stays ahead: it measures about six triangles per
-sample, the faces around the nearest vertex, which is not the exact distance (its largest
-error here is about 1e-4, 0.01 % of the size). What remains for an exact answer is the
-near-tie: far from a finely triangulated surface a few dozen triangles lie within rounding
-of curvature (|x - c|^2 / 2d) of the nearest one, and each must be measured to prove which
-is nearest.
+Profile of ``from_mesh`` at 128^3 (81,920 triangles): the kernel call (``MeshDistance.grid_signed``
+with its pseudo-normals and planes; the compiled kernel is ``splinekit/pointcloud/_gridsdf_kernels.py``)
+takes 4.47 of from_mesh's 4.59 CPU seconds, the component sign pass most of the rest. The kernel
+works by blocks of 4^3 samples: one exact query for the block centre, one range query for the
+triangles that convexity bounds leave possible, then a scan per sample. Measured on one thread
+(CPU seconds at load 13-15, so +-10 %): centre queries 0.3-0.4 s, range queries 1.9-2.4 s
+(about 2,000 hierarchy nodes, 1,000 triangle boxes and 550 exact distances per far block of 64
+samples, of which 275 pass the block test), per-sample scans 1.3-1.5 s (about 200 half-plane
+bounds and 11 exact distances per far sample), blocks near the surface (split in eight) 0.2 s:
+4.2-4.5 s in all. pysdf spends 4.0-4.3 CPU seconds on the same points (two threads). This
+session's changes (half-plane bounds per sample instead of the linear bound: 25 -> 11 exact
+distances per sample; a ball test before each exact distance in the range query: 1,626 -> 550
+per block; near blocks split in eight instead of a hierarchy walk per sample) took from_mesh on
+one thread (``NUMBA_NUM_THREADS=1``) from 5.5-5.8 to 4.7-5.0 CPU seconds, back to back (load 14):
+about 1.2x. pysdf measures about six triangles per sample, the faces around the nearest vertex,
+which is not the exact distance (its largest error here is about 1e-4, 0.01 % of the size). What limits an exact answer: far from a finely
+triangulated surface a few hundred triangles lie within the blocks' bound slack
+(``r^2 / 2 (D - r)``, the curvature of the upper bound) of the nearest one, and each must be
+bounded per sample to prove which is nearest; most of the exact distances left are ties (the
+six triangles around the nearest vertex). Three times pysdf needs about 0.75 microseconds of CPU
+per sample in all, below what the per-sample scan alone costs now (0.8-0.9 per far sample); the next step would be a
+hierarchy of candidate lists (8^3 -> 4^3 -> 2^3 blocks, each child filtering its parent's list
+by the half-plane bound linearized at its own centre, no exact distance) and candidates by
+feature (vertex, edge, face) so that ties are measured once.
 
 The grid is then meshed both ways: marching tetrahedra straight from the samples
 (``SampledSDF.to_mesh()``, including the deviation measurement) and the base class's meshing

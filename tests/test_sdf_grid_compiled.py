@@ -13,7 +13,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from test_sdf_grid import brute_distance, star_mesh, winding_number
 
-from splinekit import _kernels
+from splinekit import _kernels, limits
+from splinekit.errors import ResourceLimitError
 from splinekit.implicit.frommesh import from_mesh
 from splinekit.mesh import PolyMesh, primitives
 from splinekit.mesh.geometry import triangulate
@@ -107,3 +108,72 @@ def test_compiled_narrow_band_matches_the_dense_grid(compiled):
     dv = dense.values
     assert nb.n_stored == int((np.abs(dv) < band).sum())
     assert np.allclose(nb.values, np.where(np.abs(dv) < band, dv, np.sign(dv) * band), atol=1e-12)
+
+
+def lumpy_sphere(level):
+    """The benchmark's case: an icosphere with radius 1 + 0.3 sin(3 theta) sin^2(phi) + 0.15 cos(5 phi)."""
+    m = primitives.icosphere(level)
+    V = np.asarray(m.vertices)
+    th = np.arctan2(V[:, 1], V[:, 0])
+    ph = np.arccos(np.clip(V[:, 2], -1, 1))
+    r = 1 + 0.3 * np.sin(3 * th) * np.sin(ph) ** 2 + 0.15 * np.cos(5 * ph)
+    return PolyMesh(V * r[:, None], m.faces)
+
+
+def check_random_samples(mesh, sdf, n, seed=0, per=200):
+    """Brute-force distance and winding-number sign at ``n`` random samples of the grid (in
+    chunks: the references hold every (sample, triangle) pair)."""
+    V = np.asarray(mesh.vertices)
+    T, _ = triangulate(mesh)
+    pick = np.random.default_rng(seed).choice(sdf.values.size, n, replace=False)
+    P = sdf.points().reshape(-1, 3)[pick]
+    vals = sdf.values.ravel()[pick]
+    with np.errstate(divide="ignore", invalid="ignore"):  # a sliver's barycentric solve
+        d = np.concatenate([brute_distance(P[s : s + per], V, T) for s in range(0, n, per)])
+    w = np.concatenate([winding_number(P[s : s + per], V, T) for s in range(0, n, per)])
+    scale = np.abs(V).max()
+    assert np.allclose(np.abs(vals), d, atol=1e-12 * scale, rtol=0)
+    clear = np.abs(vals) > 1e-9 * scale
+    assert np.array_equal((vals < 0)[clear], (w > 0.5)[clear])
+    return vals
+
+
+def test_lumpy_sphere_random_samples_against_brute_force(compiled):
+    # 5,120 triangles at 40^3: far blocks (candidate lists), blocks near the surface split in
+    # eight, blocks cut by the grid end
+    mesh = lumpy_sphere(4)
+    vals = check_random_samples(mesh, from_mesh(mesh, 40), 1200)
+    assert (vals < 0).mean() > 0.1 and (vals > 0).mean() > 0.1
+
+
+@pytest.mark.slow
+def test_benchmark_case_random_samples_against_brute_force(compiled):
+    # the issue-17 case itself: 81,920 triangles at 128^3
+    mesh = lumpy_sphere(6)
+    check_random_samples(mesh, from_mesh(mesh, 128), 3000, per=20)
+
+
+def test_a_sliver_triangle_gets_no_plane_and_the_grid_stays_exact(compiled):
+    # split the edge (a, b) of two neighbouring triangles at a point m a hair off its midpoint:
+    # the triangle (b, m, a) closing the mesh is a sliver whose normal rounding could turn, so
+    # the kernel's bounds must not use its plane (it is always measured exactly)
+    m = primitives.icosphere(1)
+    V = np.asarray(m.vertices, dtype=float)
+    T = np.asarray(triangulate(m)[0])
+    a, b, c = T[0]
+    mid = 0.5 * (V[a] + V[b]) * (1 + 1e-9)
+    k = len(V)
+    T2 = np.concatenate([[[a, k, c], [k, b, c], [b, k, a]], T[1:]])
+    mesh = PolyMesh(np.vstack([V, mid]), T2)
+    plane, _ = MeshDistance(mesh.vertices, T2)._bvh_planes
+    assert int((np.abs(plane).sum(axis=1) == 0).sum()) == 1
+    check_random_samples(mesh, from_mesh(mesh, 24), 1500)
+
+
+def test_the_kernels_work_arrays_are_checked_against_the_memory_budget(compiled):
+    dist = MeshDistance.of_mesh(star_mesh())
+    need = meshdistance.GRID_WORK_BYTES * len(dist.tris)
+    with limits.budget(need // 2), pytest.raises(ResourceLimitError, match="work arrays"):
+        dist.grid_signed(np.full(3, -2.0), np.full(3, 0.2), (20, 20, 20))
+    with limits.budget(1 << 30):
+        assert np.isfinite(dist.grid_signed(np.full(3, -2.0), np.full(3, 0.2), (20, 20, 20))).all()

@@ -32,11 +32,12 @@ cross products, which would overflow for meshes of size ~1e77 and underflow for 
 
 from __future__ import annotations
 
+import os
 from functools import cached_property
 
 import numpy as np
 
-from .. import _kernels
+from .. import _kernels, limits
 from ..errors import ControlPointError, NotManifoldError, ParameterError
 from ..mesh.geometry import triangulate
 from ..mesh.polymesh import PolyMesh
@@ -58,6 +59,14 @@ GRID_KERNELS = "splinekit.pointcloud._gridsdf_kernels"
 GRID_BLOCK = 4
 """Samples along each side of the blocks :meth:`MeshDistance.grid_signed` shares its work over
 (module notes of its kernels: 4 measured fastest on 82k triangles at 128^3, ahead of 2 and 8)."""
+
+THIN = 1e-6
+"""A triangle whose edge cross product is shorter than this times its two edges' lengths gets
+no plane in the grid kernel's bounds (it is then always measured exactly)."""
+
+GRID_WORK_BYTES = 176
+"""Bytes per triangle of the grid kernel's work arrays (a block's candidates: triangle, distance,
+closest point, plane, in-plane direction, sorted copies), held once per thread."""
 
 # features of a closest point: 0 face interior, 1-3 vertex 0-2, 4 edge 01, 5 edge 12, 6 edge 20
 FACE, EDGE01, EDGE12, EDGE20 = 0, 4, 5, 6
@@ -297,6 +306,24 @@ class MeshDistance:
         return (np.ascontiguousarray(fn[order]), np.ascontiguousarray(en[order]),
                 np.ascontiguousarray(vn[self.tris[order]]))
 
+    @cached_property
+    def _bvh_planes(self):
+        """Per triangle in the hierarchy's order: unit plane normal ``(m, 3)`` (zero for a
+        triangle too thin for its normal to be accurate) and bounding ball ``(m, 4)`` (centroid,
+        radius), for the bounds of :mod:`._gridsdf_kernels`."""
+        tri = self.bvh.tri
+        e1, e2 = tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]
+        n = np.cross(e1, e2)
+        ln = np.linalg.norm(n, axis=1)
+        # a cross product this small against its edges has a direction rounding may turn
+        thin = ~(ln > THIN * np.linalg.norm(e1, axis=1) * np.linalg.norm(e2, axis=1))
+        plane = n / np.where(thin, 1.0, ln)[:, None]
+        plane[thin] = 0.0
+        cen = tri.mean(axis=1)
+        rad = np.linalg.norm(tri - cen[:, None], axis=2).max(axis=1)
+        ball = np.column_stack([cen, rad * (1.0 + 1e-12) + 1e-15])  # rounding may only widen it
+        return np.ascontiguousarray(plane), np.ascontiguousarray(ball)
+
     # -- queries ---------------------------------------------------------------------------
     def query(self, points):
         """``(distances (m,), closest points (m, 3), triangle (m,))`` of ``points`` ``(m, 3)``.
@@ -349,6 +376,8 @@ class MeshDistance:
         kernels = _kernels.load(GRID_KERNELS, work=total)
         if kernels is None:
             return None
+        limits.check(GRID_WORK_BYTES * len(self.tris) * (os.cpu_count() or 1),
+                     f"the grid distance kernel's work arrays for {len(self.tris):,} triangles")
         fn, en, vn = self._bvh_normals
         b = self.bvh
         o = (np.asarray(origin, dtype=np.float64) - self._shift) / self._scale
@@ -356,8 +385,9 @@ class MeshDistance:
         with np.errstate(over="ignore"):
             limit = float(max_distance / self._scale) ** 2
         out = np.empty(total)
+        plane, ball = self._bvh_planes
         kernels.grid_signed(o, h, np.array(shape, dtype=np.int64), limit, GRID_BLOCK, b.lo, b.hi, b.tlo, b.thi,
-                            b.tri, b.n_leaves, b.m, fn, en, vn, out)
+                            b.tri, b.n_leaves, b.m, fn, en, vn, plane, ball, out)
         return (out * self._scale).reshape(shape)
 
     def _nearest(self, P, max_distance, kernels=None):
