@@ -49,6 +49,7 @@ from .edges import _face_name, check_domains, edge_uses, group_uses, sample_grou
 from .face_grids import face_grids
 from .result import Tessellation
 from .surfaces import BYTES_PER_TRIANGLE
+from .untangle import crossing, untangle
 from .welding import close_pairs, components
 
 __all__ = ["tessellate_faces"]
@@ -90,8 +91,8 @@ class _Points:
 
 
 def _loops(faces, uses, groups, samples, vid_of_group, scales):
-    """Per face, its loops as ``(uv (k, 2), xyz (k, 3), vid (k,))`` closed polygons (last point
-    not repeated), checked: closed in 3-D and in ``(u, v)``, inside the surface's domain, the
+    """Per face, its loops as ``(uv (k, 2), xyz (k, 3), vid (k,), use (k,))`` closed polygons
+    (last point not repeated; ``use``: the edge use each point belongs to), checked: closed in 3-D and in ``(u, v)``, inside the surface's domain, the
     outer loop counter-clockwise and the inner loops clockwise."""
     group_of = np.empty(len(uses), dtype=np.int64)
     for g, group in enumerate(groups):
@@ -101,7 +102,7 @@ def _loops(faces, uses, groups, samples, vid_of_group, scales):
     for f, face in enumerate(faces):
         name = _face_name(face, f)
         for l, loop in enumerate(face.boundary_loops()):
-            uvs, xyzs, vids = [], [], []
+            uvs, xyzs, vids, own = [], [], [], []
             for _ in loop:
                 g = group_of[k]
                 smp = samples[g]
@@ -113,6 +114,7 @@ def _loops(faces, uses, groups, samples, vid_of_group, scales):
                 uvs.append(uv)
                 xyzs.append(xyz)
                 vids.append(vid)
+                own.append(np.full(len(uv) - 1, k))
                 k += 1
             # closure: each edge must end where the next one starts, in 3-D and in (u, v)
             for j in range(len(uvs)):
@@ -135,7 +137,7 @@ def _loops(faces, uses, groups, samples, vid_of_group, scales):
             if (area <= 0) if l == 0 else (area >= 0):
                 want = "counter-clockwise (outer loop)" if l == 0 else "clockwise (inner loop)"
                 raise ParameterError(f"{name}: loop {l} faces the wrong way: it must run {want} in (u, v), material on its left")
-            out[f].append((uv, xyz, vid))
+            out[f].append((uv, xyz, vid, np.concatenate(own)))
     return out
 
 
@@ -203,6 +205,12 @@ class _Layout:
         out[:, 0] += self.x0[fidx]
         return out
 
+    def unplace(self, fidx, P):
+        """The inverse of :meth:`place`."""
+        out = P.copy()
+        out[:, 0] -= self.x0[fidx]
+        return out / self.scale[fidx] + self.lo[fidx]
+
 
 def _densify(P, segs, step):
     """Points every ``step`` or closer along the segments ``P[segs]``."""
@@ -213,42 +221,26 @@ def _densify(P, segs, step):
     return a[seg] + (b - a)[seg] * frac[:, None]
 
 
-def _crossing(P, segs):
-    """Index of a segment that crosses or touches another non-adjacent one (``P[segs]``
-    ``(s, 2, 2)``), or -1. A sweep along x: candidate pairs have overlapping x ranges (few, for
-    trims made of short chords), then exact orientation tests. Triangle must never see crossing
-    segments: it splits them at new points (or, for some inputs, crashes)."""
-    A, B = P[segs[:, 0]], P[segs[:, 1]]
-    x0, x1 = np.minimum(A[:, 0], B[:, 0]), np.maximum(A[:, 0], B[:, 0])
-    order = np.argsort(x0, kind="stable")
-    xs = x0[order]
-    end = np.searchsorted(xs, x1[order], side="right")
-    count = np.maximum(end - np.arange(1, len(xs) + 1), 0)
-    total = int(count.sum())
-    if total > 1_000_000:
-        limits.check(total * 64, "the trim crossing test")
-    i = np.repeat(np.arange(len(xs)), count)
-    j = i + 1 + (np.arange(i.size) - np.repeat(np.cumsum(count) - count, count))
-    a, b = order[i], order[j]
-    shared = (segs[a, 0] == segs[b, 0]) | (segs[a, 0] == segs[b, 1]) | (segs[a, 1] == segs[b, 0]) | (segs[a, 1] == segs[b, 1])
-    a, b = a[~shared], b[~shared]
-
-    def orient(p, q, r):
-        return np.sign((q[:, 0] - p[:, 0]) * (r[:, 1] - p[:, 1]) - (q[:, 1] - p[:, 1]) * (r[:, 0] - p[:, 0]))
-
-    o1, o2 = orient(A[a], B[a], A[b]), orient(A[a], B[a], B[b])
-    o3, o4 = orient(A[b], B[b], A[a]), orient(A[b], B[b], B[a])
-    hit = (o1 * o2 <= 0) & (o3 * o4 <= 0)
-    # collinear pairs (all orientations zero) cross only if their extents overlap
-    col = (o1 == 0) & (o2 == 0)
-    if col.any():
-        ya0, ya1 = np.minimum(A[a, 1], B[a, 1]), np.maximum(A[a, 1], B[a, 1])
-        yb0, yb1 = np.minimum(A[b, 1], B[b, 1]), np.maximum(A[b, 1], B[b, 1])
-        xa0, xa1, xb0, xb1 = x0[a], x1[a], x0[b], x1[b]
-        overlap = (np.maximum(xa0, xb0) <= np.minimum(xa1, xb1)) & (np.maximum(ya0, yb0) <= np.minimum(ya1, yb1))
-        hit &= ~col | overlap
-    k = np.flatnonzero(hit)
-    return int(a[k[0]]) if k.size else -1
+def _without_crossings(faces, uses, batch, layout, pface, puv, pxyz, segs, owner):
+    """The boundary points' ``(u, v)`` ``(n, 2)``, where trims cross moved apart as far as the
+    edges' own tolerances allow (:func:`.untangle.untangle`: the surface at a moved point's new
+    ``(u, v)`` must lie within its edge's tolerance of its 3-D point); else ParameterError
+    naming the face. ``owner`` ``(n,)``: the edge use of each point."""
+    P = layout.place(pface, puv)
+    bad = crossing(P, segs)
+    if bad < 0:
+        return puv
+    corner = np.concatenate([[True], owner[1:] != owner[:-1]])
+    weight = np.array([u.edge.tolerance for u in uses], dtype=np.float64)
+    fixed = untangle(P, segs, owner, corner, weight)
+    if fixed is not None:
+        uv = layout.unplace(pface, fixed[0])
+        k = np.flatnonzero(fixed[1])
+        off = np.linalg.norm(batch.evaluate(pface[k], uv[k, 0], uv[k, 1]) - pxyz[k], axis=1)
+        if np.all(off <= weight[owner[k]]):
+            return uv
+    f = int(pface[segs[bad, 0]])
+    raise ParameterError(f"{_face_name(faces[f], f)}: its trimming loops cross or touch each other (or themselves)")
 
 
 def _half_edges(T):
@@ -329,10 +321,12 @@ def tessellate_faces(faces, tol: float, angle_tol, size: float) -> Tessellation:
     pts = _Points()
     seg_loop = []
     sizes = []
+    owner = []
     for f, face_loops in enumerate(loops):
-        for l, (uv, xyz, vid) in enumerate(face_loops):
+        for l, (uv, xyz, vid, use) in enumerate(face_loops):
             sizes.append(len(uv))
             seg_loop.append(l)
+            owner.append(use)
             pts.add(f, uv, xyz, vid)
     sizes = np.array(sizes)
     seg_loop = np.repeat(seg_loop, sizes)
@@ -343,6 +337,7 @@ def tessellate_faces(faces, tol: float, angle_tol, size: float) -> Tessellation:
     segs = np.column_stack([point, after])
     pface, puv, pxyz, pvid = pts.arrays()
     nb = len(pface)
+    puv = _without_crossings(faces, prep.uses, batch, layout, pface, puv, pxyz, segs, np.concatenate(owner))
     dense = _densify(layout.place(pface, puv), segs, 0.5 * CLEARANCE)
     gf, guv = _grid_points(grids, layout, dense)
     n_vid = len(edge_xyz)
@@ -355,10 +350,6 @@ def tessellate_faces(faces, tol: float, angle_tol, size: float) -> Tessellation:
     pvid = np.concatenate([pvid, np.arange(n_vid, n_vid + len(gf))])
     n_vid += len(gf)
 
-    bad = _crossing(layout.place(pface[:nb], puv[:nb]), segs)
-    if bad >= 0:
-        f = int(pface[segs[bad, 0]])
-        raise ParameterError(f"{_face_name(faces[f], f)}: its trimming loops cross or touch each other (or themselves)")
     # How far each boundary point lies off its face (edges of a sloppy file are off by up to their
     # own tolerance, 1e-2 in some CAD exports): the flat mesh cannot come closer to the surface than
     # its corners, so a sample may deviate by the tolerance plus its corners' offset. Measuring
