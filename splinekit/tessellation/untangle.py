@@ -22,12 +22,14 @@ from .. import limits
 
 __all__ = ["crossing", "crossing_pairs", "untangle"]
 
-SHIFT = 0.02
+SHIFT = 1e-5
 """Distance (scaled grid steps) at which a moved boundary point is put inside the fixed edge's
-polyline; doubled each round while crossings remain."""
+polyline, ten times more each round while crossings remain. Small: a flat direction of a face
+has few, long grid steps, so a step can be a large distance in space (the caller's check
+against the edge tolerance decides); Triangle's exact predicates take such thin slivers."""
 REACH = 1.0
 """Only points within this distance (scaled grid steps) of the other edge's polyline move."""
-ROUNDS = 4
+ROUNDS = 5
 
 
 def _orient(p, q, r):
@@ -144,7 +146,7 @@ def untangle(P, segs, owner, corner, weight):
         for mv, fx in pairs:
             pts = np.flatnonzero((owner == mv) & ~corner)
             if pts.size:
-                moved += _push(P, pts, segs[seg_owner == fx], SHIFT * 2.0**r)
+                moved += _push(P, pts, segs[seg_owner == fx], SHIFT * 10.0**r)
         if moved == 0:
             return None
     return None
