@@ -111,6 +111,18 @@ def _diagonal(points) -> float:
     return float(np.linalg.norm(hi - lo))
 
 
+def _faces_diagonal(faces) -> float:
+    """The bounding-box diagonal of the faces' control points, kept in the first face's cache
+    (faces are immutable) with the face set it belongs to."""
+    cache = faces[0]._cache
+    hit = cache.get("diagonal")
+    if hit is not None and len(hit[0]) == len(faces) and all(a is b for a, b in zip(hit[0], faces)):
+        return hit[1]
+    size = _diagonal(np.concatenate([np.asarray(f.surface.control_points).reshape(-1, 3) for f in faces]))
+    cache["diagonal"] = tuple(faces), size
+    return size
+
+
 def tessellate(obj, tolerance=None, *, angle_tolerance=DEFAULT_ANGLE_TOLERANCE, relative: bool = False, levels: int = 2):
     """Adaptive tessellation of a curve, a surface, a patch set or a subdivision surface.
 
@@ -199,7 +211,7 @@ def tessellate(obj, tolerance=None, *, angle_tolerance=DEFAULT_ANGLE_TOLERANCE, 
     if kind == "curve":
         size = _diagonal(np.asarray(item.control_points))
     elif kind == "faces":
-        size = _diagonal(np.concatenate([np.asarray(f.surface.control_points).reshape(-1, 3) for f in item]))
+        size = _faces_diagonal(item)
     else:
         size = _diagonal(np.concatenate([np.asarray(s.control_points).reshape(-1, 3) for s in item]))
     if not np.isfinite(size):

@@ -45,8 +45,9 @@ from ..errors import BackendError, ParameterError
 from ..tolerances import WELD
 from .batch import CurveBatch, SurfaceBatch
 from .cells import second_derivative_bounds
-from .edges import _face_name, check_domains, edge_uses, group_uses, sample_groups
+from .edges import _face_name, _pieces, check_domains, edge_uses, group_uses, sample_groups
 from .face_grids import face_grids
+from .loops import Layout, LoopTable, gather_loops
 from .result import Tessellation
 from .surfaces import BYTES_PER_TRIANGLE
 from .untangle import crossing, untangle
@@ -56,8 +57,6 @@ __all__ = ["tessellate_faces"]
 
 MAX_ROUNDS = 8
 """Largest number of measure-and-refine rounds."""
-UV_GAP = 0.25
-"""Largest gap (scaled grid steps) between one edge's last (u, v) and the next edge's first."""
 CLEARANCE = 0.5
 """Grid points closer than this (in scaled grid steps) to a trim are dropped."""
 # WELD (from splinekit.tolerances): weld distance of edge end points, relative to the model's
@@ -73,95 +72,30 @@ def _triangulator():
     return triangle
 
 
-class _Points:
-    """The growing point set of the triangulation: per point its face, ``(u, v)``, 3-D position
-    and mesh vertex (boundary points of several faces share a mesh vertex)."""
-
-    def __init__(self):
-        self.face, self.uv, self.xyz, self.vid = [], [], [], []
-
-    def add(self, face, uv, xyz, vid):
-        self.face.append(np.broadcast_to(np.asarray(face, dtype=np.int64), (len(uv),)))
-        self.uv.append(np.asarray(uv, dtype=np.float64).reshape(-1, 2))
-        self.xyz.append(np.asarray(xyz, dtype=np.float64).reshape(-1, 3))
-        self.vid.append(np.asarray(vid, dtype=np.int64).reshape(-1))
-
-    def arrays(self):
-        return (np.concatenate(self.face), np.concatenate(self.uv), np.concatenate(self.xyz), np.concatenate(self.vid))
-
-
-def _loops(faces, uses, groups, samples, vid_of_group, scales):
-    """Per face, its loops as ``(uv (k, 2), xyz (k, 3), vid (k,), use (k,))`` closed polygons
-    (last point not repeated; ``use``: the edge use each point belongs to), checked: closed in 3-D and in ``(u, v)``, inside the surface's domain, the
-    outer loop counter-clockwise and the inner loops clockwise."""
-    group_of = np.empty(len(uses), dtype=np.int64)
-    for g, group in enumerate(groups):
-        group_of[group] = g
-    out = [[] for _ in faces]
-    k = 0
-    for f, face in enumerate(faces):
-        name = _face_name(face, f)
-        for l, loop in enumerate(face.boundary_loops()):
-            uvs, xyzs, vids, own = [], [], [], []
-            for _ in loop:
-                g = group_of[k]
-                smp = samples[g]
-                uv, vid = smp.uv[k], vid_of_group[g]
-                xyz = np.broadcast_to(smp.points[:1], (len(uv), 3)) if smp.degenerate else smp.points
-                s = smp.params[k]
-                if s[-1] < s[0]:  # this use runs against the group's samples
-                    uv, vid, xyz = uv[::-1], vid[::-1], xyz[::-1]
-                uvs.append(uv)
-                xyzs.append(xyz)
-                vids.append(vid)
-                own.append(np.full(len(uv) - 1, k))
-                k += 1
-            # closure: each edge must end where the next one starts, in 3-D and in (u, v)
-            for j in range(len(uvs)):
-                nxt = (j + 1) % len(uvs)
-                if vids[j][-1] != vids[nxt][0]:
-                    gap = float(np.linalg.norm(xyzs[j][-1] - xyzs[nxt][0]))
-                    raise ParameterError(f"{name}: loop {l} is not closed: edge {j} ends {gap:.3g} away from where edge {nxt} starts")
-                # (a corner at a pole may jump in u: the gap must only stay well below the grid step)
-                if np.hypot(*((uvs[j][-1] - uvs[nxt][0]) * scales[f])) > UV_GAP:
-                    raise ParameterError(
-                        f"{name}: loop {l} is not closed in (u, v): edge {j} ends at {uvs[j][-1].tolist()}, "
-                        f"edge {nxt} starts at {uvs[nxt][0].tolist()}")
-            uv = np.concatenate([x[:-1] for x in uvs])
-            xyz = np.concatenate([x[:-1] for x in xyzs])
-            vid = np.concatenate([x[:-1] for x in vids])
-            if len(uv) < 2 + (len(uvs) == 1):
-                raise ParameterError(f"{name}: loop {l} encloses no area")
-            nx = np.concatenate([uv[1:], uv[:1]])
-            area = 0.5 * np.sum(uv[:, 0] * nx[:, 1] - nx[:, 0] * uv[:, 1])
-            if (area <= 0) if l == 0 else (area >= 0):
-                want = "counter-clockwise (outer loop)" if l == 0 else "clockwise (inner loop)"
-                raise ParameterError(f"{name}: loop {l} faces the wrong way: it must run {want} in (u, v), material on its left")
-            out[f].append((uv, xyz, vid, np.concatenate(own)))
-    return out
-
-
-def _edge_vertices(samples, size, tolerance):
+def _edge_vertices(samples, size, tolerance, memo):
     """Mesh vertices of the edge samples: end points welded (within the weld distance), inner
-    samples numbered after them. Returns ``(vid_of_group, xyz (n, 3))``."""
-    ends = np.concatenate([[s.points[0], s.points[-1]] for s in samples]) if samples else np.zeros((0, 3))
-    pairs = close_pairs(ends, max(WELD * size, 10.0 * tolerance))
-    lab = components(len(ends), pairs[:, 0], pairs[:, 1]) if len(pairs) else np.arange(len(ends))
-    first, end_vid = np.unique(lab, return_index=True, return_inverse=True)[1:]
-    end_vid = end_vid.reshape(-1, 2)
-    xyz = [ends[first]]
-    n = len(first)
-    vid_of_group = []
-    for g, s in enumerate(samples):
-        if s.degenerate:
-            m = len(next(iter(s.uv.values())))
-            vid_of_group.append(np.full(m, end_vid[g, 0]))
-            continue
-        m = len(s.points)
-        vid_of_group.append(np.concatenate([[end_vid[g, 0]], np.arange(n, n + m - 2), [end_vid[g, 1]]]))
-        xyz.append(s.points[1:-1])
-        n += m - 2
-    return vid_of_group, np.concatenate(xyz)
+    samples numbered after them. Returns ``(vid_of_group, xyz (n, 3))``. The ends are the edges'
+    vertices at every tolerance, so their welding is kept in ``memo`` (the face set's)."""
+    if "ends" not in memo:
+        ends = np.concatenate([[s.points[0], s.points[-1]] for s in samples]) if samples else np.zeros((0, 3))
+        pairs = close_pairs(ends, max(WELD * size, 10.0 * tolerance))
+        lab = components(len(ends), pairs[:, 0], pairs[:, 1]) if len(pairs) else np.arange(len(ends))
+        first, end_vid = np.unique(lab, return_index=True, return_inverse=True)[1:]
+        memo["ends"] = ends[first], end_vid.reshape(-1, 2)
+    corners, end_vid = memo["ends"]
+    deg = np.array([s.degenerate for s in samples], dtype=bool)
+    m = np.array([len(next(iter(s.uv.values()))) if s.degenerate else len(s.points) for s in samples], dtype=np.int64)
+    inner = np.where(deg, 0, m - 2)
+    base = len(corners) + np.cumsum(inner) - inner  # first inner vertex of each group
+    g = np.repeat(np.arange(len(samples)), m)
+    j = np.arange(int(m.sum())) - np.repeat(np.cumsum(m) - m, m)
+    vid = base[g] + j - 1
+    vid[j == 0] = end_vid[g[j == 0], 0]
+    last = j == m[g] - 1
+    vid[last] = end_vid[g[last], 1]
+    vid[deg[g]] = end_vid[g[deg[g]], 0]
+    xyz = [corners] + [s.points[1:-1] for s in samples if not s.degenerate]
+    return _pieces(vid, np.cumsum(m)[:-1]), np.concatenate(xyz)
 
 
 def _grid_points(grids, layout, dense):
@@ -185,31 +119,6 @@ def _grid_points(grids, layout, dense):
     d, _ = cKDTree(dense).query(layout.place(fidx, uv), distance_upper_bound=CLEARANCE)
     keep = ~np.isfinite(d)
     return fidx[keep], uv[keep]
-
-
-class _Layout:
-    """The faces' scaled parameter planes side by side: face ``f``'s point ``uv`` sits at
-    ``(uv - lo[f]) * scale[f] + (x0[f], 0)``."""
-
-    GAP = 4.0
-
-    def __init__(self, loops, scales):
-        self.scale = scales
-        self.lo = np.stack([lp[0][0].min(axis=0) for lp in loops])
-        self.hi = np.stack([lp[0][0].max(axis=0) for lp in loops])
-        width = (self.hi[:, 0] - self.lo[:, 0]) * scales[:, 0]
-        self.x0 = np.concatenate([[0.0], np.cumsum(width + self.GAP)[:-1]])
-
-    def place(self, fidx, uv):
-        out = (uv - self.lo[fidx]) * self.scale[fidx]
-        out[:, 0] += self.x0[fidx]
-        return out
-
-    def unplace(self, fidx, P):
-        """The inverse of :meth:`place`."""
-        out = P.copy()
-        out[:, 0] -= self.x0[fidx]
-        return out / self.scale[fidx] + self.lo[fidx]
 
 
 def _densify(P, segs, step):
@@ -278,7 +187,7 @@ class _Prepared:
     second-derivative bounds, the edge uses, their pcurves' batch evaluator (domains checked),
     the groups of uses that are one edge and the edge sampler's tolerance-independent memo."""
 
-    __slots__ = ("faces", "size", "batch", "bounds", "edge_tol", "uses", "pcurves", "groups", "memo")
+    __slots__ = ("faces", "size", "batch", "bounds", "edge_tol", "uses", "pcurves", "groups", "table", "memo")
 
     def __init__(self, faces, size):
         self.faces, self.size = tuple(faces), size
@@ -289,6 +198,7 @@ class _Prepared:
         self.pcurves = CurveBatch([u.edge.pcurve for u in self.uses])
         check_domains(self.uses, self.pcurves, self.batch)
         self.groups = group_uses(self.uses, max(WELD * size, 2.0 * self.edge_tol), self.pcurves, self.batch)
+        self.table = LoopTable(self.faces, self.uses, self.groups)
         self.memo = {}
 
     @classmethod
@@ -310,34 +220,20 @@ def tessellate_faces(faces, tol: float, angle_tol, size: float) -> Tessellation:
     triangle = _triangulator()
     prep = _Prepared.of(faces, size)
     batch, uses, groups, edge_tol = prep.batch, prep.uses, prep.groups, prep.edge_tol
-    grids = face_grids(batch, tol, angle_tol, prep.bounds)
+    grids = face_grids(batch, tol, angle_tol, prep.bounds, prep.memo)
     scales = np.stack([g.scale for g in grids])
     samples = sample_groups(uses, groups, scales, tol, angle_tol, batch, prep.pcurves, prep.memo)
-    vid_of_group, edge_xyz = _edge_vertices(samples, size, edge_tol)
-    loops = _loops(faces, uses, groups, samples, vid_of_group, scales)
-    layout = _Layout(loops, scales)
-
-    # boundary points and segments (each loop closed on itself)
-    pts = _Points()
-    seg_loop = []
-    sizes = []
-    owner = []
-    for f, face_loops in enumerate(loops):
-        for l, (uv, xyz, vid, use) in enumerate(face_loops):
-            sizes.append(len(uv))
-            seg_loop.append(l)
-            owner.append(use)
-            pts.add(f, uv, xyz, vid)
-    sizes = np.array(sizes)
-    seg_loop = np.repeat(seg_loop, sizes)
-    point = np.arange(int(sizes.sum()))
-    after = point + 1
+    vid_of_group, edge_xyz = _edge_vertices(samples, size, edge_tol, prep.memo)
+    pface, puv, pxyz, pvid, owner, sizes = gather_loops(prep.table, samples, vid_of_group, scales)
+    layout = Layout(puv, sizes, prep.table, scales)
+    # boundary segments (each loop closed on itself)
+    seg_loop = np.repeat(prep.table.loop_index, sizes)
+    nb = len(pface)
+    after = np.arange(1, nb + 1)
     ends = np.cumsum(sizes)
     after[ends - 1] = ends - sizes  # the last point of a loop is followed by its first
-    segs = np.column_stack([point, after])
-    pface, puv, pxyz, pvid = pts.arrays()
-    nb = len(pface)
-    puv = _without_crossings(faces, prep.uses, batch, layout, pface, puv, pxyz, segs, np.concatenate(owner))
+    segs = np.column_stack([np.arange(nb), after])
+    puv = _without_crossings(faces, uses, batch, layout, pface, puv, pxyz, segs, owner)
     dense = _densify(layout.place(pface, puv), segs, 0.5 * CLEARANCE)
     gf, guv = _grid_points(grids, layout, dense)
     n_vid = len(edge_xyz)
