@@ -98,13 +98,15 @@ def _edge_vertices(samples, size, tolerance, memo):
     return _pieces(vid, np.cumsum(m)[:-1]), np.concatenate(xyz)
 
 
-def _grid_points(grids, layout, dense):
+def _grid_points(grids, layout, P, segs):
     """Interior grid points of every face (scaled, laid out) at least :data:`CLEARANCE` from the
-    trims (``dense``: the trims' polylines densified, scaled, laid out). Returns ``(face, uv)``."""
+    trims (``P[segs]``: the trims' segments, scaled, laid out). Returns ``(face, uv)``."""
     from scipy.spatial import cKDTree
 
     fs, uvs = [], []
     for f, g in enumerate(grids):
+        if g.us.size <= 2 and g.vs.size <= 2:  # one span each way (a plane): the domain's ends only
+            continue
         lo, hi = layout.lo[f], layout.hi[f]
         margin = CLEARANCE / g.scale
         us = g.us[(g.us > lo[0] + margin[0]) & (g.us < hi[0] - margin[0])]
@@ -116,6 +118,7 @@ def _grid_points(grids, layout, dense):
     if not uvs:
         return np.zeros(0, dtype=np.int64), np.zeros((0, 2))
     fidx, uv = np.concatenate(fs), np.concatenate(uvs)
+    dense = _densify(P, segs, 0.5 * CLEARANCE)
     d, _ = cKDTree(dense).query(layout.place(fidx, uv), distance_upper_bound=CLEARANCE)
     keep = ~np.isfinite(d)
     return fidx[keep], uv[keep]
@@ -181,13 +184,28 @@ def _keep_inside(T, N, nxt):
     return inside[lab], conflict, along
 
 
+def _is_affine(surface) -> bool:
+    """Whether ``surface`` is an affine map of its parameters (one bilinear span whose control
+    points form a parallelogram, equal weights): a plane on which a flat triangle's point is
+    the surface's point at the same barycentric (u, v)."""
+    P = np.asarray(surface.control_points)
+    if P.shape[:2] != (2, 2) or surface.degree_u != 1 or surface.degree_v != 1:
+        return False
+    w = surface.weights
+    if w is not None and np.ptp(np.asarray(w)) > 0:
+        return False
+    twist = P[1, 1] - P[1, 0] - P[0, 1] + P[0, 0]
+    return bool(np.abs(twist).max() <= 1e-14 * max(np.abs(P).max(), 1e-300))
+
+
 class _Prepared:
     """What a face set's tessellation needs at any tolerance, computed once per face set and kept
     in the first face's ``_cache`` (faces are immutable): the surfaces' batch evaluator and
     second-derivative bounds, the edge uses, their pcurves' batch evaluator (domains checked),
-    the groups of uses that are one edge and the edge sampler's tolerance-independent memo."""
+    the groups of uses that are one edge, their loops' indices, which faces are affine and the
+    tolerance-independent memo of the edge sampler and the grids."""
 
-    __slots__ = ("faces", "size", "batch", "bounds", "edge_tol", "uses", "pcurves", "groups", "table", "memo")
+    __slots__ = ("faces", "size", "batch", "bounds", "edge_tol", "uses", "pcurves", "groups", "table", "affine", "memo")
 
     def __init__(self, faces, size):
         self.faces, self.size = tuple(faces), size
@@ -199,6 +217,7 @@ class _Prepared:
         check_domains(self.uses, self.pcurves, self.batch)
         self.groups = group_uses(self.uses, max(WELD * size, 2.0 * self.edge_tol), self.pcurves, self.batch)
         self.table = LoopTable(self.faces, self.uses, self.groups)
+        self.affine = np.array([_is_affine(face.surface) for face in faces], dtype=bool)
         self.memo = {}
 
     @classmethod
@@ -234,8 +253,7 @@ def tessellate_faces(faces, tol: float, angle_tol, size: float) -> Tessellation:
     after[ends - 1] = ends - sizes  # the last point of a loop is followed by its first
     segs = np.column_stack([np.arange(nb), after])
     puv = _without_crossings(faces, uses, batch, layout, pface, puv, pxyz, segs, owner)
-    dense = _densify(layout.place(pface, puv), segs, 0.5 * CLEARANCE)
-    gf, guv = _grid_points(grids, layout, dense)
+    gf, guv = _grid_points(grids, layout, layout.place(pface, puv), segs)
     n_vid = len(edge_xyz)
     # the point after each boundary point in its loop (-1: not a boundary point), grown with the points
     nxt_b = np.full(nb, -1, dtype=np.int64)
@@ -250,8 +268,11 @@ def tessellate_faces(faces, tol: float, angle_tol, size: float) -> Tessellation:
     # own tolerance, 1e-2 in some CAD exports): the flat mesh cannot come closer to the surface than
     # its corners, so a sample may deviate by the tolerance plus its corners' offset. Measuring
     # against the bare tolerance there refined every round without end (millions of triangles).
-    poff = np.zeros(len(pface))
-    poff[:nb] = np.linalg.norm(pxyz[:nb] - batch.evaluate(pface[:nb], puv[:nb, 0], puv[:nb, 1]), axis=1)
+    # (kept as vectors: on an affine face the surface at a mean of (u, v) is the mean of the
+    # surface points, so there the deviation is the mean of the corners' offsets, with no evaluation)
+    offv = np.zeros((len(pface), 3))
+    offv[:nb] = pxyz[:nb] - batch.evaluate(pface[:nb], puv[:nb, 0], puv[:nb, 1])
+    poff = np.linalg.norm(offv, axis=1)
     max_dev = 0.0
     for round_ in range(MAX_ROUNDS):
         nP = len(pface)
@@ -292,7 +313,10 @@ def tessellate_faces(faces, tol: float, angle_tol, size: float) -> Tessellation:
         fid = np.concatenate([pface[ea], pface[Tl[:, 0]]])
         uv = np.concatenate([0.5 * (puv[ea] + puv[eb]), puv[Tl].mean(axis=1)])
         flat = np.concatenate([0.5 * (pxyz[ea] + pxyz[eb]), pxyz[Tl].mean(axis=1)])
-        exact = batch.evaluate(fid, uv[:, 0], uv[:, 1])
+        exact = flat - np.concatenate([0.5 * (offv[ea] + offv[eb]), offv[Tl].mean(axis=1)])
+        curved = np.flatnonzero(~prep.affine[fid])
+        if curved.size:
+            exact[curved] = batch.evaluate(fid[curved], uv[curved, 0], uv[curved, 1])
         dev = np.linalg.norm(exact - flat, axis=1)
         max_dev = float(dev.max()) if dev.size else 0.0
         ne = len(ea)
@@ -311,6 +335,7 @@ def tessellate_faces(faces, tol: float, angle_tol, size: float) -> Tessellation:
         pxyz = np.concatenate([pxyz, exact[new]])
         pvid = np.concatenate([pvid, np.arange(n_vid, n_vid + new.size)])
         poff = np.concatenate([poff, np.zeros(new.size)])
+        offv = np.concatenate([offv, np.zeros((new.size, 3))])
         n_vid += new.size
     return _assemble(faces, batch, T[live], pface, puv, pxyz, pvid, n_vid, max_dev, tol)
 
