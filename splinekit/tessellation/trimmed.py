@@ -241,7 +241,7 @@ def tessellate_faces(faces, tol: float, angle_tol, size: float) -> Tessellation:
     batch, uses, groups, edge_tol = prep.batch, prep.uses, prep.groups, prep.edge_tol
     grids = face_grids(batch, tol, angle_tol, prep.bounds, prep.memo)
     scales = np.stack([g.scale for g in grids])
-    samples = sample_groups(uses, groups, scales, tol, angle_tol, batch, prep.pcurves, prep.memo)
+    samples = sample_groups(uses, groups, scales, tol, angle_tol, batch, prep.pcurves, prep.memo, prep.affine)
     vid_of_group, edge_xyz = _edge_vertices(samples, size, edge_tol, prep.memo)
     pface, puv, pxyz, pvid, owner, sizes = gather_loops(prep.table, samples, vid_of_group, scales)
     layout = Layout(puv, sizes, prep.table, scales)
