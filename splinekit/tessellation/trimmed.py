@@ -26,10 +26,17 @@ points or triangles):
    kept or dropped by region: a triangle whose edge runs along a trim in the trim's direction
    lies on the material side (loops keep the material on their left), and the label spreads
    over the triangles connected without crossing a trim (one sparse connected-components pass).
+   Trims must not cross; where they do within their edges' own tolerance (sliver faces of some
+   CAD exports), the looser edge's points are first moved apart in ``(u, v)`` only
+   (:mod:`.untangle`).
 5. Measure and refine: the deviation is measured at every triangle's centre and every edge's
    midpoint (the surface at the barycentric ``(u, v)`` against the flat triangle's point); the
    midpoints of interior edges over the tolerance (and the centres of triangles over it whose
    edges are fine) are added to the point set and the faces triangulated again, for a few rounds.
+   On an affine face (a plane whose parametrization is a parallelogram) the surface at a mean
+   of ``(u, v)`` is the mean of the surface points, so its deviation comes from the corners'
+   offsets alone, without evaluating; a line segment used only by such faces is sampled at its
+   two ends once per face set (:func:`.edges.sample_groups`).
 6. Orientation: triangles run counter-clockwise in ``(u, v)``, so their normals follow
    ``Su x Sv``; a reversed face's triangles are flipped. Triangles that collapse in 3-D (two
    corners on one pole) are dropped.
