@@ -212,7 +212,8 @@ class _Prepared:
     the groups of uses that are one edge, their loops' indices, which faces are affine and the
     tolerance-independent memo of the edge sampler and the grids."""
 
-    __slots__ = ("faces", "size", "batch", "bounds", "edge_tol", "uses", "pcurves", "groups", "table", "affine", "memo")
+    __slots__ = ("faces", "size", "batch", "bounds", "edge_tol", "uses", "pcurves", "groups", "table", "affine",
+                 "partials", "reversed", "memo")
 
     def __init__(self, faces, size):
         self.faces, self.size = tuple(faces), size
@@ -225,6 +226,10 @@ class _Prepared:
         self.groups = group_uses(self.uses, max(WELD * size, 2.0 * self.edge_tol), self.pcurves, self.batch)
         self.table = LoopTable(self.faces, self.uses, self.groups)
         self.affine = np.array([_is_affine(face.surface) for face in faces], dtype=bool)
+        # an affine face's partials are constant: taken once at its domain's corner
+        corner = np.array([[b[0] for b in self.batch.bu], [b[0] for b in self.batch.bv]])
+        self.partials = self.batch.partials(np.arange(len(faces)), corner[0], corner[1])[1:]
+        self.reversed = np.array([face.reversed for face in faces], dtype=bool)
         self.memo = {}
 
     @classmethod
@@ -259,7 +264,14 @@ def tessellate_faces(faces, tol: float, angle_tol, size: float) -> Tessellation:
     ends = np.cumsum(sizes)
     after[ends - 1] = ends - sizes  # the last point of a loop is followed by its first
     segs = np.column_stack([np.arange(nb), after])
-    puv = _without_crossings(faces, uses, batch, layout, pface, puv, pxyz, segs, owner)
+    # with every edge a straight segment on planar faces the loops are the same at every
+    # tolerance: their crossing test (and any untangling) is done once per face set
+    fixed = bool(prep.memo["straight"][0].all())
+    if not (fixed and "untangled" in prep.memo):
+        puv = _without_crossings(faces, uses, batch, layout, pface, puv, pxyz, segs, owner)
+        if fixed:
+            prep.memo["untangled"] = puv
+    puv = prep.memo["untangled"] if fixed else puv
     gf, guv = _grid_points(grids, layout, layout.place(pface, puv), segs)
     n_vid = len(edge_xyz)
     # the point after each boundary point in its loop (-1: not a boundary point), grown with the points
@@ -344,12 +356,13 @@ def tessellate_faces(faces, tol: float, angle_tol, size: float) -> Tessellation:
         poff = np.concatenate([poff, np.zeros(new.size)])
         offv = np.concatenate([offv, np.zeros((new.size, 3))])
         n_vid += new.size
-    return _assemble(faces, batch, T[live], pface, puv, pxyz, pvid, n_vid, max_dev, tol)
+    return _assemble(prep, T[live], pface, puv, pxyz, pvid, n_vid, max_dev, tol)
 
 
-def _assemble(faces, batch, T, pface, puv, pxyz, pvid, n_vid, max_dev, tol):
-    """The :class:`Tessellation` of the final triangles ``T`` (point indices)."""
-    flip = np.array([face.reversed for face in faces])[pface[T[:, 0]]]
+def _assemble(prep, T, pface, puv, pxyz, pvid, n_vid, max_dev, tol):
+    """The :class:`Tessellation` of the final triangles ``T`` (point indices) of the face set
+    ``prep``."""
+    flip = prep.reversed[pface[T[:, 0]]]
     T = np.where(flip[:, None], T[:, [0, 2, 1]], T)
     used = np.zeros(n_vid, dtype=bool)
     used[pvid[T]] = True
@@ -362,13 +375,16 @@ def _assemble(faces, batch, T, pface, puv, pxyz, pvid, n_vid, max_dev, tol):
     V = pxyz[rep]
     UV = puv[rep]
     VP = pface[rep]
-    _, Su, Sv = batch.partials(VP, UV[:, 0], UV[:, 1])
+    Su, Sv = prep.partials[0][VP], prep.partials[1][VP]
+    curved = np.flatnonzero(~prep.affine[VP])
+    if curved.size:
+        _, Su[curved], Sv[curved] = prep.batch.partials(VP[curved], UV[curved, 0], UV[curved, 1])
     N = np.cross(Su, Sv)
     length = np.linalg.norm(N, axis=1)
     scale = np.einsum("ij,ij->i", Su, Su) + np.einsum("ij,ij->i", Sv, Sv)
     weak = length <= 1e-10 * scale
     N /= np.where(weak, 1.0, length)[:, None]
-    N[np.array([face.reversed for face in faces])[VP]] *= -1.0
+    N[prep.reversed[VP]] *= -1.0
     if weak.any():  # collapsed points (poles): the mean of the adjacent triangles' normals
         X = V[tri]
         fn = np.cross(X[:, 1] - X[:, 0], X[:, 2] - X[:, 0])
