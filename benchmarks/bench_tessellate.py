@@ -90,7 +90,27 @@ calls vary 3-10x and only best-of-N figures repeat):
   ``max_deviation`` (and for this benchmark), which changes the documented contract of
   ``Tessellation.max_deviation``: left for a decision.
 
-Last run (this session, load average 15-18 on 2 cores, CPU times, best of N; time ratio = OCC's
+Small planar parts, later session (load average 13-15 on 2 cores; ``--brep --tols 1e-1,1e-2,1e-3``
+run on the code before and after, same meshes): cProfile of the box with a hole showed ~4,200
+Python-level calls per tessellation, spread over the stages. Cut: the loops are gathered and
+checked as flat arrays (the per-use indices kept with the face set) instead of per-loop numpy
+calls; a line segment used only by affine faces (planes parametrized as parallelograms) is
+sampled at its two ends once per face set, with no measuring round; an affine face's deviation
+is the mean of its corners' offsets and its normals its constant partials (no evaluation); the
+edge ends' welding, the angle criterion's counts, the model size and, where every edge is such a
+segment, the loops' crossing test are kept with the face set; planar faces skip the grid-point
+clearance work. OCC time / splinekit time, before -> after: box 0.21-0.42x -> 0.50-0.52x
+(2.2 -> 0.9 ms, OCC 0.5 ms), chamfered block 0.45-0.50x -> 1.46-1.67x (3.5 -> 1.3 ms), box with a
+hole 0.43-0.51x -> 0.61-0.67x (3.4-4.1 -> 2.5-3.0 ms), plate with 3 holes 0.81-0.89x ->
+1.02-1.20x (4.6-5.1 -> 3.8-3.9 ms), box - cylinder 0.52-0.56x -> 0.59-0.67x. 10x is out of reach
+on this path: what is left of a box-with-hole call (section medians, 1e-2) is edge sampling of
+the circles and the seam 0.7 ms (one measure round over all curved edges: ~100 numpy calls),
+the cylinder's grid 0.4 ms, Triangle 0.23 ms, the assembly 0.15 ms, the crossing test 0.14 ms,
+the inside/outside labelling 0.12 ms, the loops 0.11 ms: no stage dominates, and OCC meshes the
+same part in 1.7 ms (the box in 0.5 ms). 10x needs a compiled per-call driver, not more numpy
+batching.
+
+Last run (the session before, load average 15-18 on 2 cores, CPU times, best of N; time ratio = OCC's
 time / splinekit's at the same measured deviation; triangle ratio = splinekit's / OCC's):
 
 * part 1, NURBS sphere (8 patches): 1e-1 10.3x (8.1x in the run before, OCC's own time varying
