@@ -101,9 +101,13 @@ def test_foreign_step_solids_tessellate_closed(name, ref, imported, request):
         assert mesh.is_closed, f"solid {i}"
         assert mesh.volume > 0, f"solid {i} faces inward"
         volume += mesh.volume
-    # within the bound the tolerance implies (the area times the tolerance) of OCC's volume
+    # within the bound the tolerance implies (the area times the tolerance) of OCC's volume; where
+    # the file's own edge tolerances are larger (NX part: edges up to 3.4e-2 off their faces), the
+    # boundary vertices lie that far off and the mesh cannot be closer: area times both
+    edge_tol = max(e.tolerance for s in imported(name) for f in s.faces for e in f.edges)
     expected = ref.get("volume_best", ref["volume"])
-    assert abs(volume - expected) <= ref.get("area_best", ref["area"]) * tol, (volume, expected)
+    bound = ref.get("area_best", ref["area"]) * (tol + (edge_tol if edge_tol > tol else 0.0))
+    assert abs(volume - expected) <= bound, (volume, expected, bound)
 
 
 @pytest.mark.parametrize("name, ref", _cases())
