@@ -33,10 +33,15 @@ def _grid_triangles(n, m):
     return np.stack([np.column_stack([v00, v10, v11]), np.column_stack([v00, v11, v01])], axis=1).reshape(-1, 3)
 
 
+@functools.lru_cache(maxsize=256)
 def _edge_locals(n, m):
-    """Local vertex indices along the four cell edges (v = 0, v = 1, u = 0, u = 1)."""
+    """Local vertex indices along the four cell edges (v = 0, v = 1, u = 0, u = 1) (cached,
+    read-only)."""
     i, j = np.arange(n + 1), np.arange(m + 1)
-    return [i * (m + 1), i * (m + 1) + m, j, n * (m + 1) + j]
+    out = (i * (m + 1), i * (m + 1) + m, j, n * (m + 1) + j)
+    for a in out:
+        a.setflags(write=False)
+    return out
 
 
 @functools.lru_cache(maxsize=256)

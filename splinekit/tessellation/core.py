@@ -111,6 +111,19 @@ def _diagonal(points) -> float:
     return float(np.linalg.norm(hi - lo))
 
 
+def _set_diagonal(items, points) -> float:
+    """The bounding-box diagonal of ``points(item)`` over ``items`` (faces or surfaces), kept in
+    the first item's cache (they are immutable) with the item set it belongs to."""
+    cache = getattr(items[0], "_cache", None)
+    hit = cache.get("diagonal") if cache is not None else None
+    if hit is not None and len(hit[0]) == len(items) and all(a is b for a, b in zip(hit[0], items)):
+        return hit[1]
+    size = _diagonal(np.concatenate([np.asarray(points(it)).reshape(-1, 3) for it in items]))
+    if cache is not None:
+        cache["diagonal"] = tuple(items), size
+    return size
+
+
 def tessellate(obj, tolerance=None, *, angle_tolerance=DEFAULT_ANGLE_TOLERANCE, relative: bool = False, levels: int = 2):
     """Adaptive tessellation of a curve, a surface, a patch set or a subdivision surface.
 
@@ -199,9 +212,9 @@ def tessellate(obj, tolerance=None, *, angle_tolerance=DEFAULT_ANGLE_TOLERANCE, 
     if kind == "curve":
         size = _diagonal(np.asarray(item.control_points))
     elif kind == "faces":
-        size = _diagonal(np.concatenate([np.asarray(f.surface.control_points).reshape(-1, 3) for f in item]))
+        size = _set_diagonal(item, lambda f: f.surface.control_points)
     else:
-        size = _diagonal(np.concatenate([np.asarray(s.control_points).reshape(-1, 3) for s in item]))
+        size = _set_diagonal(item, lambda s: s.control_points)
     if not np.isfinite(size):
         raise ParameterError("the model's bounding box overflows the float range")
     if size == 0.0:

@@ -171,14 +171,27 @@ def _subdivide(owner, a, b, n):
     return t, who
 
 
-def sample_groups(uses, groups, scales, tol, angle_tol, surfaces, pc, memo=None):
+def _straight_use(use) -> bool:
+    """Whether the use's edge is a line segment in space and in ``(u, v)`` (degree 1, two
+    control points, non-rational, both)."""
+    e = use.edge
+    return all(c is not None and c.degree == 1 and len(c.control_points) == 2 and c.weights is None
+               for c in (e.curve, e.pcurve))  # fmt: skip
+
+
+def sample_groups(uses, groups, scales, tol, angle_tol, surfaces, pc, memo=None, flat=None):
     """Sample every group (see the module docstring), all groups at once.
 
     ``scales`` ``(F, 2)`` per face: parameter units -> interior grid steps in u and v;
     ``surfaces``: a :class:`.batch.SurfaceBatch` of the faces' surfaces (in face order);
     ``pc``: a :class:`.batch.CurveBatch` of the uses' pcurves; ``memo``: a dict kept with the
     face set (its tolerance-independent part: representatives, 3-D curve batch, directions,
-    span bounds, filled on the first call).
+    span bounds, filled on the first call); ``flat`` ``(F,)`` bool: faces that are affine maps
+    of their parameters (planes: :func:`.trimmed._is_affine`).
+
+    A line segment whose every use lies on a flat face needs its two end points only at any
+    tolerance (the chord is the edge, its ``(u, v)`` images are straight, and the face's one
+    grid step spans it): such groups are sampled once and kept in ``memo``.
     Returns a list of :class:`SampledGroup`, one per group.
     """
     memo = {} if memo is None else memo
@@ -210,11 +223,18 @@ def sample_groups(uses, groups, scales, tol, angle_tol, surfaces, pc, memo=None)
             o = out[dg[k]]
             o.points, o.params, o.uv, o.degenerate = pole[k : k + 1], {int(ui[k]): tk}, {int(ui[k]): uvk}, True
 
-    live = np.flatnonzero(~degenerate)
+    if "straight" not in memo:
+        straight = np.array([not degenerate[g] and flat is not None and all(flat[uses[i].f] and _straight_use(uses[i]) for i in members)
+                             for g, members in enumerate(groups)], dtype=bool)  # fmt: skip
+        memo["straight"] = straight, _end_samples(uses, groups, np.flatnonzero(straight), G, face, pdom, surfaces, pc, group_of, ~straight)
+    straight, fixed = memo["straight"]
+    for g, smp in fixed.items():
+        out[g] = smp
+    live = np.flatnonzero(~degenerate & ~straight)
     if live.size == 0:
         return out
     if "live" not in memo:  # the tolerance-independent part, computed once per face set
-        memo["live"] = _live_groups(uses, groups, live, G, face, pdom, surfaces, pc, group_of, degenerate)
+        memo["live"] = _live_groups(uses, groups, live, G, face, pdom, surfaces, pc, group_of, degenerate | straight)
     rep, has_curve, curve_of, c3, dom, lu, lg, flip, span_bounds = memo["live"]
     a, b = dom[lg, 0], dom[lg, 1]
     c, d = pdom[lu, 0], pdom[lu, 1]
@@ -335,6 +355,27 @@ def _exact(k, t, has_curve, curve_of, c3, rep, pc, surfaces, face):
         uv = pc.evaluate(r, t[~cur])
         X[~cur] = surfaces.evaluate(face[r], uv[:, 0], uv[:, 1])
     return X
+
+
+def _end_samples(uses, groups, idx, G, face, pdom, surfaces, pc, group_of, excluded):
+    """``{group: SampledGroup}`` of the groups ``idx`` sampled at their two end points only
+    (``excluded``: the groups not in ``idx``, as :func:`_live_groups` takes them)."""
+    if idx.size == 0:
+        return {}
+    rep, has_curve, curve_of, c3, dom, lu, lg, flip, _ = _live_groups(uses, groups, idx, G, face, pdom, surfaces, pc, group_of, excluded)
+    k = np.repeat(np.arange(idx.size), 2)
+    X = _exact(k, dom.ravel(), has_curve, curve_of, c3, rep, pc, surfaces, face).reshape(-1, 2, 3)
+    c, d = pdom[lu, 0], pdom[lu, 1]
+    s = np.where(flip[:, None], np.column_stack([d, c]), np.column_stack([c, d]))
+    uv = pc.evaluate(np.repeat(lu, 2), s.ravel()).reshape(-1, 2, 2)
+    out = {}
+    for j, g in enumerate(idx.tolist()):
+        o = out[g] = SampledGroup()
+        o.points, o.degenerate, o.params, o.uv = X[j], False, {}, {}
+    for i, u in enumerate(lu.tolist()):
+        o = out[int(idx[lg[i]])]
+        o.params[u], o.uv[u] = s[i], uv[i]
+    return out
 
 
 def _live_groups(uses, groups, live, G, face, pdom, surfaces, pc, group_of, degenerate):

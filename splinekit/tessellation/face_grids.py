@@ -31,11 +31,13 @@ class FaceGrid:
     __slots__ = ("us", "vs", "scale")
 
 
-def face_grids(batch, tol, angle_tol, bounds=None):
+def face_grids(batch, tol, angle_tol, bounds=None, memo=None):
     """The interior grid of every surface of ``batch`` (a :class:`.batch.SurfaceBatch`): per knot
     span row (column) the largest a-priori count of its cells, times :data:`GRID_FRACTION`, then
     lowered where the grid's MEASURED chord error allows (:func:`_measured_counts`)
-    (``bounds``: the cell sets' second-derivative bounds, when already known).
+    (``bounds``: the cell sets' second-derivative bounds, when already known; ``memo``: a dict
+    kept with the face set, where the angle criterion's counts, which do not depend on ``tol``,
+    are kept).
 
     A face whose every cell needs one step in both directions (a plane, or a surface flat
     within a small fraction of the tolerance) gets its knot breaks as its grid without further
@@ -43,7 +45,10 @@ def face_grids(batch, tol, angle_tol, bounds=None):
     of a machined part (most of its faces) then cost no per-face Python work here."""
     nu, nv = initial_counts(batch.cellsets, tol, angle_tol, bounds)
     if angle_tol is not None:  # the angle criterion's own counts: a floor for the measured ones
-        au, av = initial_counts(batch.cellsets, np.inf, angle_tol, bounds)
+        memo = {} if memo is None else memo
+        if memo.get("angle", (None,))[0] != angle_tol:
+            memo["angle"] = angle_tol, initial_counts(batch.cellsets, np.inf, angle_tol, bounds)
+        au, av = memo["angle"][1]
     else:
         au, av = np.ones_like(nu), np.ones_like(nv)
     # faces whose cells all have one step per direction (cells of a face are contiguous)

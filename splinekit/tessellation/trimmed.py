@@ -26,10 +26,17 @@ points or triangles):
    kept or dropped by region: a triangle whose edge runs along a trim in the trim's direction
    lies on the material side (loops keep the material on their left), and the label spreads
    over the triangles connected without crossing a trim (one sparse connected-components pass).
+   Trims must not cross; where they do within their edges' own tolerance (sliver faces of some
+   CAD exports), the looser edge's points are first moved apart in ``(u, v)`` only
+   (:mod:`.untangle`).
 5. Measure and refine: the deviation is measured at every triangle's centre and every edge's
    midpoint (the surface at the barycentric ``(u, v)`` against the flat triangle's point); the
    midpoints of interior edges over the tolerance (and the centres of triangles over it whose
    edges are fine) are added to the point set and the faces triangulated again, for a few rounds.
+   On an affine face (a plane whose parametrization is a parallelogram) the surface at a mean
+   of ``(u, v)`` is the mean of the surface points, so its deviation comes from the corners'
+   offsets alone, without evaluating; a line segment used only by such faces is sampled at its
+   two ends once per face set (:func:`.edges.sample_groups`).
 6. Orientation: triangles run counter-clockwise in ``(u, v)``, so their normals follow
    ``Su x Sv``; a reversed face's triangles are flipped. Triangles that collapse in 3-D (two
    corners on one pole) are dropped.
@@ -45,18 +52,18 @@ from ..errors import BackendError, ParameterError
 from ..tolerances import WELD
 from .batch import CurveBatch, SurfaceBatch
 from .cells import second_derivative_bounds
-from .edges import _face_name, check_domains, edge_uses, group_uses, sample_groups
+from .edges import _face_name, _pieces, check_domains, edge_uses, group_uses, sample_groups
 from .face_grids import face_grids
+from .loops import Layout, LoopTable, gather_loops
 from .result import Tessellation
 from .surfaces import BYTES_PER_TRIANGLE
+from .untangle import crossing, untangle
 from .welding import close_pairs, components
 
 __all__ = ["tessellate_faces"]
 
 MAX_ROUNDS = 8
 """Largest number of measure-and-refine rounds."""
-UV_GAP = 0.25
-"""Largest gap (scaled grid steps) between one edge's last (u, v) and the next edge's first."""
 CLEARANCE = 0.5
 """Grid points closer than this (in scaled grid steps) to a trim are dropped."""
 # WELD (from splinekit.tolerances): weld distance of edge end points, relative to the model's
@@ -72,103 +79,41 @@ def _triangulator():
     return triangle
 
 
-class _Points:
-    """The growing point set of the triangulation: per point its face, ``(u, v)``, 3-D position
-    and mesh vertex (boundary points of several faces share a mesh vertex)."""
-
-    def __init__(self):
-        self.face, self.uv, self.xyz, self.vid = [], [], [], []
-
-    def add(self, face, uv, xyz, vid):
-        self.face.append(np.broadcast_to(np.asarray(face, dtype=np.int64), (len(uv),)))
-        self.uv.append(np.asarray(uv, dtype=np.float64).reshape(-1, 2))
-        self.xyz.append(np.asarray(xyz, dtype=np.float64).reshape(-1, 3))
-        self.vid.append(np.asarray(vid, dtype=np.int64).reshape(-1))
-
-    def arrays(self):
-        return (np.concatenate(self.face), np.concatenate(self.uv), np.concatenate(self.xyz), np.concatenate(self.vid))
-
-
-def _loops(faces, uses, groups, samples, vid_of_group, scales):
-    """Per face, its loops as ``(uv (k, 2), xyz (k, 3), vid (k,))`` closed polygons (last point
-    not repeated), checked: closed in 3-D and in ``(u, v)``, inside the surface's domain, the
-    outer loop counter-clockwise and the inner loops clockwise."""
-    group_of = np.empty(len(uses), dtype=np.int64)
-    for g, group in enumerate(groups):
-        group_of[group] = g
-    out = [[] for _ in faces]
-    k = 0
-    for f, face in enumerate(faces):
-        name = _face_name(face, f)
-        for l, loop in enumerate(face.boundary_loops()):
-            uvs, xyzs, vids = [], [], []
-            for _ in loop:
-                g = group_of[k]
-                smp = samples[g]
-                uv, vid = smp.uv[k], vid_of_group[g]
-                xyz = np.broadcast_to(smp.points[:1], (len(uv), 3)) if smp.degenerate else smp.points
-                s = smp.params[k]
-                if s[-1] < s[0]:  # this use runs against the group's samples
-                    uv, vid, xyz = uv[::-1], vid[::-1], xyz[::-1]
-                uvs.append(uv)
-                xyzs.append(xyz)
-                vids.append(vid)
-                k += 1
-            # closure: each edge must end where the next one starts, in 3-D and in (u, v)
-            for j in range(len(uvs)):
-                nxt = (j + 1) % len(uvs)
-                if vids[j][-1] != vids[nxt][0]:
-                    gap = float(np.linalg.norm(xyzs[j][-1] - xyzs[nxt][0]))
-                    raise ParameterError(f"{name}: loop {l} is not closed: edge {j} ends {gap:.3g} away from where edge {nxt} starts")
-                # (a corner at a pole may jump in u: the gap must only stay well below the grid step)
-                if np.hypot(*((uvs[j][-1] - uvs[nxt][0]) * scales[f])) > UV_GAP:
-                    raise ParameterError(
-                        f"{name}: loop {l} is not closed in (u, v): edge {j} ends at {uvs[j][-1].tolist()}, "
-                        f"edge {nxt} starts at {uvs[nxt][0].tolist()}")
-            uv = np.concatenate([x[:-1] for x in uvs])
-            xyz = np.concatenate([x[:-1] for x in xyzs])
-            vid = np.concatenate([x[:-1] for x in vids])
-            if len(uv) < 2 + (len(uvs) == 1):
-                raise ParameterError(f"{name}: loop {l} encloses no area")
-            nx = np.concatenate([uv[1:], uv[:1]])
-            area = 0.5 * np.sum(uv[:, 0] * nx[:, 1] - nx[:, 0] * uv[:, 1])
-            if (area <= 0) if l == 0 else (area >= 0):
-                want = "counter-clockwise (outer loop)" if l == 0 else "clockwise (inner loop)"
-                raise ParameterError(f"{name}: loop {l} faces the wrong way: it must run {want} in (u, v), material on its left")
-            out[f].append((uv, xyz, vid))
-    return out
-
-
-def _edge_vertices(samples, size, tolerance):
+def _edge_vertices(samples, size, tolerance, memo):
     """Mesh vertices of the edge samples: end points welded (within the weld distance), inner
-    samples numbered after them. Returns ``(vid_of_group, xyz (n, 3))``."""
-    ends = np.concatenate([[s.points[0], s.points[-1]] for s in samples]) if samples else np.zeros((0, 3))
-    pairs = close_pairs(ends, max(WELD * size, 10.0 * tolerance))
-    lab = components(len(ends), pairs[:, 0], pairs[:, 1]) if len(pairs) else np.arange(len(ends))
-    first, end_vid = np.unique(lab, return_index=True, return_inverse=True)[1:]
-    end_vid = end_vid.reshape(-1, 2)
-    xyz = [ends[first]]
-    n = len(first)
-    vid_of_group = []
-    for g, s in enumerate(samples):
-        if s.degenerate:
-            m = len(next(iter(s.uv.values())))
-            vid_of_group.append(np.full(m, end_vid[g, 0]))
-            continue
-        m = len(s.points)
-        vid_of_group.append(np.concatenate([[end_vid[g, 0]], np.arange(n, n + m - 2), [end_vid[g, 1]]]))
-        xyz.append(s.points[1:-1])
-        n += m - 2
-    return vid_of_group, np.concatenate(xyz)
+    samples numbered after them. Returns ``(vid_of_group, xyz (n, 3))``. The ends are the edges'
+    vertices at every tolerance, so their welding is kept in ``memo`` (the face set's)."""
+    if "ends" not in memo:
+        ends = np.concatenate([[s.points[0], s.points[-1]] for s in samples]) if samples else np.zeros((0, 3))
+        pairs = close_pairs(ends, max(WELD * size, 10.0 * tolerance))
+        lab = components(len(ends), pairs[:, 0], pairs[:, 1]) if len(pairs) else np.arange(len(ends))
+        first, end_vid = np.unique(lab, return_index=True, return_inverse=True)[1:]
+        memo["ends"] = ends[first], end_vid.reshape(-1, 2)
+    corners, end_vid = memo["ends"]
+    deg = np.array([s.degenerate for s in samples], dtype=bool)
+    m = np.array([len(next(iter(s.uv.values()))) if s.degenerate else len(s.points) for s in samples], dtype=np.int64)
+    inner = np.where(deg, 0, m - 2)
+    base = len(corners) + np.cumsum(inner) - inner  # first inner vertex of each group
+    g = np.repeat(np.arange(len(samples)), m)
+    j = np.arange(int(m.sum())) - np.repeat(np.cumsum(m) - m, m)
+    vid = base[g] + j - 1
+    vid[j == 0] = end_vid[g[j == 0], 0]
+    last = j == m[g] - 1
+    vid[last] = end_vid[g[last], 1]
+    vid[deg[g]] = end_vid[g[deg[g]], 0]
+    xyz = [corners] + [s.points[1:-1] for s in samples if not s.degenerate]
+    return _pieces(vid, np.cumsum(m)[:-1]), np.concatenate(xyz)
 
 
-def _grid_points(grids, layout, dense):
+def _grid_points(grids, layout, P, segs):
     """Interior grid points of every face (scaled, laid out) at least :data:`CLEARANCE` from the
-    trims (``dense``: the trims' polylines densified, scaled, laid out). Returns ``(face, uv)``."""
+    trims (``P[segs]``: the trims' segments, scaled, laid out). Returns ``(face, uv)``."""
     from scipy.spatial import cKDTree
 
     fs, uvs = [], []
     for f, g in enumerate(grids):
+        if g.us.size <= 2 and g.vs.size <= 2:  # one span each way (a plane): the domain's ends only
+            continue
         lo, hi = layout.lo[f], layout.hi[f]
         margin = CLEARANCE / g.scale
         us = g.us[(g.us > lo[0] + margin[0]) & (g.us < hi[0] - margin[0])]
@@ -180,28 +125,10 @@ def _grid_points(grids, layout, dense):
     if not uvs:
         return np.zeros(0, dtype=np.int64), np.zeros((0, 2))
     fidx, uv = np.concatenate(fs), np.concatenate(uvs)
+    dense = _densify(P, segs, 0.5 * CLEARANCE)
     d, _ = cKDTree(dense).query(layout.place(fidx, uv), distance_upper_bound=CLEARANCE)
     keep = ~np.isfinite(d)
     return fidx[keep], uv[keep]
-
-
-class _Layout:
-    """The faces' scaled parameter planes side by side: face ``f``'s point ``uv`` sits at
-    ``(uv - lo[f]) * scale[f] + (x0[f], 0)``."""
-
-    GAP = 4.0
-
-    def __init__(self, loops, scales):
-        self.scale = scales
-        self.lo = np.stack([lp[0][0].min(axis=0) for lp in loops])
-        self.hi = np.stack([lp[0][0].max(axis=0) for lp in loops])
-        width = (self.hi[:, 0] - self.lo[:, 0]) * scales[:, 0]
-        self.x0 = np.concatenate([[0.0], np.cumsum(width + self.GAP)[:-1]])
-
-    def place(self, fidx, uv):
-        out = (uv - self.lo[fidx]) * self.scale[fidx]
-        out[:, 0] += self.x0[fidx]
-        return out
 
 
 def _densify(P, segs, step):
@@ -213,42 +140,26 @@ def _densify(P, segs, step):
     return a[seg] + (b - a)[seg] * frac[:, None]
 
 
-def _crossing(P, segs):
-    """Index of a segment that crosses or touches another non-adjacent one (``P[segs]``
-    ``(s, 2, 2)``), or -1. A sweep along x: candidate pairs have overlapping x ranges (few, for
-    trims made of short chords), then exact orientation tests. Triangle must never see crossing
-    segments: it splits them at new points (or, for some inputs, crashes)."""
-    A, B = P[segs[:, 0]], P[segs[:, 1]]
-    x0, x1 = np.minimum(A[:, 0], B[:, 0]), np.maximum(A[:, 0], B[:, 0])
-    order = np.argsort(x0, kind="stable")
-    xs = x0[order]
-    end = np.searchsorted(xs, x1[order], side="right")
-    count = np.maximum(end - np.arange(1, len(xs) + 1), 0)
-    total = int(count.sum())
-    if total > 1_000_000:
-        limits.check(total * 64, "the trim crossing test")
-    i = np.repeat(np.arange(len(xs)), count)
-    j = i + 1 + (np.arange(i.size) - np.repeat(np.cumsum(count) - count, count))
-    a, b = order[i], order[j]
-    shared = (segs[a, 0] == segs[b, 0]) | (segs[a, 0] == segs[b, 1]) | (segs[a, 1] == segs[b, 0]) | (segs[a, 1] == segs[b, 1])
-    a, b = a[~shared], b[~shared]
-
-    def orient(p, q, r):
-        return np.sign((q[:, 0] - p[:, 0]) * (r[:, 1] - p[:, 1]) - (q[:, 1] - p[:, 1]) * (r[:, 0] - p[:, 0]))
-
-    o1, o2 = orient(A[a], B[a], A[b]), orient(A[a], B[a], B[b])
-    o3, o4 = orient(A[b], B[b], A[a]), orient(A[b], B[b], B[a])
-    hit = (o1 * o2 <= 0) & (o3 * o4 <= 0)
-    # collinear pairs (all orientations zero) cross only if their extents overlap
-    col = (o1 == 0) & (o2 == 0)
-    if col.any():
-        ya0, ya1 = np.minimum(A[a, 1], B[a, 1]), np.maximum(A[a, 1], B[a, 1])
-        yb0, yb1 = np.minimum(A[b, 1], B[b, 1]), np.maximum(A[b, 1], B[b, 1])
-        xa0, xa1, xb0, xb1 = x0[a], x1[a], x0[b], x1[b]
-        overlap = (np.maximum(xa0, xb0) <= np.minimum(xa1, xb1)) & (np.maximum(ya0, yb0) <= np.minimum(ya1, yb1))
-        hit &= ~col | overlap
-    k = np.flatnonzero(hit)
-    return int(a[k[0]]) if k.size else -1
+def _without_crossings(faces, uses, batch, layout, pface, puv, pxyz, segs, owner):
+    """The boundary points' ``(u, v)`` ``(n, 2)``, where trims cross moved apart as far as the
+    edges' own tolerances allow (:func:`.untangle.untangle`: the surface at a moved point's new
+    ``(u, v)`` must lie within its edge's tolerance of its 3-D point); else ParameterError
+    naming the face. ``owner`` ``(n,)``: the edge use of each point."""
+    P = layout.place(pface, puv)
+    bad = crossing(P, segs)
+    if bad < 0:
+        return puv
+    corner = np.concatenate([[True], owner[1:] != owner[:-1]])
+    weight = np.array([u.edge.tolerance for u in uses], dtype=np.float64)
+    fixed = untangle(P, segs, owner, corner, weight)
+    if fixed is not None:
+        uv = layout.unplace(pface, fixed[0])
+        k = np.flatnonzero(fixed[1])
+        off = np.linalg.norm(batch.evaluate(pface[k], uv[k, 0], uv[k, 1]) - pxyz[k], axis=1)
+        if np.all(off <= weight[owner[k]]):
+            return uv
+    f = int(pface[segs[bad, 0]])
+    raise ParameterError(f"{_face_name(faces[f], f)}: its trimming loops cross or touch each other (or themselves)")
 
 
 def _half_edges(T):
@@ -280,13 +191,29 @@ def _keep_inside(T, N, nxt):
     return inside[lab], conflict, along
 
 
+def _is_affine(surface) -> bool:
+    """Whether ``surface`` is an affine map of its parameters (one bilinear span whose control
+    points form a parallelogram, equal weights): a plane on which a flat triangle's point is
+    the surface's point at the same barycentric (u, v)."""
+    P = np.asarray(surface.control_points)
+    if P.shape[:2] != (2, 2) or surface.degree_u != 1 or surface.degree_v != 1:
+        return False
+    w = surface.weights
+    if w is not None and np.ptp(np.asarray(w)) > 0:
+        return False
+    twist = P[1, 1] - P[1, 0] - P[0, 1] + P[0, 0]
+    return bool(np.abs(twist).max() <= 1e-14 * max(np.abs(P).max(), 1e-300))
+
+
 class _Prepared:
     """What a face set's tessellation needs at any tolerance, computed once per face set and kept
     in the first face's ``_cache`` (faces are immutable): the surfaces' batch evaluator and
     second-derivative bounds, the edge uses, their pcurves' batch evaluator (domains checked),
-    the groups of uses that are one edge and the edge sampler's tolerance-independent memo."""
+    the groups of uses that are one edge, their loops' indices, which faces are affine and the
+    tolerance-independent memo of the edge sampler and the grids."""
 
-    __slots__ = ("faces", "size", "batch", "bounds", "edge_tol", "uses", "pcurves", "groups", "memo")
+    __slots__ = ("faces", "size", "batch", "bounds", "edge_tol", "uses", "pcurves", "groups", "table", "affine",
+                 "partials", "reversed", "memo")
 
     def __init__(self, faces, size):
         self.faces, self.size = tuple(faces), size
@@ -297,6 +224,12 @@ class _Prepared:
         self.pcurves = CurveBatch([u.edge.pcurve for u in self.uses])
         check_domains(self.uses, self.pcurves, self.batch)
         self.groups = group_uses(self.uses, max(WELD * size, 2.0 * self.edge_tol), self.pcurves, self.batch)
+        self.table = LoopTable(self.faces, self.uses, self.groups)
+        self.affine = np.array([_is_affine(face.surface) for face in faces], dtype=bool)
+        # an affine face's partials are constant: taken once at its domain's corner
+        corner = np.array([[b[0] for b in self.batch.bu], [b[0] for b in self.batch.bv]])
+        self.partials = self.batch.partials(np.arange(len(faces)), corner[0], corner[1])[1:]
+        self.reversed = np.array([face.reversed for face in faces], dtype=bool)
         self.memo = {}
 
     @classmethod
@@ -318,33 +251,28 @@ def tessellate_faces(faces, tol: float, angle_tol, size: float) -> Tessellation:
     triangle = _triangulator()
     prep = _Prepared.of(faces, size)
     batch, uses, groups, edge_tol = prep.batch, prep.uses, prep.groups, prep.edge_tol
-    grids = face_grids(batch, tol, angle_tol, prep.bounds)
+    grids = face_grids(batch, tol, angle_tol, prep.bounds, prep.memo)
     scales = np.stack([g.scale for g in grids])
-    samples = sample_groups(uses, groups, scales, tol, angle_tol, batch, prep.pcurves, prep.memo)
-    vid_of_group, edge_xyz = _edge_vertices(samples, size, edge_tol)
-    loops = _loops(faces, uses, groups, samples, vid_of_group, scales)
-    layout = _Layout(loops, scales)
-
-    # boundary points and segments (each loop closed on itself)
-    pts = _Points()
-    seg_loop = []
-    sizes = []
-    for f, face_loops in enumerate(loops):
-        for l, (uv, xyz, vid) in enumerate(face_loops):
-            sizes.append(len(uv))
-            seg_loop.append(l)
-            pts.add(f, uv, xyz, vid)
-    sizes = np.array(sizes)
-    seg_loop = np.repeat(seg_loop, sizes)
-    point = np.arange(int(sizes.sum()))
-    after = point + 1
+    samples = sample_groups(uses, groups, scales, tol, angle_tol, batch, prep.pcurves, prep.memo, prep.affine)
+    vid_of_group, edge_xyz = _edge_vertices(samples, size, edge_tol, prep.memo)
+    pface, puv, pxyz, pvid, owner, sizes = gather_loops(prep.table, samples, vid_of_group, scales)
+    layout = Layout(puv, sizes, prep.table, scales)
+    # boundary segments (each loop closed on itself)
+    seg_loop = np.repeat(prep.table.loop_index, sizes)
+    nb = len(pface)
+    after = np.arange(1, nb + 1)
     ends = np.cumsum(sizes)
     after[ends - 1] = ends - sizes  # the last point of a loop is followed by its first
-    segs = np.column_stack([point, after])
-    pface, puv, pxyz, pvid = pts.arrays()
-    nb = len(pface)
-    dense = _densify(layout.place(pface, puv), segs, 0.5 * CLEARANCE)
-    gf, guv = _grid_points(grids, layout, dense)
+    segs = np.column_stack([np.arange(nb), after])
+    # with every edge a straight segment on planar faces the loops are the same at every
+    # tolerance: their crossing test (and any untangling) is done once per face set
+    fixed = bool(prep.memo["straight"][0].all())
+    if not (fixed and "untangled" in prep.memo):
+        puv = _without_crossings(faces, uses, batch, layout, pface, puv, pxyz, segs, owner)
+        if fixed:
+            prep.memo["untangled"] = puv
+    puv = prep.memo["untangled"] if fixed else puv
+    gf, guv = _grid_points(grids, layout, layout.place(pface, puv), segs)
     n_vid = len(edge_xyz)
     # the point after each boundary point in its loop (-1: not a boundary point), grown with the points
     nxt_b = np.full(nb, -1, dtype=np.int64)
@@ -355,16 +283,15 @@ def tessellate_faces(faces, tol: float, angle_tol, size: float) -> Tessellation:
     pvid = np.concatenate([pvid, np.arange(n_vid, n_vid + len(gf))])
     n_vid += len(gf)
 
-    bad = _crossing(layout.place(pface[:nb], puv[:nb]), segs)
-    if bad >= 0:
-        f = int(pface[segs[bad, 0]])
-        raise ParameterError(f"{_face_name(faces[f], f)}: its trimming loops cross or touch each other (or themselves)")
     # How far each boundary point lies off its face (edges of a sloppy file are off by up to their
     # own tolerance, 1e-2 in some CAD exports): the flat mesh cannot come closer to the surface than
     # its corners, so a sample may deviate by the tolerance plus its corners' offset. Measuring
     # against the bare tolerance there refined every round without end (millions of triangles).
-    poff = np.zeros(len(pface))
-    poff[:nb] = np.linalg.norm(pxyz[:nb] - batch.evaluate(pface[:nb], puv[:nb, 0], puv[:nb, 1]), axis=1)
+    # (kept as vectors: on an affine face the surface at a mean of (u, v) is the mean of the
+    # surface points, so there the deviation is the mean of the corners' offsets, with no evaluation)
+    offv = np.zeros((len(pface), 3))
+    offv[:nb] = pxyz[:nb] - batch.evaluate(pface[:nb], puv[:nb, 0], puv[:nb, 1])
+    poff = np.linalg.norm(offv, axis=1)
     max_dev = 0.0
     for round_ in range(MAX_ROUNDS):
         nP = len(pface)
@@ -405,7 +332,10 @@ def tessellate_faces(faces, tol: float, angle_tol, size: float) -> Tessellation:
         fid = np.concatenate([pface[ea], pface[Tl[:, 0]]])
         uv = np.concatenate([0.5 * (puv[ea] + puv[eb]), puv[Tl].mean(axis=1)])
         flat = np.concatenate([0.5 * (pxyz[ea] + pxyz[eb]), pxyz[Tl].mean(axis=1)])
-        exact = batch.evaluate(fid, uv[:, 0], uv[:, 1])
+        exact = flat - np.concatenate([0.5 * (offv[ea] + offv[eb]), offv[Tl].mean(axis=1)])
+        curved = np.flatnonzero(~prep.affine[fid])
+        if curved.size:
+            exact[curved] = batch.evaluate(fid[curved], uv[curved, 0], uv[curved, 1])
         dev = np.linalg.norm(exact - flat, axis=1)
         max_dev = float(dev.max()) if dev.size else 0.0
         ne = len(ea)
@@ -424,13 +354,15 @@ def tessellate_faces(faces, tol: float, angle_tol, size: float) -> Tessellation:
         pxyz = np.concatenate([pxyz, exact[new]])
         pvid = np.concatenate([pvid, np.arange(n_vid, n_vid + new.size)])
         poff = np.concatenate([poff, np.zeros(new.size)])
+        offv = np.concatenate([offv, np.zeros((new.size, 3))])
         n_vid += new.size
-    return _assemble(faces, batch, T[live], pface, puv, pxyz, pvid, n_vid, max_dev, tol)
+    return _assemble(prep, T[live], pface, puv, pxyz, pvid, n_vid, max_dev, tol)
 
 
-def _assemble(faces, batch, T, pface, puv, pxyz, pvid, n_vid, max_dev, tol):
-    """The :class:`Tessellation` of the final triangles ``T`` (point indices)."""
-    flip = np.array([face.reversed for face in faces])[pface[T[:, 0]]]
+def _assemble(prep, T, pface, puv, pxyz, pvid, n_vid, max_dev, tol):
+    """The :class:`Tessellation` of the final triangles ``T`` (point indices) of the face set
+    ``prep``."""
+    flip = prep.reversed[pface[T[:, 0]]]
     T = np.where(flip[:, None], T[:, [0, 2, 1]], T)
     used = np.zeros(n_vid, dtype=bool)
     used[pvid[T]] = True
@@ -443,13 +375,16 @@ def _assemble(faces, batch, T, pface, puv, pxyz, pvid, n_vid, max_dev, tol):
     V = pxyz[rep]
     UV = puv[rep]
     VP = pface[rep]
-    _, Su, Sv = batch.partials(VP, UV[:, 0], UV[:, 1])
+    Su, Sv = prep.partials[0][VP], prep.partials[1][VP]
+    curved = np.flatnonzero(~prep.affine[VP])
+    if curved.size:
+        _, Su[curved], Sv[curved] = prep.batch.partials(VP[curved], UV[curved, 0], UV[curved, 1])
     N = np.cross(Su, Sv)
     length = np.linalg.norm(N, axis=1)
     scale = np.einsum("ij,ij->i", Su, Su) + np.einsum("ij,ij->i", Sv, Sv)
     weak = length <= 1e-10 * scale
     N /= np.where(weak, 1.0, length)[:, None]
-    N[np.array([face.reversed for face in faces])[VP]] *= -1.0
+    N[prep.reversed[VP]] *= -1.0
     if weak.any():  # collapsed points (poles): the mean of the adjacent triangles' normals
         X = V[tri]
         fn = np.cross(X[:, 1] - X[:, 0], X[:, 2] - X[:, 0])
