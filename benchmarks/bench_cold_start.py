@@ -42,7 +42,24 @@ fresh processes took 60 and 196 ms (best of three each) while both used 24 ms of
 time of the process counts the work, and counts a compiled call's second thread in full, so it
 is, if anything, stricter on the compiled path.
 
-FINDING_PLACEHOLDER
+Finding (2026-11-26, ``--quick``, load average 12-17 on the 2 shared cores):
+
+- At the README's sizes the default path never loads the kernels on the first call (each job
+  is below ``LOAD_WORK``; ``tests/test_package.py`` checks it without a clock), so its first
+  call runs the numpy path's code: CPU ratios default / numpy 0.78-1.21 with the same code on
+  both sides (wall ratios 0.55-3.24), except "curve points" at 2.24 in that run's best of three,
+  while three more pairs of the same processes then gave 185-640 ms of CPU on either side. The
+  "over 1.5x" first calls of earlier loaded runs were this code measured once per path, not
+  interleaved, in bursts of load (one earlier run had the demo grid at 2.60 wall with numba
+  never imported). On this machine a single quick run can still put one such identical case
+  below its target: rerun that case (``--case``) before believing it.
+- Where the first call is ``LOAD_WORK`` (curve points, grid curvature, one Catmull-Clark step),
+  loading costs 0.5-2 s of wall time (mostly ``import numba``; loading from numba's cache, not
+  compiling: a first compile of the subdivision kernels took 15 s of CPU), and the compiled
+  call saves more than that: those first calls took 0.33-0.38 of the numpy path's wall time
+  and 0.41-0.57 of its CPU time, so ``LOAD_WORK`` is not too low for any family measured.
+- Warm, the compiled kernels beat the numpy path in every case (forced / numpy 0.07-0.79); the
+  narrowest are the tensor grids (0.74-0.79).
 """
 
 from __future__ import annotations

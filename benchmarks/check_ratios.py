@@ -35,7 +35,7 @@ REPO = os.path.dirname(HERE)
 # every benchmark, the arguments of its short version, and how long it may take (seconds)
 BENCHMARKS = {
     "booleans": (["--quick"], 600),
-    "cold_start": (["--quick"], 900),
+    "cold_start": (["--quick"], 2400),
     "continuity": (["--quick"], 900),
     "curvature": (["--quick"], 600),
     "deviation": (["--quick"], 900),
