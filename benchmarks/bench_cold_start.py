@@ -53,11 +53,15 @@ Finding (2026-11-26, ``--quick``, load average 12-17 on the 2 shared cores):
   interleaved, in bursts of load (one earlier run had the demo grid at 2.60 wall with numba
   never imported). On this machine a single quick run can still put one such identical case
   below its target: rerun that case (``--case``) before believing it.
-- Where the first call is ``LOAD_WORK`` (curve points, grid curvature, one Catmull-Clark step),
-  loading costs 0.5-2 s of wall time (mostly ``import numba``; loading from numba's cache, not
-  compiling: a first compile of the subdivision kernels took 15 s of CPU), and the compiled
-  call saves more than that: those first calls took 0.33-0.38 of the numpy path's wall time
-  and 0.41-0.57 of its CPU time, so ``LOAD_WORK`` is not too low for any family measured.
+- Where the first call is ``LOAD_WORK`` (curve points, grid curvature, one Catmull-Clark step,
+  PCA normals), loading costs 0.5-2 s of wall time (mostly ``import numba``; loading from numba's
+  cache, not compiling: a first compile of the subdivision kernels took 15 s of CPU), and the
+  compiled call saves more than that: those first calls took 0.33-0.44 of the numpy path's wall
+  time and 0.34-0.57 of its CPU time, so ``LOAD_WORK`` and these families' work estimates are
+  not too low. The one family whose estimate was (measured by hand, not in this script: a
+  first export writes hundreds of MB) is binary STL export: a record counted as a whole unit
+  made a first 2M-triangle export load numba and take 1.7 times the numpy path's; it now
+  counts as an eighth (``exporters._meshio.RECORD_WORK``).
 - Warm, the compiled kernels beat the numpy path in every case (forced / numpy 0.07-0.79); the
   narrowest are the tensor grids (0.74-0.79).
 """
