@@ -19,14 +19,15 @@ chooses them), then the median of three more calls (**warm**). The paths:
 - **forced**: ``SPLINEKIT_NUMBA=1`` and both thresholds 0, the compiled kernels at every size.
 
 The two ratio lines per case answer the two rules of issue 17: *cold* = numpy first call /
-default first call, in CPU time of the process (target >= 1/1.5: a first call never more than 1.5
-times the numpy path's; the table gives the wall-time ratio too),
-*warm* = numpy warm / forced warm (target >= 1: compiled code only where it is faster). The
+default first call, in CPU time of the process (target >= 1/1.5: a first call never more than
+1.5 times the numpy path's; the table gives the wall-time ratio too), *warm* = numpy warm /
+forced warm (target >= 1: compiled code only where it is faster). The
 processes of the three paths are interleaved, their order rotated (numpy, default, forced, then
-default, forced, numpy, ...), so a burst of load on the shared machine or a slow first slot hits all
-alike, and each figure is the best over the processes (the least disturbed by other jobs: on the
-loaded machine the same first call of the same code varies threefold from process to process). The numba cache is
-filled by a first untimed run, so "cold" means a new process, not a new install.
+default, forced, numpy, ...), so a burst of load on the shared machine or a slow first slot hits
+all alike, and each figure is the best over the processes (the least disturbed by other jobs: on
+the loaded machine the same first call of the same code varies threefold from process to
+process). The numba cache is filled by a first untimed run, so "cold" means a new process, not a
+new install.
 
 Cases (at the sizes of the README's benchmark table): curve points, curve derivatives,
 scattered surface points, tensor grids (the ``splinekit demo`` grid and a 20 x 20 NURBS grid),
@@ -58,10 +59,11 @@ Finding (2026-11-26, ``--quick``, load average 12-17 on the 2 shared cores):
   cache, not compiling: a first compile of the subdivision kernels took 15 s of CPU), and the
   compiled call saves more than that: those first calls took 0.33-0.44 of the numpy path's wall
   time and 0.34-0.57 of its CPU time, so ``LOAD_WORK`` and these families' work estimates are
-  not too low. The one family whose estimate was (measured by hand, not in this script: a
-  first export writes hundreds of MB) is binary STL export: a record counted as a whole unit
-  made a first 2M-triangle export load numba and take 1.7 times the numpy path's; it now
-  counts as an eighth (``exporters._meshio.RECORD_WORK``).
+  not too low. Of the families outside this script, binary STL export was measured by hand (a
+  first export of that size writes hundreds of MB): a record counted as a whole unit made a
+  first 2M-triangle export load numba and take 1.7 times the numpy path's; it now counts as an
+  eighth (``exporters._meshio.RECORD_WORK``). The mesh-distance and SDF-grid estimates were not
+  measured here.
 - Warm, the compiled kernels beat the numpy path in every case (forced / numpy 0.07-0.79); the
   narrowest are the tensor grids (0.74-0.79).
 """

@@ -24,7 +24,7 @@ peak memory of the largest against its output arrays (``_memory.py``), and the f
 level's product: the time to merely read, with numpy fancy indexing in the order the product
 needs them, the rows of ``M_(L-1)`` its stencil entries pick (five row entries per output entry
 for Catmull-Clark; no arithmetic, no output). The ratio line for
-``check_ratios.py`` is that linearity between the two larger sizes (both far beyond the caches):
+``check_ratios.py`` is that linearity between the two larger sizes (both at or beyond the L3):
 (time per entry of the middle one) / (time per entry of the largest), target >= 0.5 (a fourfold
 output may cost at most eight times the time). The smallest runs from the caches and is cheaper
 per entry.
@@ -41,8 +41,8 @@ was not kept.
 Profile of 2026-11-26 (issue 17 asked why the per-entry time was 64, 127, 108 ns at 2.1M, 8.4M,
 33.6M entries), on the shared 2-core EPYC (32 MB L3 shared by every process, 1 MB L2 a core)
 under a load average of 12-17: the last product is all of the time (the earlier levels are a
-quarter and a sixteenth). Its per-entry cost follows where ``M_(L-1)`` lives: 0.4 MB of stencil
-rows for the 50^2 torus (in L2/L3), 20 MB for 100^2 (about the L3, which the other jobs share),
+quarter and a sixteenth). Its per-entry cost follows where ``M_(L-1)`` lives: 5 MB of composed
+rows for the 50^2 torus (in the L3), 20 MB for 100^2 (about the L3, which the other jobs share),
 81 MB for 200^2 (DRAM). The reads alone cost 27, 50, 55 ns per output entry and the product
 85, 97, 188 ns (1.9-3.4x its reads: scipy reads each picked row twice, once to count and once
 to sum); the largest moved between 116 and 203 ns from run to run at equal code, with the
@@ -51,7 +51,7 @@ DRAM traffic of the other jobs. Three reorderings were measured against the plai
 stencil rows first touch them (194 against 191 ns), the stencil rows sorted by their first
 parent (the product 88-109 ns, but permuting the stencil and the result back cost 55-65 ns
 more, 145-168 against 116-203 ns), and the product by row blocks of 4, 16, 64 (142-286 against
-140-152 ns). Scipy's product taking CSC operands converts them to CSR first. So the floor is
+140-152 ns). CSR x CSC is no other order: scipy's product converts the CSC operand to CSR first. So the floor is
 the memory latency of reading the scattered parent rows, with the cache shared with the
 machine's other jobs; in the caches' range the time is scipy's own two passes.
 """
