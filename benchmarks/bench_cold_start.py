@@ -49,7 +49,8 @@ Finding (2026-11-26, ``--quick``, load average 12-17 on the 2 shared cores):
   is below ``LOAD_WORK``; ``tests/test_package.py`` checks it without a clock), so its first
   call runs the numpy path's code: CPU ratios default / numpy 0.78-1.21 with the same code on
   both sides (wall ratios 0.55-3.24), except "curve points" at 2.24 in that run's best of three,
-  while three more pairs of the same processes then gave 185-640 ms of CPU on either side. The
+  while three more pairs of the same processes (numpy first) then gave 185-640 ms of CPU on
+  either side, ratios 1.0-1.4: the second of two back-to-back processes tended to be slower. The
   "over 1.5x" first calls of earlier loaded runs were this code measured once per path, not
   interleaved, in bursts of load (one earlier run had the demo grid at 2.60 wall with numba
   never imported). On this machine a single quick run can still put one such identical case
