@@ -20,18 +20,34 @@ Two peaks, taken in one extra (untimed) call:
 The output size is the sum of ``nbytes`` of every array in the result (ndarrays, a PolyMesh's
 vertices and flat faces, scipy sparse matrices' three arrays, inside tuples, lists and dicts).
 A ratio near 1 is the floor: the workload holds little beyond what it returns.
+
+For a peer whose allocations in one process would skew the next (or that must run without
+splinekit's kernels loaded), the same ``VmHWM`` figure is taken in a fresh child process::
+
+    from _memory import in_child, mb, measure_here
+    # in the benchmark's ``--child CASE`` branch:  print(json.dumps(measure_here(lambda: fn(P))))
+    peak = in_child(__file__, "splinekit:100000", {"SPLINEKIT_NUMBA": "1"})
+    print(mb(peak))  # "41 MB", or "n/a" when the child failed or /proc is missing
+
+:func:`measure_here` runs the workload once to warm up, resets the high-water mark and reports how
+far the second run raised it above the resident size before it.
 """
 
 from __future__ import annotations
 
 import gc
+import json
+import os
+import subprocess
+import sys
 import threading
 import tracemalloc
 from dataclasses import dataclass, field
 
 import numpy as np
 
-__all__ = ["Memory", "measure_memory", "output_bytes"]
+__all__ = ["Memory", "in_child", "mb", "measure_here", "measure_memory", "output_bytes"]
+
 
 def output_bytes(obj) -> int:
     """Bytes of the arrays held by ``obj`` (see the module notes); shared arrays counted once."""
@@ -128,3 +144,32 @@ def measure_memory(fn) -> Memory:
         peak[0] = end
     rss = None if start is None else peak[0] - start
     return Memory(traced, rss, output_bytes(result), result)
+
+
+def measure_here(run) -> int | None:
+    """Peak RSS growth (bytes) of ``run()`` in this process, after a warm-up call; None without /proc."""
+    run()
+    if not _reset_high_water_mark():
+        return None
+    base = _status("VmRSS")
+    run()
+    peak = _status("VmHWM")
+    return None if base is None or peak is None else peak - base
+
+
+def in_child(script: str, case: str, env: dict | None = None, timeout: float = 900) -> int | None:
+    """Run ``python script --child case`` (which prints :func:`measure_here`'s figure as JSON on its
+    last line) and return the figure, or None when the child fails or /proc is missing."""
+    try:
+        res = subprocess.run([sys.executable, script, "--child", case], capture_output=True, text=True,
+                             timeout=timeout, env={**os.environ, **(env or {})}, check=True)
+        return json.loads(res.stdout.strip().splitlines()[-1])
+    except Exception:  # noqa: BLE001 (a peer missing in the child, no /proc: no figure)
+        return None
+
+
+def mb(nbytes) -> str:
+    """``nbytes`` in megabytes for a table cell: one decimal below 10 MB, "n/a" for None."""
+    if nbytes is None:
+        return "n/a"
+    return f"{nbytes / 1e6:.1f} MB" if abs(nbytes) < 10e6 else f"{nbytes / 1e6:.0f} MB"

@@ -67,7 +67,7 @@ import numpy as np
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from bench_eval import Table, measure, versions
 
-from _peakmem import in_child, mb, measure_here
+from _memory import in_child, mb, measure_here
 
 from splinekit.pointcloud import estimate_normals, orient_normals
 

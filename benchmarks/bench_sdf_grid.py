@@ -71,7 +71,7 @@ import time
 import numpy as np
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from _peakmem import in_child, mb, measure_here
+from _memory import in_child, mb, measure_here
 from _ratios import report
 
 from splinekit.implicit import from_mesh

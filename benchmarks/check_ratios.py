@@ -35,7 +35,7 @@ REPO = os.path.dirname(HERE)
 # every benchmark, the arguments of its short version, and how long it may take (seconds)
 BENCHMARKS = {
     "booleans": (["--quick"], 600),
-    "cold_start": (["--quick"], 900),
+    "cold_start": (["--quick"], 2400),
     "contains": (["--quick"], 900),
     "continuity": (["--quick"], 900),
     "curvature": (["--quick"], 600),

@@ -144,6 +144,17 @@ smaller meshes, and every mesh without numba, take the numpy path. Both give the
 tests compare them): the numpy path computes the same float64 normal of the float32 triangle."""
 
 
+RECORD_WORK = 1 / 8
+"""A binary STL record in :mod:`splinekit._kernels` work units, so that a first export loads the
+kernel only where the saving pays for numba's import. The numpy path fills a record in 0.08-0.14
+microseconds of CPU (a quarter of a curve point) and the kernel saves only about half of that
+(the rest is the write), measured in one loaded run: counted as one unit, a first export of 2M
+triangles loaded the kernel and took 1.7 times the numpy path's wall time (1.9 its CPU); as a third, 6M
+triangles took 1.3-2.1 times its CPU. As an eighth, a first export loads it from 16M triangles
+on; once numba is up (another family loaded it) every export of MIN_COMPILED_TRIANGLES or more
+takes the kernel (2x faster warm)."""
+
+
 def stl_fill_kernel(n_triangles: int):
     """The compiled ``fill(V, tris, out)`` that writes binary STL records, or None (use numpy).
 
@@ -151,7 +162,8 @@ def stl_fill_kernel(n_triangles: int):
     records: normal then the three corners, all rounded to float32 before the normal is computed,
     as the numpy path does).
     """
-    K = _kernels.load("exporters._stl_kernel", work=n_triangles)
+    K = _kernels.load("exporters._stl_kernel", work=n_triangles * RECORD_WORK,
+                      min_work=MIN_COMPILED_TRIANGLES * RECORD_WORK)
     return None if K is None else K.fill
 
 

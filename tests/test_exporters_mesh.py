@@ -19,6 +19,8 @@ from __future__ import annotations
 import json
 import os
 import struct
+import subprocess
+import sys
 import tempfile
 import xml.etree.ElementTree as ET
 import zipfile
@@ -754,3 +756,20 @@ def test_malformed_glb_and_3mf(tmp_path):
         z.writestr("3D/other.model", "<model/>")
     with pytest.raises(FileFormatError, match="no model part"):
         exporters.import_3mf(tmp_path / "b.3mf")
+
+
+def test_first_stl_export_loads_the_kernel_only_where_it_pays():
+    """A first binary STL export of LOAD_WORK triangles (2M: the numpy fill takes a few tenths of
+    a second) stays on the numpy path in a fresh process with the default rule: loading numba
+    would cost more than the fill. 1 / RECORD_WORK times as many records load it."""
+    code = (
+        "import os, sys\n"
+        "os.environ.pop('SPLINEKIT_NUMBA', None)\n"
+        "from splinekit import _kernels\n"
+        "from exporters import _meshio\n"
+        "n = int(_kernels.LOAD_WORK)\n"
+        "small = _meshio.stl_fill_kernel(n) is None and 'numba' not in sys.modules\n"
+        "print(small, _meshio.stl_fill_kernel(int(n / _meshio.RECORD_WORK)) is not None)"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout.strip()
+    assert out == "True True"

@@ -143,6 +143,32 @@ def test_numba_is_not_imported_by_the_first_demo_grid():
     assert out == "False"
 
 
+def test_first_calls_of_every_benchmarked_family_run_the_numpy_path():
+    """The cold-start rule (issue 17) without a clock: the first calls that
+    benchmarks/bench_cold_start.py times, at its sizes, in a fresh process with the default rule,
+    import no numba, so each costs what the numpy path's first call costs. One process serves
+    them all: the work they add up to stays below LOAD_WORK, so each is below it alone."""
+    out = _run(
+        "import os, sys, numpy as np\n"
+        "os.environ.pop('SPLINEKIT_NUMBA', None)\n"
+        "import splinekit as sk\n"
+        "from splinekit import _kernels\n"
+        "from splinekit.basis.knots import clamped_uniform\n"
+        "rng = np.random.default_rng(1)\n"
+        "g = np.linspace(0.0, 1.0, 20)\n"
+        "P = np.stack([*np.meshgrid(g, g, indexing='ij'), rng.uniform(-0.3, 0.3, (20, 20))], axis=-1)\n"
+        "U = clamped_uniform(3, 20)\n"
+        "s = sk.NurbsSurface(3, 3, U, U, P, rng.uniform(0.5, 2.0, (20, 20)))\n"
+        "c = sk.NurbsCurve(3, clamped_uniform(3, 50), rng.uniform(-1, 1, (50, 3)), rng.uniform(0.5, 2.0, 50))\n"
+        "x, u, v = np.linspace(0, 1, 100_000), rng.uniform(0, 1, 100_000), rng.uniform(0, 1, 100_000)\n"
+        "c.derivatives(x, 2); s.evaluate(u, v)\n"
+        "g = np.linspace(0.0, 1.0, 1000); s.evaluate_grid(g, g)\n"
+        "g = np.linspace(0.0, 1.0, 300); s.normal_grid(g, g); sk.curvature(s, g, g, grid=True)\n"
+        "print(0 < _kernels._served < _kernels.LOAD_WORK, 'numba' in sys.modules)"
+    )
+    assert out == "True False"
+
+
 def test_kernels_load_once_the_numpy_path_has_served_load_work():
     """Jobs of at least MIN_WORK add up: the kernels load with the job that brings the work
     served to LOAD_WORK, and from then on serve every job of at least MIN_WORK."""

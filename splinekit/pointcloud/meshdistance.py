@@ -134,9 +134,18 @@ def closest_points_on_triangles(p, a, b, c) -> np.ndarray:
 
 _LEAF = 4  # triangles per leaf; the kernel assumes 4
 
-QUERY_WORK = 20
-"""Cost of one query point on the numpy path, in :mod:`splinekit._kernels` work units (a point
-costs about as much as twenty curve points): large queries get the compiled search at once."""
+QUERY_WORK = 60
+"""Cost of one query point on the numpy path, in :mod:`splinekit._kernels` work units: 19-120
+microseconds of CPU a point (meshes of 320 to 40,000 triangles, points near and far) where a
+curve point costs 0.2-0.5, measured in one loaded run; sixty is the cheap end. So a first query
+of 33,334 points or more loads the compiled search at once: near the 20,480 triangles of an
+icosphere(5), the cheapest case measured, that first call took 0.62-0.63 s of CPU with the load
+against 0.80-1.00 s on the numpy path (at twenty units it stayed on the numpy path up to
+100,000 points)."""
+
+MIN_QUERIES = 1000
+"""Smallest query sent to the compiled search once it is loaded (the numpy path serves smaller
+ones)."""
 
 
 class _TriangleBVH:
@@ -395,7 +404,7 @@ class MeshDistance:
         ``max_distance`` ``d`` is inf and the triangle -1. Compiled search for large queries
         (or whenever ``kernels`` is given)."""
         if kernels is None:
-            kernels = _kernels.load(KERNELS, work=len(P) * QUERY_WORK)
+            kernels = _kernels.load(KERNELS, work=len(P) * QUERY_WORK, min_work=MIN_QUERIES * QUERY_WORK)
         if kernels is not None:
             return self.bvh.nearest(kernels, P, max_distance)
         dist, close, tri, feature = self._search(P)

@@ -7,7 +7,10 @@ is sparse, and the whole composition is linear in the size of the result (the le
 fourfold, so the last product dominates). Its cost is memory latency: each stencil row picks rows
 of ``M_(k-1)`` scattered in memory. A compiled two-pass product split between two threads was
 tried and was no faster than scipy's on a loaded 2-core machine (and three times slower with
-sorted rows), so scipy serves; see ``benchmarks/bench_subdiv_compose.py``.
+sorted rows), and so were reorderings for locality (parents renumbered in first-touch order,
+stencil rows sorted by parent, row blocks), so scipy serves; the benchmark
+``benchmarks/bench_subdiv_compose.py`` measures the time against the bare reads of the parent
+rows, and its docstring keeps the profile.
 """
 
 from __future__ import annotations
