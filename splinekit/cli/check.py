@@ -9,9 +9,11 @@ references, with tolerances no looser than the geometry allows.
   largest deviation from the surfaces (the tessellation's own bound).
 - Model checks (``model.checks``): the tolerance each model states with its reference values.
   The ``genus`` measure is that of the watertight tessellation
-  (:func:`splinekit.mesh.components.genus`, handles summed over the pieces), not derived from
-  OCC's ``V - E + F``: a face closed on itself (a sphere, a cylinder's wall) counts there as
-  if it had a handle more or less.
+  (:func:`splinekit.mesh.components.genus`, handles summed over the pieces). The
+  ``euler_characteristic`` of patch sets is that of OCC's sewn topology counted as B-rep topology
+  counts it (:func:`splinekit.interop.gprop.occ_euler_characteristic`: degenerate edges at poles
+  and collapsed sides are points, a seam is one edge, inner wires are holes), so a sphere is 2
+  and a torus 0 whether their faces close on themselves or not.
 """
 
 from __future__ import annotations
@@ -116,7 +118,8 @@ def _check_bodies(model, table_: Checks, measures: dict) -> dict:
             bound = sum(float(m.area) * float(m.max_deviation) for m in meshes)
             measures["tessellation"] = (volume, reference.volume, max(bound, 1e-12))
     source = f"{reference.source} ({reference.reason})"
-    return {"area": source, "volume": source, "faces": "OCC faces", "euler_characteristic": "OCC V - E + F",
+    return {"area": source, "volume": source, "faces": "OCC faces",
+            "euler_characteristic": "OCC topology V - E + F - (W - F), degenerate edges left out",
             "genus": "tessellation genus"}
 
 
