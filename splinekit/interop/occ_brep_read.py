@@ -89,13 +89,15 @@ class _Reader:
             wires.Next()
             if cwires is not None:
                 cwires.Next()
-        uv = _loop_samples(loops, index)
+        if not loops:
+            raise BackendError(f"face {index}: OpenCascade gives it no wire (an unbounded face cannot be converted)")
         if plan is None or plan.kind == "spline":
+            uv = _loop_samples(loops)
             surface = self._surface(fwd if plan is not None else cfwd, index, uv.min(axis=0), uv.max(axis=0))
         else:  # a rational pcurve lies in its control points' hull: the plane's box holds it whole
-            P = np.concatenate([uv] + [np.asarray(e.pcurve.control_points) for lp in loops for e in lp])
+            P = np.concatenate([np.asarray(e.pcurve.control_points) for lp in loops for e in lp])
             surface = native_surface(plan, (P.min(axis=0), P.max(axis=0)))
-        loops = [[_same_parameter(surface, use) for use in lp] for lp in loops]
+        loops = _same_parameter(surface, loops)
         return TrimmedFace(surface, loops, reversed=reversed_, tolerance=tol_face, name=name)
 
     def _native_use(self, edge, fwd, plan):
@@ -188,10 +190,8 @@ def _add_loop(loops: list, edges: list, outer: bool) -> None:
         loops.insert(0, edges) if outer else loops.append(edges)
 
 
-def _loop_samples(loops, index) -> np.ndarray:
-    """``(n, 2)`` points of every pcurve of the face ``index`` (BackendError if it has no loop)."""
-    if not loops:
-        raise BackendError(f"face {index}: OpenCascade gives it no wire (an unbounded face cannot be converted)")
+def _loop_samples(loops) -> np.ndarray:
+    """``(n, 2)`` points of every pcurve of a face's ``loops``."""
     return np.concatenate([e.pcurve.evaluate(np.linspace(*e.domain, 17)) for lp in loops for e in lp])
 
 
@@ -244,32 +244,41 @@ def _isoline_pcurve(edge, fwd, cedge, cfwd, pcurve):
     return best
 
 
-def _same_parameter(surface, use):
-    """``use`` (an Edge on ``surface``) with its tolerance covering how far its 3-D curve is from
-    the surface at its pcurve at the same parameter (the data model's SameParameter).
+def _same_parameter(surface, loops) -> list:
+    """``loops`` (lists of Edges on ``surface``) with each use's tolerance covering how far its 3-D
+    curve is from the surface at its pcurve at the same parameter (the data model's SameParameter).
 
     OCC measures that deviation on its own samples and the NURBS conversion re-approximates
     curves, so the figure read from OCC can fall short of the one the curves really have.
     Where the two curves are the same point set within a much smaller distance (only their
     parameters disagree), the 3-D curve is dropped instead (the surface at the pcurve is then the
-    edge's geometry, as for a use without a 3-D curve) and the tolerance covers that distance."""
-    if use.curve is None or use.degenerate:
-        return use
-    a, b = use.domain
-    br = np.union1d(use.pcurve.bezier_breakpoints(), use.curve.bezier_breakpoints())
-    br = np.union1d(br[(br > a) & (br < b)], [a, b])
-    t = (br[:-1, None] + (br[1:] - br[:-1])[:, None] * np.linspace(0.0, 1.0, 17)[None]).ravel()
-    uv = use.pcurve.evaluate(t)
+    edge's geometry, as for a use without a 3-D curve) and the tolerance covers that distance.
+    The surface is evaluated once for the samples of every use of the face."""
+    uses = [use for lp in loops for use in lp if use.curve is not None and not use.degenerate]
+    if not uses:
+        return loops
+    samples = []
+    for use in uses:
+        a, b = use.domain
+        br = np.union1d(use.pcurve.bezier_breakpoints(), use.curve.bezier_breakpoints())
+        br = np.union1d(br[(br > a) & (br < b)], [a, b])
+        samples.append((br[:-1, None] + (br[1:] - br[:-1])[:, None] * np.linspace(0.0, 1.0, 17)[None]).ravel())
+    uv = np.concatenate([use.pcurve.evaluate(t) for use, t in zip(uses, samples)])
     (u0, u1), (v0, v1) = surface.domain
-    on_surface = surface.evaluate(np.clip(uv[:, 0], u0, u1), np.clip(uv[:, 1], v0, v1))
-    dev = float(np.linalg.norm(on_surface - use.curve.evaluate(t), axis=1).max())
-    if dev <= use.tolerance:
-        return use
-    apart = float(project(use.curve, on_surface).distances.max())
-    margin = 1.1  # the check samples the same parameters; the margin covers rounding only
-    if apart < 0.5 * dev:
-        return Edge(use.pcurve, None, key=use.key, tolerance=max(use.tolerance, margin * apart))
-    return Edge(use.pcurve, use.curve, key=use.key, tolerance=margin * dev)
+    on_surface = np.split(surface.evaluate(np.clip(uv[:, 0], u0, u1), np.clip(uv[:, 1], v0, v1)),
+                          np.cumsum([len(t) for t in samples])[:-1])
+    fixed = {}
+    for use, t, on in zip(uses, samples, on_surface):
+        dev = float(np.linalg.norm(on - use.curve.evaluate(t), axis=1).max())
+        if dev <= use.tolerance:
+            continue
+        apart = float(project(use.curve, on).distances.max())
+        margin = 1.1  # the check samples the same parameters; the margin covers rounding only
+        if apart < 0.5 * dev:
+            fixed[id(use)] = Edge(use.pcurve, None, key=use.key, tolerance=max(use.tolerance, margin * apart))
+        else:
+            fixed[id(use)] = Edge(use.pcurve, use.curve, key=use.key, tolerance=margin * dev)
+    return [[fixed.get(id(use), use) for use in lp] for lp in loops]
 
 
 def _native_surface(face) -> bool:
