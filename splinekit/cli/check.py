@@ -23,6 +23,7 @@ import time
 import numpy as np
 
 from .._progress import progress
+from ..brep.crosscheck import singular_patches
 from ..errors import ParameterError, SplineKitError
 from ..interop.gprop import (
     OCC_PRECISION,
@@ -49,6 +50,11 @@ MASS_RTOL = 1e-8
 Both integrate adaptively to 1e-10 relative, but GProp's precision is a stopping threshold, not a
 bound: on the block model its volume is 1.4e-9 away from splinekit's (and splinekit's error
 estimate is below 1e-10), so 1e-8 is the tightest bound that OCC keeps."""
+
+
+CATCH_RTOL = 5e-7
+"""The loosest relative tolerance an integral comparison may take: a 1e-6 relative error in
+splinekit's (or a model's stated) area or volume must still fail."""
 
 
 def closed_genus(meshes) -> float | None:
@@ -123,12 +129,33 @@ def _check_bodies(model, table_: Checks, measures: dict) -> dict:
             "genus": "tessellation genus"}
 
 
+def _solid_reference(shapes, singular) -> tuple[float, float, float, str]:
+    """``(area, volume, relative tolerance, note)``: OCC's GProp of the solids' ``shapes`` as the
+    reference for splinekit's integrals.
+
+    Where no face has a pole or collapsed edge OCC matches closed forms to ~1e-13 and the tolerance
+    is :data:`MASS_RTOL`. Otherwise GProp may drift (see :mod:`splinekit.interop.gprop`) and
+    there is no second integrator for trimmed faces: GProp is run again at a precision 100 times
+    finer and the tolerance widened by twice the drift between the two runs, but never past
+    :data:`CATCH_RTOL` (beyond that the comparison is reported as skipped, naming the drift)."""
+    area, volume = sum(occ_area(s) for s in shapes), sum(occ_volume(s) for s in shapes)
+    if not singular:
+        return area, volume, MASS_RTOL, f"OCC GProp {OCC_PRECISION:g} (no collapsed edges or poles)"
+    fine = OCC_PRECISION * 1e-2
+    area2, volume2 = sum(occ_area(s, fine) for s in shapes), sum(occ_volume(s, fine) for s in shapes)
+    drift = max(abs(area - area2) / max(abs(area2), 1e-300), abs(volume - volume2) / max(abs(volume2), 1e-300))
+    i, j, why = singular[0]
+    note = (f"OCC GProp {OCC_PRECISION:g}, may drift ({why}: solid {i} face {j}); "
+            f"tolerance widened by twice its drift to {fine:g} ({drift:.1e})")
+    return area2, volume2, MASS_RTOL + 2.0 * drift, note
+
+
 def _check_solids(model, table_: Checks, measures: dict) -> dict:
     """Checks and measures of a model's exact B-rep solids: OCC's validity, splinekit's area and
-    volume against OCC's GProp on the same solids, and the tessellation (closed, its volume
-    within its bound, its Euler characteristic ``2 - 2 genus``)."""
+    volume against OCC's GProp on the same solids (:func:`_solid_reference`), and the
+    tessellation (closed, its volume within its bound, its Euler characteristic ``2 - 2 genus``)."""
     solids = solids_of(model)
-    occ_area_total = occ_volume_total = 0.0
+    shapes = []
     for i, solid in enumerate(solids):
         label = solid.name or f"solid {i}"
         try:
@@ -138,15 +165,18 @@ def _check_solids(model, table_: Checks, measures: dict) -> dict:
             continue
         valid = is_valid(shape)
         table_.truth(f"{label}: OCC calls it a valid solid", valid, "BRepCheck_Analyzer")
-        if not valid:  # GProp of an invalid shape means nothing; the comparison below then fails
-            continue
-        occ_area_total += occ_area(shape)
-        occ_volume_total += occ_volume(shape)
+        if valid:  # GProp of an invalid shape means nothing; the comparison below then fails
+            shapes.append(shape)
     measures["faces"] = sum(len(s.faces) for s in solids)
     measures["area"] = sum(s.area() for s in solids)
     measures["volume"] = sum(s.volume() for s in solids)
+    singular = [(i, j, why) for i, s in enumerate(solids) for j, why in singular_patches([f.surface for f in s.faces])]
+    occ_area_total, occ_volume_total, rtol, note = _solid_reference(shapes, singular)
     for kind, ours, theirs in (("area", measures["area"], occ_area_total), ("volume", measures["volume"], occ_volume_total)):
-        table_.compare(f"{kind}: splinekit vs OCC", ours, theirs, MASS_RTOL * abs(theirs), f"OCC GProp at precision {OCC_PRECISION:g}")
+        if rtol > CATCH_RTOL:
+            table_.skip(f"{kind}: splinekit vs OCC", f"{note}: too loose to judge")
+        else:
+            table_.compare(f"{kind}: splinekit vs OCC", ours, theirs, rtol * abs(theirs), note)
     mesh, deviation = model_mesh(model)
     table_.truth("tessellation is closed", bool(mesh.is_closed))
     measures["euler_characteristic"] = mesh.euler_characteristic
