@@ -96,7 +96,10 @@ class _Reader:
             surface = self._surface(fwd if plan is not None else cfwd, index, uv.min(axis=0), uv.max(axis=0))
         else:  # a rational pcurve lies in its control points' hull: the plane's box holds it whole
             P = np.concatenate([np.asarray(e.pcurve.control_points) for lp in loops for e in lp])
-            surface = native_surface(plan, (P.min(axis=0), P.max(axis=0)))
+            lo, hi = P.min(axis=0), P.max(axis=0)
+            if plan.kind == "plane" and not (hi - lo > 1e-12 * max(1.0, float(np.abs(P).max()))).all():
+                raise BackendError(f"face {index}: its edges bound no area (their (u, v) box is {lo.tolist()} to {hi.tolist()})")
+            surface = native_surface(plan, (lo, hi))
         loops = _same_parameter(surface, loops)
         return TrimmedFace(surface, loops, reversed=reversed_, tolerance=tol_face, name=name)
 
