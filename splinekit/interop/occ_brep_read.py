@@ -47,7 +47,7 @@ class _Reader:
         self.edge_map = edge_map  # TopTools_IndexedMapOfShape of the shape's edges: their keys
         self.converted = converted  # keys of the circular edges read on OCC's parameter
         self.curves: dict = {}  # (edge key, native) -> 3-D curve in the edge's own direction
-        self.arcs: dict = {}  # edge key -> rational 3-D arc of a natively converted circular edge
+        self.native_curves: dict = {}  # edge key -> 3-D curve of a natively read edge (a rational arc if circular)
 
     def face(self, face, conv, index: int, name=None, plan=None):
         """The TrimmedFace of the original ``face``: read through its converted twin ``conv``, or
@@ -109,7 +109,7 @@ class _Reader:
         tool = BRep.BRep_Tool
         key = self.edge_map.FindIndex(edge)
         degenerate = bool(tool.Degenerated_s(edge))
-        pcurve, curve = native_use(edge, fwd, plan, self.arcs, key)
+        pcurve, curve = native_use(edge, fwd, plan, self.native_curves, key)
         if curve is not None and not _same_domain(curve.domain, pcurve.domain):
             curve = None  # not SameRange: keep the trim only, the 3-D curve is rebuilt on export
         ends = [TopExp.TopExp.FirstVertex_s(edge), TopExp.TopExp.LastVertex_s(edge)]

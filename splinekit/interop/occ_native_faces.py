@@ -201,10 +201,10 @@ def native_surface(plan: FacePlan, box=None):
     return revolved_surface(O, X, Y, Z, plan.u_map, meridian)
 
 
-def native_use(edge, face, plan: FacePlan, arcs: dict, key):
+def native_use(edge, face, plan: FacePlan, curves: dict, key):
     """``(pcurve, 3-D curve or None)`` of the edge use (``edge`` as the wire holds it) on the
-    natively converted ``face``, on the edge's parameter (new for circular edges). ``arcs``:
-    a cache of the circular edges' rational 3-D curves by ``key``."""
+    natively converted ``face``, on the edge's parameter (new for circular edges). ``curves``:
+    a cache of the edges' 3-D curves by ``key`` (both uses of an edge share one)."""
     (BRep,) = _ocp("BRep")
     tool = BRep.BRep_Tool
     pc = tool.CurveOnSurface_s(edge, face, 0.0, 0.0)
@@ -212,12 +212,10 @@ def native_use(edge, face, plan: FacePlan, arcs: dict, key):
     degenerate = bool(tool.Degenerated_s(edge))
     conic = None if degenerate else circular_curve(edge)
     curve = None
-    if conic is not None:
-        if key not in arcs:
-            arcs[key] = edge_arc(*_conic_axes(conic, 3), first, last)
-        curve = arcs[key]
-    elif not degenerate:
-        curve = _curve3d_from_occ(edge)
+    if not degenerate:
+        if key not in curves:
+            curves[key] = edge_arc(*_conic_axes(conic, 3), first, last) if conic is not None else _curve3d_from_occ(edge)
+        curve = curves[key]
     if plan.kind in ("plane", "spline"):
         if conic is not None:  # a plane's circle or ellipse, on the edge's new parameter
             (Geom2d,) = _ocp("Geom2d")
