@@ -49,7 +49,10 @@ def build(**params) -> Model:
 
     Checks: ``"faces"`` = 32 and ``"area"`` (mm^2): the surface area by
     adaptive quadrature of the exact patches (21153.3212370 mm^2 at the default
-    scale; eight patches have collapsed edges), tolerance 1e-9 relative.
+    scale; eight patches have collapsed edges), tolerance 1e-9 relative;
+    ``"euler_characteristic"`` = 2: four open pieces, the body and the lid disks
+    (1 each: closed at their apexes, open at the rim) and the handle and the
+    spout tubes (0 each: open at both ends).
     """
     values = resolve_params(NAME, PARAMETERS, params)
     patches = [BezierSurface(net) for net in control_nets(values["scale"])]
@@ -61,5 +64,5 @@ def build(**params) -> Model:
         body_names=["teapot"],
         mesh=None,
         closed=False,
-        checks={"faces": (32, 0), "area": (area, INTEGRAL_TOLERANCE * area)},
+        checks={"faces": (32, 0), "area": (area, INTEGRAL_TOLERANCE * area), "euler_characteristic": (2, 0)},
     )

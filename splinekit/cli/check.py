@@ -4,14 +4,20 @@ references, with tolerances no looser than the geometry allows.
 - Point evaluation: splinekit and OCC evaluate the same control nets in float64; they agree to
   :data:`POINT_RTOL` of the largest coordinate (a few thousand units in the last place).
 - Exact solids: splinekit's mass properties (adaptive quadrature to relative 1e-10, with an error
-  estimate) against OCC's GProp (precision 1e-10) on the same solids, within :data:`MASS_RTOL`.
+  estimate) against OCC's GProp (precision 1e-10) on the same solids, within :data:`MASS_RTOL`;
+  where a face has a pole or collapsed edge, GProp's drift to a finer precision widens that, up
+  to :data:`CATCH_RTOL` (so a 1e-6 error always fails). Patch sets: OCC's GProp where no patch
+  has a pole, scipy's cubature where one has (:func:`splinekit.interop.gprop.reference_integrals`).
+  Each row's note names the reference used and why.
 - Meshes: a tessellation's volume differs from the exact one by at most its area times its
   largest deviation from the surfaces (the tessellation's own bound).
 - Model checks (``model.checks``): the tolerance each model states with its reference values.
   The ``genus`` measure is that of the watertight tessellation
-  (:func:`splinekit.mesh.components.genus`, handles summed over the pieces), not derived from
-  OCC's ``V - E + F``: a face closed on itself (a sphere, a cylinder's wall) counts there as
-  if it had a handle more or less.
+  (:func:`splinekit.mesh.components.genus`, handles summed over the pieces). The
+  ``euler_characteristic`` of patch sets is that of OCC's sewn topology counted as B-rep topology
+  counts it (:func:`splinekit.interop.gprop.occ_euler_characteristic`: degenerate edges at poles
+  and collapsed sides are points, a seam is one edge, inner wires are holes), so a sphere is 2
+  and a torus 0 whether their faces close on themselves or not.
 """
 
 from __future__ import annotations
@@ -21,6 +27,7 @@ import time
 import numpy as np
 
 from .._progress import progress
+from ..brep.crosscheck import singular_patches
 from ..errors import ParameterError, SplineKitError
 from ..interop.gprop import (
     OCC_PRECISION,
@@ -47,6 +54,11 @@ MASS_RTOL = 1e-8
 Both integrate adaptively to 1e-10 relative, but GProp's precision is a stopping threshold, not a
 bound: on the block model its volume is 1.4e-9 away from splinekit's (and splinekit's error
 estimate is below 1e-10), so 1e-8 is the tightest bound that OCC keeps."""
+
+
+CATCH_RTOL = 5e-7
+"""The loosest relative tolerance an integral comparison may take: a 1e-6 relative error in
+splinekit's (or a model's stated) area or volume must still fail."""
 
 
 def closed_genus(meshes) -> float | None:
@@ -116,16 +128,38 @@ def _check_bodies(model, table_: Checks, measures: dict) -> dict:
             bound = sum(float(m.area) * float(m.max_deviation) for m in meshes)
             measures["tessellation"] = (volume, reference.volume, max(bound, 1e-12))
     source = f"{reference.source} ({reference.reason})"
-    return {"area": source, "volume": source, "faces": "OCC faces", "euler_characteristic": "OCC V - E + F",
+    return {"area": source, "volume": source, "faces": "OCC faces",
+            "euler_characteristic": "OCC topology V - E + F - (W - F), degenerate edges left out",
             "genus": "tessellation genus"}
+
+
+def _solid_reference(shapes, singular) -> tuple[float, float, float, str]:
+    """``(area, volume, relative tolerance, note)``: OCC's GProp of the solids' ``shapes`` as the
+    reference for splinekit's integrals.
+
+    Where no face has a pole or collapsed edge OCC matches closed forms to ~1e-13 and the tolerance
+    is :data:`MASS_RTOL`. Otherwise GProp may drift (see :mod:`splinekit.interop.gprop`) and
+    there is no second integrator for trimmed faces: GProp is run again at a precision 100 times
+    finer and the tolerance widened by twice the drift between the two runs, but never past
+    :data:`CATCH_RTOL` (beyond that the comparison is reported as skipped, naming the drift)."""
+    area, volume = sum(occ_area(s) for s in shapes), sum(occ_volume(s) for s in shapes)
+    if not singular:
+        return area, volume, MASS_RTOL, f"OCC GProp {OCC_PRECISION:g} (no collapsed edges or poles)"
+    fine = OCC_PRECISION * 1e-2
+    area2, volume2 = sum(occ_area(s, fine) for s in shapes), sum(occ_volume(s, fine) for s in shapes)
+    drift = max(abs(area - area2) / max(abs(area2), 1e-300), abs(volume - volume2) / max(abs(volume2), 1e-300))
+    i, j, why = singular[0]
+    note = (f"OCC GProp {OCC_PRECISION:g}, may drift ({why}: solid {i} face {j}); "
+            f"tolerance widened by twice its drift to {fine:g} ({drift:.1e})")
+    return area2, volume2, MASS_RTOL + 2.0 * drift, note
 
 
 def _check_solids(model, table_: Checks, measures: dict) -> dict:
     """Checks and measures of a model's exact B-rep solids: OCC's validity, splinekit's area and
-    volume against OCC's GProp on the same solids, and the tessellation (closed, its volume
-    within its bound, its Euler characteristic ``2 - 2 genus``)."""
+    volume against OCC's GProp on the same solids (:func:`_solid_reference`), and the
+    tessellation (closed, its volume within its bound, its Euler characteristic ``2 - 2 genus``)."""
     solids = solids_of(model)
-    occ_area_total = occ_volume_total = 0.0
+    shapes = []
     for i, solid in enumerate(solids):
         label = solid.name or f"solid {i}"
         try:
@@ -135,15 +169,18 @@ def _check_solids(model, table_: Checks, measures: dict) -> dict:
             continue
         valid = is_valid(shape)
         table_.truth(f"{label}: OCC calls it a valid solid", valid, "BRepCheck_Analyzer")
-        if not valid:  # GProp of an invalid shape means nothing; the comparison below then fails
-            continue
-        occ_area_total += occ_area(shape)
-        occ_volume_total += occ_volume(shape)
+        if valid:  # GProp of an invalid shape means nothing; the comparison below then fails
+            shapes.append(shape)
     measures["faces"] = sum(len(s.faces) for s in solids)
     measures["area"] = sum(s.area() for s in solids)
     measures["volume"] = sum(s.volume() for s in solids)
+    singular = [(i, j, why) for i, s in enumerate(solids) for j, why in singular_patches([f.surface for f in s.faces])]
+    occ_area_total, occ_volume_total, rtol, note = _solid_reference(shapes, singular)
     for kind, ours, theirs in (("area", measures["area"], occ_area_total), ("volume", measures["volume"], occ_volume_total)):
-        table_.compare(f"{kind}: splinekit vs OCC", ours, theirs, MASS_RTOL * abs(theirs), f"OCC GProp at precision {OCC_PRECISION:g}")
+        if rtol > CATCH_RTOL:
+            table_.skip(f"{kind}: splinekit vs OCC", f"{note}: too loose to judge")
+        else:
+            table_.compare(f"{kind}: splinekit vs OCC", ours, theirs, rtol * abs(theirs), note)
     mesh, deviation = model_mesh(model)
     table_.truth("tessellation is closed", bool(mesh.is_closed))
     measures["euler_characteristic"] = mesh.euler_characteristic

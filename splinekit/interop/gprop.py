@@ -82,12 +82,21 @@ def topology_counts(shape) -> dict:
 
 
 def occ_euler_characteristic(shape) -> int:
-    """``V - E + F`` of ``shape``'s distinct vertices, edges and faces as OCC counts them, seam
-    and degenerate edges included: ``2 - 2 genus`` for a closed shell whose faces are all
-    disks bounded by proper edges (a box: 2); a face closed on itself counts differently (a
-    one-face NURBS sphere, with a seam and two degenerate pole edges: 2 - 3 + 1 = 0)."""
+    """The Euler characteristic of ``shape``'s faces as OCC's topology holds them, counted the
+    way B-rep topology counts (Euler-Poincaré with inner loops)::
+
+        V - (E - degenerate E) + F - (W - F)
+
+    A degenerate edge (a pole, a collapsed patch side) is a point, not an edge: left out. A seam
+    is one edge that its face uses twice, so a face closed on itself is still one disk: a one-face
+    sphere (2 poles, 1 seam, 2 degenerate edges) gives 2 - 1 + 1 = 2, a one-face torus (1 vertex,
+    2 seams) 1 - 2 + 1 = 0. Each wire beyond a face's first is a hole (``- (W - F)``). For a
+    closed shell this is ``2 - 2 genus``; plain ``V - E + F`` gives 0 for the sphere."""
+    (BRep,) = _ocp("BRep")
     counts = topology_counts(shape)
-    return counts["VERTEX"] - counts["EDGE"] + counts["FACE"]
+    degenerate = sum(bool(BRep.BRep_Tool.Degenerated_s(e)) for e in _sub_shapes(shape, "EDGE"))
+    holes = sum(len(_sub_shapes(f, "WIRE")) - 1 for f in _sub_shapes(shape, "FACE"))
+    return counts["VERTEX"] - (counts["EDGE"] - degenerate) + counts["FACE"] - holes
 
 
 def face_kinds(shape) -> dict:

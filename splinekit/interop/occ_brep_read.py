@@ -1,13 +1,16 @@
 """OpenCascade topology -> splinekit B-rep: TopoDS faces, shells and solids read as
 :class:`~splinekit.brep.TrimmedFace`, :class:`~splinekit.brep.Shell` and :class:`~splinekit.brep.Solid`.
 
-The shape is first re-expressed with ``BRepBuilderAPI_NurbsConvert`` on a copy (:mod:`.occ_nurbs`),
-which turns every analytic surface AND its pcurves into B-splines consistently (an analytic surface
-converted alone gets a rational parametrization that is not the angle, so the pcurves would no
-longer map onto it). Each face is then read with FORWARD orientation so its pcurves keep the
-material on their left; the face's own orientation becomes ``reversed``. Every edge use keeps its
-pcurve, its 3-D curve on the same parameter range and a ``key``: the edge's index in one
-``TopTools_IndexedMapOfShape`` of the whole shape, so the two faces of an edge share it.
+Planes, B-spline and Bézier faces, and cylinders, cones, spheres and tori whose pcurves are
+isolines, are converted natively and exactly (:mod:`.occ_native_faces`); a circular edge then gets
+a rational parameter shared by all its faces. The other faces are re-expressed together with
+``BRepBuilderAPI_NurbsConvert`` on a copy (:mod:`.occ_nurbs`), which turns an analytic surface AND
+its pcurves into B-splines consistently (an analytic surface converted alone gets a rational
+parametrization that is not the angle, so the pcurves would no longer map onto it). Each face is
+read with FORWARD orientation so its pcurves keep the material on their left; the face's own
+orientation becomes ``reversed``. Every edge use keeps its pcurve, its 3-D curve on the same
+parameter range and a ``key``: the edge's index in one ``TopTools_IndexedMapOfShape`` of the
+whole shape, so the two faces of an edge share it.
 """
 
 from __future__ import annotations
@@ -20,6 +23,7 @@ from ..curves import BSplineCurve, NurbsCurve
 from ..errors import BackendError, ParameterError
 from .occ_backend import _ocp, _occ_call, require_ocp
 from .occ_geometry import _curve2d_from_occ, _curve3d_from_occ, _edge_to_curve, _from_geom, _same_domain
+from .occ_native_faces import native_faces, native_surface, native_use
 from .occ_nurbs import _nurbs_converted
 from .occ_shapes import _children, _sub_shapes
 
@@ -27,7 +31,8 @@ __all__ = ["brep_from_shape"]
 
 
 class _Reader:
-    """Reads the faces of an OCC shape through its NURBS-converted copy, walked in parallel.
+    """Reads the faces of an OCC shape natively or through their NURBS-converted twins, walked in
+    parallel.
 
     The converted copy gives every surface as a B-spline and, where the original geometry is
     analytic, the pcurves and 3-D curves re-expressed on it. Where the original is already
@@ -38,55 +43,79 @@ class _Reader:
     ``TopTools_IndexedMapOfShape`` of the original shape.
     """
 
-    def __init__(self, shape):
-        TopAbs, TopExp, TopTools = _ocp("TopAbs", "TopExp", "TopTools")
-        self.edge_map = TopTools.TopTools_IndexedMapOfShape()
-        TopExp.TopExp.MapShapes_s(shape, TopAbs.TopAbs_ShapeEnum.TopAbs_EDGE, self.edge_map)
+    def __init__(self, edge_map, converted=frozenset()):
+        self.edge_map = edge_map  # TopTools_IndexedMapOfShape of the shape's edges: their keys
+        self.converted = converted  # keys of the circular edges read on OCC's parameter
         self.curves: dict = {}  # (edge key, native) -> 3-D curve in the edge's own direction
+        self.native_curves: dict = {}  # edge key -> 3-D curve of a natively read edge (a rational arc if circular)
 
-    def face(self, face, conv, index: int, name=None):
-        """The TrimmedFace of the original ``face`` whose converted twin is ``conv``."""
+    def face(self, face, conv, index: int, name=None, plan=None):
+        """The TrimmedFace of the original ``face``: read through its converted twin ``conv``, or
+        natively by ``plan`` (:func:`.occ_native_faces.face_plan`), or both: a native plane or
+        B-spline face reads its edges in ``self.converted`` from its twin."""
         BRep, BRepTools, TopAbs, TopExp, TopoDS = _ocp("BRep", "BRepTools", "TopAbs", "TopExp", "TopoDS")
         orient = TopAbs.TopAbs_Orientation
         reversed_ = face.Orientation() == orient.TopAbs_REVERSED
         fwd = TopoDS.TopoDS.Face_s(face.Oriented(orient.TopAbs_FORWARD))
-        cfwd = TopoDS.TopoDS.Face_s(conv.Oriented(orient.TopAbs_FORWARD))
+        cfwd = None if conv is None else TopoDS.TopoDS.Face_s(conv.Oriented(orient.TopAbs_FORWARD))
         native_face = _native_surface(fwd)
         tol_face = max(BRep.BRep_Tool.Tolerance_s(fwd), 1e-7)
         outer = BRepTools.BRepTools.OuterWire_s(fwd)
         loops = []
-        wires, cwires = (TopExp.TopExp_Explorer(f, TopAbs.TopAbs_ShapeEnum.TopAbs_WIRE) for f in (fwd, cfwd))
-        while wires.More() and cwires.More():
+        wires = TopExp.TopExp_Explorer(fwd, TopAbs.TopAbs_ShapeEnum.TopAbs_WIRE)
+        cwires = None if cfwd is None else TopExp.TopExp_Explorer(cfwd, TopAbs.TopAbs_ShapeEnum.TopAbs_WIRE)
+        while wires.More() and (cwires is None or cwires.More()):
             wire = TopoDS.TopoDS.Wire_s(wires.Current())
             # the wire's stored edges, original and converted, pair up in order; the wire explorer
             # (which follows the loop, in an order that depends on hashing) runs on the original only
-            stored, twins = _children(wire), _children(cwires.Current())
-            if len(stored) != len(twins):
+            stored = _children(wire)
+            twins = None if cwires is None else _children(cwires.Current())
+            if twins is not None and len(stored) != len(twins):
                 raise BackendError(f"face {index}: the NURBS-converted wire does not match the original")
             edges = []
             walk = BRepTools.BRepTools_WireExplorer(wire, fwd)
             while walk.More():
                 e = walk.Current()
+                walk.Next()
+                if plan is not None and (twins is None or self.edge_map.FindIndex(e) not in self.converted):
+                    edges.append(self._native_use(e, fwd, plan))
+                    continue
                 j = next((j for j, x in enumerate(stored) if x.IsEqual(e)), None)
                 if j is None:
                     j = next(j for j, x in enumerate(stored) if x.IsSame(e))
                 twin = TopoDS.TopoDS.Edge_s(twins[j].Oriented(e.Orientation()))
                 edges.append(self._edge_use(e, fwd, twin, cfwd, native_face, index))
-                walk.Next()
-            if edges:
-                _close_at_poles(edges)
-                if wire.IsSame(outer):
-                    loops.insert(0, edges)
-                else:
-                    loops.append(edges)
+            _add_loop(loops, edges, wire.IsSame(outer))
             wires.Next()
-            cwires.Next()
+            if cwires is not None:
+                cwires.Next()
         if not loops:
             raise BackendError(f"face {index}: OpenCascade gives it no wire (an unbounded face cannot be converted)")
-        uv = np.concatenate([e.pcurve.evaluate(np.linspace(*e.domain, 17)) for lp in loops for e in lp])
-        surface = self._surface(cfwd, index, uv.min(axis=0), uv.max(axis=0))
-        loops = [[_same_parameter(surface, use) for use in lp] for lp in loops]
+        if plan is None or plan.kind == "spline":
+            uv = _loop_samples(loops)
+            surface = self._surface(fwd if plan is not None else cfwd, index, uv.min(axis=0), uv.max(axis=0))
+        else:  # a rational pcurve lies in its control points' hull: the plane's box holds it whole
+            P = np.concatenate([np.asarray(e.pcurve.control_points) for lp in loops for e in lp])
+            lo, hi = P.min(axis=0), P.max(axis=0)
+            if plan.kind == "plane" and not (hi - lo > 1e-12 * max(1.0, float(np.abs(P).max()))).all():
+                raise BackendError(f"face {index}: its edges bound no area (their (u, v) box is {lo.tolist()} to {hi.tolist()})")
+            surface = native_surface(plan, (lo, hi))
+        loops = _same_parameter(surface, loops)
         return TrimmedFace(surface, loops, reversed=reversed_, tolerance=tol_face, name=name)
+
+    def _native_use(self, edge, fwd, plan):
+        """The Edge of one use of ``edge`` (as the wire holds it) on a natively converted face."""
+        BRep, TopAbs, TopExp = _ocp("BRep", "TopAbs", "TopExp")
+        tool = BRep.BRep_Tool
+        key = self.edge_map.FindIndex(edge)
+        degenerate = bool(tool.Degenerated_s(edge))
+        pcurve, curve = native_use(edge, fwd, plan, self.native_curves, key)
+        if curve is not None and not _same_domain(curve.domain, pcurve.domain):
+            curve = None  # not SameRange: keep the trim only, the 3-D curve is rebuilt on export
+        ends = [TopExp.TopExp.FirstVertex_s(edge), TopExp.TopExp.LastVertex_s(edge)]
+        tolerance = max([tool.Tolerance_s(edge), 1e-7] + [tool.Tolerance_s(v) for v in ends if not v.IsNull()])
+        use = Edge(pcurve, curve, key=key, degenerate=degenerate, tolerance=tolerance)
+        return use.reversed() if edge.Orientation() == TopAbs.TopAbs_Orientation.TopAbs_REVERSED else use
 
     def _surface(self, fwd, index, lo, hi):
         """The face's B-spline surface; ``lo``, ``hi``: the (u, v) bounding box of its pcurves."""
@@ -157,6 +186,18 @@ class _Reader:
         return use.reversed() if edge.Orientation() == TopAbs.TopAbs_Orientation.TopAbs_REVERSED else use
 
 
+def _add_loop(loops: list, edges: list, outer: bool) -> None:
+    """Add the loop ``edges`` (closed at its poles) to ``loops``, the outer loop first."""
+    if edges:
+        _close_at_poles(edges)
+        loops.insert(0, edges) if outer else loops.append(edges)
+
+
+def _loop_samples(loops) -> np.ndarray:
+    """``(n, 2)`` points of every pcurve of a face's ``loops``."""
+    return np.concatenate([e.pcurve.evaluate(np.linspace(*e.domain, 17)) for lp in loops for e in lp])
+
+
 def _isoline_pcurve(edge, fwd, cedge, cfwd, pcurve):
     """A better pcurve than OCC's re-approximated ``pcurve`` of the converted edge ``cedge``, or
     ``pcurve`` itself.
@@ -206,32 +247,41 @@ def _isoline_pcurve(edge, fwd, cedge, cfwd, pcurve):
     return best
 
 
-def _same_parameter(surface, use):
-    """``use`` (an Edge on ``surface``) with its tolerance covering how far its 3-D curve is from
-    the surface at its pcurve at the same parameter (the data model's SameParameter).
+def _same_parameter(surface, loops) -> list:
+    """``loops`` (lists of Edges on ``surface``) with each use's tolerance covering how far its 3-D
+    curve is from the surface at its pcurve at the same parameter (the data model's SameParameter).
 
     OCC measures that deviation on its own samples and the NURBS conversion re-approximates
     curves, so the figure read from OCC can fall short of the one the curves really have.
     Where the two curves are the same point set within a much smaller distance (only their
     parameters disagree), the 3-D curve is dropped instead (the surface at the pcurve is then the
-    edge's geometry, as for a use without a 3-D curve) and the tolerance covers that distance."""
-    if use.curve is None or use.degenerate:
-        return use
-    a, b = use.domain
-    br = np.union1d(use.pcurve.bezier_breakpoints(), use.curve.bezier_breakpoints())
-    br = np.union1d(br[(br > a) & (br < b)], [a, b])
-    t = (br[:-1, None] + (br[1:] - br[:-1])[:, None] * np.linspace(0.0, 1.0, 17)[None]).ravel()
-    uv = use.pcurve.evaluate(t)
+    edge's geometry, as for a use without a 3-D curve) and the tolerance covers that distance.
+    The surface is evaluated once for the samples of every use of the face."""
+    uses = [use for lp in loops for use in lp if use.curve is not None and not use.degenerate]
+    if not uses:
+        return loops
+    samples = []
+    for use in uses:
+        a, b = use.domain
+        br = np.union1d(use.pcurve.bezier_breakpoints(), use.curve.bezier_breakpoints())
+        br = np.union1d(br[(br > a) & (br < b)], [a, b])
+        samples.append((br[:-1, None] + (br[1:] - br[:-1])[:, None] * np.linspace(0.0, 1.0, 17)[None]).ravel())
+    uv = np.concatenate([use.pcurve.evaluate(t) for use, t in zip(uses, samples)])
     (u0, u1), (v0, v1) = surface.domain
-    on_surface = surface.evaluate(np.clip(uv[:, 0], u0, u1), np.clip(uv[:, 1], v0, v1))
-    dev = float(np.linalg.norm(on_surface - use.curve.evaluate(t), axis=1).max())
-    if dev <= use.tolerance:
-        return use
-    apart = float(project(use.curve, on_surface).distances.max())
-    margin = 1.1  # the check samples the same parameters; the margin covers rounding only
-    if apart < 0.5 * dev:
-        return Edge(use.pcurve, None, key=use.key, tolerance=max(use.tolerance, margin * apart))
-    return Edge(use.pcurve, use.curve, key=use.key, tolerance=margin * dev)
+    on_surface = np.split(surface.evaluate(np.clip(uv[:, 0], u0, u1), np.clip(uv[:, 1], v0, v1)),
+                          np.cumsum([len(t) for t in samples])[:-1])
+    fixed = {}
+    for use, t, on in zip(uses, samples, on_surface):
+        dev = float(np.linalg.norm(on - use.curve.evaluate(t), axis=1).max())
+        if dev <= use.tolerance:
+            continue
+        apart = float(project(use.curve, on).distances.max())
+        margin = 1.1  # the check samples the same parameters; the margin covers rounding only
+        if apart < 0.5 * dev:
+            fixed[id(use)] = Edge(use.pcurve, None, key=use.key, tolerance=max(use.tolerance, margin * apart))
+        else:
+            fixed[id(use)] = Edge(use.pcurve, use.curve, key=use.key, tolerance=margin * dev)
+    return [[fixed.get(id(use), use) for use in lp] for lp in loops]
 
 
 def _native_surface(face) -> bool:
@@ -298,41 +348,41 @@ def brep_from_shape(shape, *, name=None, on_error=None):
     reading order). With ``on_error(index, message)`` given instead, the face is left out and
     reported through the callback; a solid that lost faces comes back as its shells (open).
     """
-    TopAbs, TopoDS, BRepTools = _ocp("TopAbs", "TopoDS", "BRepTools")
+    TopAbs, TopoDS, BRepTools, TopExp, TopTools = _ocp("TopAbs", "TopoDS", "BRepTools", "TopExp", "TopTools")
     for face in _sub_shapes(shape, "FACE"):
         bounds = BRepTools.BRepTools.UVBounds_s(face)
         if not all(abs(x) < 1e100 for x in bounds):  # OCC's "infinite" is 2e100
             raise ParameterError(f"cannot convert an unbounded face (UV bounds {list(bounds)}): bound it with edges first")
+    faces, edges = TopTools.TopTools_IndexedMapOfShape(), TopTools.TopTools_IndexedMapOfShape()
+    TopExp.TopExp.MapShapes_s(shape, TopAbs.TopAbs_ShapeEnum.TopAbs_FACE, faces)
+    TopExp.TopExp.MapShapes_s(shape, TopAbs.TopAbs_ShapeEnum.TopAbs_EDGE, edges)
+    plans, converted, mixed = native_faces(shape, faces, edges)
     try:
-        converted = _nurbs_converted(shape)
+        twins = _converted_twins(faces, [i for i in range(1, faces.Extent() + 1) if i not in plans or i in mixed])
     except BackendError as exc:
         return _unconvertible(shape, exc, name, on_error)
-    reader = _Reader(shape)
+    reader = _Reader(edges, converted)
     kinds = TopAbs.TopAbs_ShapeEnum
     counter = iter(range(1 << 62))  # face numbers in error messages, in reading order
-    TopExp, BRepClass3d = _ocp("TopExp", "BRepClass3d")
+    BRepClass3d = _ocp("BRepClass3d")[0]
 
-    def pairs(s, c, kind=None):
-        """The children (or the ``kind`` sub-shapes) of the original ``s`` and its converted twin ``c``."""
+    def children(s, kind=None):
+        """The children (or the ``kind`` sub-shapes, orientations composed) of ``s``."""
         if kind is None:
-            its = TopoDS.TopoDS_Iterator(s), TopoDS.TopoDS_Iterator(c)
-            more, value = (lambda it: it.More()), (lambda it: it.Value())
-        else:
-            its = TopExp.TopExp_Explorer(s, kind), TopExp.TopExp_Explorer(c, kind)
-            more, value = (lambda it: it.More()), (lambda it: it.Current())
-        while more(its[0]) and more(its[1]):
-            yield value(its[0]), value(its[1])
-            its[0].Next()
-            its[1].Next()
-        if more(its[0]) or more(its[1]):
-            raise BackendError("the NURBS-converted shape does not match the original's structure")
+            return _children(s)
+        out, explorer = [], TopExp.TopExp_Explorer(s, kind)
+        while explorer.More():
+            out.append(explorer.Current())
+            explorer.Next()
+        return out
 
     lost = []  # faces left out (on_error given)
 
-    def face(s, c, label=None):
+    def face(s, label=None):
         index = next(counter)
         try:
-            return reader.face(TopoDS.TopoDS.Face_s(s), TopoDS.TopoDS.Face_s(c), index, label)
+            i = faces.FindIndex(s)
+            return reader.face(TopoDS.TopoDS.Face_s(s), twins.get(i), index, label, plans.get(i))
         except Exception as exc:  # SplineKitError, or an OCC Standard_Failure (no common base)
             message = str(exc) if isinstance(exc, BackendError) else f"face {index}: {type(exc).__name__}: {exc}"
             if on_error is None:
@@ -341,44 +391,61 @@ def brep_from_shape(shape, *, name=None, on_error=None):
             lost.append(index)
             return None
 
-    def shell(s, c, label=None):
+    def shell(s, label=None):
         # faces explored with their orientations composed with the shell's (and solid's)
-        faces = [f for f in (face(f, fc) for f, fc in pairs(s, c, kinds.TopAbs_FACE)) if f is not None]
-        return Shell(faces, name=label) if faces else None
+        got = [f for f in (face(f) for f in children(s, kinds.TopAbs_FACE)) if f is not None]
+        return Shell(got, name=label) if got else None
 
-    def solid(s, c):
+    def solid(s):
         outer = BRepClass3d.BRepClass3d.OuterShell_s(TopoDS.TopoDS.Solid_s(s))
         shells, before = [], len(lost)
-        for sh, shc in pairs(s, c, kinds.TopAbs_SHELL):
+        for sh in children(s, kinds.TopAbs_SHELL):
             if outer is not None and not outer.IsNull() and sh.IsSame(outer):
-                shells.insert(0, shell(sh, shc, name))
+                shells.insert(0, shell(sh, name))
             else:
-                shells.append(shell(sh, shc, name))
+                shells.append(shell(sh, name))
         if len(lost) > before:  # faces were left out: the shells no longer close
             return [x for x in shells if x is not None]
         if not shells:
             raise BackendError("the OCC solid has no shell")
         return [Solid(shells, name=name)]
 
-    def convert(s, c):
+    def convert(s):
         kind = s.ShapeType()
         if kind == kinds.TopAbs_FACE:
-            return [x for x in [face(s, c, name)] if x is not None]
+            return [x for x in [face(s, name)] if x is not None]
         if kind == kinds.TopAbs_SHELL:
-            return [x for x in [shell(s, c, name)] if x is not None]
+            return [x for x in [shell(s, name)] if x is not None]
         if kind == kinds.TopAbs_SOLID:
-            return solid(s, c)
+            return solid(s)
         if kind in (kinds.TopAbs_EDGE, kinds.TopAbs_WIRE):
             curves = (_edge_to_curve(e) for e in _sub_shapes(s, "EDGE"))
             return [cv for cv in curves if cv is not None]
         if kind in (kinds.TopAbs_COMPOUND, kinds.TopAbs_COMPSOLID):
-            return [item for child, twin in pairs(s, c) for item in convert(child, twin)]
+            return [item for child in children(s) for item in convert(child)]
         return []  # vertices
 
-    out = convert(shape, converted)
+    out = convert(shape)
     if on_error is None and shape.ShapeType() in (kinds.TopAbs_FACE, kinds.TopAbs_SHELL, kinds.TopAbs_SOLID):
         return out[0]
     return out
+
+
+def _converted_twins(faces, indices) -> dict:
+    """``{index: converted face}`` for the faces (indices in the ``TopTools_IndexedMapOfShape``
+    ``faces``) that are left to OCC's NURBS conversion, converted together in one compound so
+    that the edges they share stay shared."""
+    if not indices:
+        return {}
+    BRep, TopoDS = _ocp("BRep", "TopoDS")
+    builder, compound = BRep.BRep_Builder(), TopoDS.TopoDS_Compound()
+    builder.MakeCompound(compound)
+    for i in indices:
+        builder.Add(compound, faces.FindKey(i))
+    converted = _children(_nurbs_converted(compound))
+    if len(converted) != len(indices):
+        raise BackendError("the NURBS-converted faces do not match the originals")
+    return dict(zip(indices, converted))
 
 
 def _unconvertible(shape, exc, name, on_error):
