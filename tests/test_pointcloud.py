@@ -313,6 +313,30 @@ def test_mesh_distance_matches_brute_force(seed):
     assert np.allclose(own, d, rtol=1e-9, atol=1e-12)
 
 
+def test_numpy_mesh_distance_certifies_in_bounded_groups(monkeypatch):
+    # points deep inside a fine closed mesh have nearly every triangle within their certification
+    # radius; the numpy search measures those pairs in groups (it once asked for 18.6 GB at once)
+    import splinekit.pointcloud.meshdistance as md
+    from splinekit.mesh.geometry import triangulate
+
+    monkeypatch.setenv("SPLINEKIT_NUMBA", "0")
+    mesh = primitives.torus(32, 16, 1.0, 0.4)
+    tris, _ = triangulate(mesh)
+    V = np.asarray(mesh.vertices)
+    rng = np.random.default_rng(5)
+    ang = rng.uniform(0, 2 * np.pi, 200)
+    P = np.stack([np.cos(ang), np.sin(ang), np.zeros(200)], axis=1) * rng.uniform(0.95, 1.05, (200, 1))  # on the core circle
+    ref = _reference_triangle_distance(np.repeat(P, len(tris), 0), *(np.tile(V[tris[:, j]], (len(P), 1)) for j in range(3)))
+    ref = ref.reshape(len(P), len(tris)).min(axis=1)
+    groups = []
+    certify = md.MeshDistance._certify
+    monkeypatch.setattr(md, "EXHAUSTIVE_PAIRS", 2000)
+    monkeypatch.setattr(md.MeshDistance, "_certify", lambda self, *a: (groups.append(len(a[2])), certify(self, *a))[1])
+    d, _, _ = md.MeshDistance(V, tris).query(P)
+    assert np.allclose(d, ref, rtol=1e-9, atol=1e-12)
+    assert len(groups) > 1 and sum(groups) <= len(P)
+
+
 def test_mesh_distance_matches_trimesh_on_a_torus():
     import trimesh  # the test extra installs it: no skip
     mesh = primitives.torus(24, 12, 1.0, 0.3)

@@ -52,6 +52,15 @@ CANDIDATES = 8
 CHUNK = 65536
 """Points per block of the numpy search (bounds temporary memory)."""
 
+EXHAUSTIVE_PAIRS = 1 << 18
+"""Point-triangle pairs measured at once by the numpy search's certification step. A point deep
+inside a fine mesh has nearly every triangle within its certification radius: 30,000 such points
+against 16,600 triangles asked for 18.6 GB in one go before the step was split."""
+
+PAIR_BYTES = 512
+"""Bytes per point-triangle pair in that step (Python ints of the ball lists, the triangles'
+corners, closest points and their temporaries), for the memory budget."""
+
 KERNELS = "splinekit.pointcloud._meshdistance_kernels"
 
 GRID_KERNELS = "splinekit.pointcloud._gridsdf_kernels"
@@ -448,8 +457,24 @@ class MeshDistance:
         return dist, close, tri, feature
 
     def _exhaustive(self, Q, s, unsure, best, out):
+        """Certify the points ``Q[unsure]`` against every triangle within their radius, in groups
+        of at most :data:`EXHAUSTIVE_PAIRS` pairs (one point's pairs always fit: at most all triangles)."""
+        radius = best + self.reach * (1 + 1e-12) + 1e-300
+        counts = np.asarray(self.tree.query_ball_point(Q[unsure], radius, workers=-1, return_length=True), dtype=np.int64)
+        per_group = max(EXHAUSTIVE_PAIRS, len(self.tris))
+        limits.check(per_group * PAIR_BYTES, "the point/triangle pairs of a mesh-distance query")
+        ends = np.cumsum(counts)
+        start = 0
+        while start < len(unsure):
+            base = ends[start - 1] if start else 0
+            stop = max(start + 1, int(np.searchsorted(ends, base + per_group, side="right")))
+            g = np.arange(start, stop)
+            self._certify(Q, s, unsure[g], best[g], radius[g], out)
+            start = stop
+
+    def _certify(self, Q, s, unsure, best, radius, out):
         dist, close, tri, feature = out
-        lists = self.tree.query_ball_point(Q[unsure], best + self.reach * (1 + 1e-12) + 1e-300, workers=-1)
+        lists = self.tree.query_ball_point(Q[unsure], radius, workers=-1)
         counts = np.fromiter((len(x) for x in lists), dtype=np.int64, count=len(lists))
         if counts.sum() == 0:
             return
