@@ -67,6 +67,7 @@ import numpy as np
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from bench_eval import Table, measure, versions
 
+from _kernel_switch import with_numba
 from _memory import in_child, mb, measure_here
 
 from splinekit.pointcloud import estimate_normals, orient_normals
@@ -133,18 +134,6 @@ def o3d_both(o3d, P):
     pc.estimate_normals(o3d.geometry.KDTreeSearchParamKNN(K))
     pc.orient_normals_consistent_tangent_plane(K)
     return np.asarray(pc.normals)
-
-
-def with_numba(value, fn):
-    saved = os.environ.get("SPLINEKIT_NUMBA")
-    os.environ["SPLINEKIT_NUMBA"] = value
-    try:
-        return fn()
-    finally:
-        if saved is None:
-            del os.environ["SPLINEKIT_NUMBA"]
-        else:
-            os.environ["SPLINEKIT_NUMBA"] = saved
 
 
 def batched_eigh_normals(P, idx):

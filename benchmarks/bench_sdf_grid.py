@@ -71,6 +71,7 @@ import time
 import numpy as np
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from _kernel_switch import with_numba
 from _memory import in_child, mb, measure_here
 from _ratios import report
 
@@ -92,18 +93,6 @@ def lumpy_sphere(level):
     ph = np.arccos(np.clip(V[:, 2], -1.0, 1.0))
     r = 1.0 + 0.3 * np.sin(3 * th) * np.sin(ph) ** 2 + 0.15 * np.cos(5 * ph)
     return PolyMesh(V * r[:, None], m.faces)
-
-
-def with_numba(value, fn):
-    saved = os.environ.get("SPLINEKIT_NUMBA")
-    os.environ["SPLINEKIT_NUMBA"] = value
-    try:
-        return fn()
-    finally:
-        if saved is None:
-            del os.environ["SPLINEKIT_NUMBA"]
-        else:
-            os.environ["SPLINEKIT_NUMBA"] = saved
 
 
 def case(quick):

@@ -33,7 +33,7 @@ import numpy as np
 from .._validate import as_int, as_real
 from ..errors import ParameterError
 from ..plot import raster
-from ..plot.picture import DEFAULT_SIZE
+from ..plot.picture import DEFAULT_SIZE, view_angles
 from . import pictures
 from .fields import VERTICAL_DEGREES, draft_degrees, isophote_angle, zebra_angle, zebra_stripe
 from .sampling import SampledPart, freeze, sample_part, unit_direction
@@ -98,16 +98,6 @@ class DraftMap(SurfaceMap):
 
 
 # -- the public maps -----------------------------------------------------------------------------------
-def _view(view):
-    try:
-        elev, azim = (float(x) for x in view)
-    except (TypeError, ValueError):
-        raise ParameterError(f"view must be two angles in degrees (elevation, azimuth); got {view!r}") from None
-    if not (np.isfinite(elev) and np.isfinite(azim)):
-        raise ParameterError(f"view angles must be finite degrees; got {view!r}")
-    return elev, azim
-
-
 def zebra(part, *, stripes: int = 12, axis=None, view=DEFAULT_VIEW, tolerance=None) -> SurfaceMap:
     """Zebra stripes of ``part`` seen from ``view`` (module notes).
 
@@ -121,7 +111,7 @@ def zebra(part, *, stripes: int = 12, axis=None, view=DEFAULT_VIEW, tolerance=No
     stripes = as_int(stripes, "stripes", minimum=1)
     if stripes > 180:
         raise ParameterError(f"stripes must be at most 180 (one-degree bands), got {stripes}")
-    view = _view(view)
+    view = view_angles(view)
     eye, _, up = raster.view_basis(*view)
     upright = axis is None
     axis = up if upright else unit_direction(axis, "axis")

@@ -49,13 +49,18 @@ def check_render_options(color, scale, size, view):
         ok = False
     if not ok or not (64 <= w <= 8000 and 64 <= h <= 8000):
         raise ParameterError(f"size must be two whole numbers of pixels between 64 and 8000 (width, height); got {size!r}")
+    return (w, h), view_angles(view)
+
+
+def view_angles(view) -> tuple[float, float]:
+    """``(elevation, azimuth)`` in degrees from a pair of finite numbers; ParameterError otherwise."""
     try:
         elev, azim = (float(x) for x in view)
     except (TypeError, ValueError):
         raise ParameterError(f"view must be two angles in degrees (elevation, azimuth); got {view!r}") from None
     if not (np.isfinite(elev) and np.isfinite(azim)):
         raise ParameterError(f"view angles must be finite degrees; got {view!r}")
-    return (w, h), (elev, azim)
+    return elev, azim
 
 
 def triangle_normals(tris):
