@@ -155,3 +155,59 @@ class CircleMap:
         s = 0.5 * (np.tan((theta - self.start[k] - self.half[k]) / 2.0) / self.t_half[k] + 1.0)
         x = self.lam[k] * s / ((1.0 - s) + self.lam[k] * s)
         return self.lo[k] + x * (self.hi[k] - self.lo[k])
+
+
+class CircleMaps:
+    """Several :class:`CircleMap` as one table, so that points on different circles are mapped
+    in one pass: :meth:`angle` and :meth:`param` take the map ``q`` ``(n,)`` of every point."""
+
+    __slots__ = ("lo", "hi", "start", "half", "lam", "t_half", "first", "last", "t0", "t1", "tkey", "akey", "sweep",
+                 "kappa")  # fmt: skip
+
+    def __init__(self, maps):
+        cat = lambda name: np.concatenate([getattr(m, name) for m in maps])  # noqa: E731
+        self.lo, self.hi, self.start, self.half = cat("lo"), cat("hi"), cat("start"), cat("half")
+        self.lam, self.t_half = cat("lam"), cat("t_half")
+        count = np.array([len(m.lo) for m in maps], dtype=np.int64)
+        self.first = np.cumsum(count) - count
+        self.last = self.first + count - 1
+        self.t0 = np.array([m.lo[0] for m in maps])
+        self.t1 = np.array([m.hi[-1] for m in maps])
+        self.sweep = np.array([m.circle.sweep for m in maps])
+        q = np.repeat(np.arange(len(maps)), count)
+        # sorted search keys: map q's pieces end at 2 q + (fraction of its domain), 8 q + angle
+        self.tkey = 2.0 * q + (self.hi - self.t0[q]) / (self.t1 - self.t0)[q]
+        self.akey = 8.0 * q + self.start + 2.0 * self.half
+        self.kappa = np.array([_kappa(m) for m in maps])
+
+    def _piece(self, keys, key, q):
+        return np.minimum(np.maximum(np.searchsorted(keys, key, side="left"), self.first[q]), self.last[q])
+
+    def angle(self, q, t):
+        """Angles (from each circle's start) at parameters ``t`` of maps ``q`` (same shapes)."""
+        k = self._piece(self.tkey, 2.0 * q + (t - self.t0[q]) / (self.t1 - self.t0)[q], q)
+        x = (t - self.lo[k]) / (self.hi[k] - self.lo[k])
+        s = x / (x + self.lam[k] * (1.0 - x))
+        return self.start[k] + self.half[k] + 2.0 * np.arctan(self.t_half[k] * (2.0 * s - 1.0))
+
+    def param(self, q, theta):
+        """Parameters of maps ``q`` at angles ``theta`` (any branch: taken into ``[0, sweep]``,
+        an arc's far side split halfway)."""
+        th = np.mod(theta, 2.0 * np.pi)
+        sw = self.sweep[q]
+        th = np.where(th > 0.5 * (sw + 2.0 * np.pi), th - 2.0 * np.pi, th)
+        k = self._piece(self.akey, 8.0 * q + th, q)
+        s = 0.5 * (np.tan((th - self.start[k] - self.half[k]) / 2.0) / self.t_half[k] + 1.0)
+        x = self.lam[k] * s / ((1.0 - s) + self.lam[k] * s)
+        return self.lo[k] + x * (self.hi[k] - self.lo[k])
+
+
+def _kappa(m) -> float:
+    """``max |u''(theta) / u'(theta)|`` of a circle map (``u``: parameter, ``theta``: angle),
+    sampled densely: how far a parametric midpoint strays from the angular one, in units of
+    the squared step (it moves by ``kappa step^2 / 8`` radians to leading order)."""
+    th = np.linspace(0.0, m.circle.sweep, 20001)
+    u = m.param(th)
+    g1 = np.gradient(u, th)
+    g2 = np.gradient(g1, th)
+    return float(np.abs(g2 / g1).max())

@@ -24,7 +24,7 @@ import mapbox_earcut as earcut
 import numpy as np
 
 from ..tolerances import WELD
-from .arcs import REL, CircleMap, fit_circle, is_segment
+from .arcs import REL, CircleMap, CircleMaps, fit_circle, is_segment
 from .welding import close_pairs, components
 
 __all__ = ["FastPlan", "build_plan", "planar_triangles"]
@@ -108,6 +108,10 @@ class FastPlan:
         "arc_sweep", "arc_closed", "use_group", "use_face", "use_flip", "use_uv0", "use_uv1", "use_arc_cyl",
         "arc_cyl_use", "cyl_arc_uses", "A", "b", "normal", "origin", "fixed_T", "fixed_face", "curved_planes",
         "face_loops", "loop_first", "cyl", "cyl_faces",
+        # derived for the per-call path (:func:`_derive`)
+        "use_arc", "start_vid", "start_X", "au", "au_arc", "au_flip", "au_slot", "au_off", "au_sense", "au_v",
+        "au_A", "au_b", "arc_factor", "maps", "slot_of_face", "slot_centre", "slot_axis", "slot_sign", "slot_radius",
+        "slot_lo", "slot_hi", "arc_min", "zb_use", "zb_slot", "zt_use", "zt_slot", "face_first_use", "plane_offset", "static",
     )  # fmt: skip
 
 
@@ -167,6 +171,7 @@ def build_plan(prep):
     plan.arc_r = np.array([a.radius for a in arcs], dtype=np.float64)
     plan.arc_sweep = np.array([a.sweep for a in arcs], dtype=np.float64)
     plan.arc_closed = np.array([a.closed for a in arcs], dtype=bool)
+    plan.arc_min = np.where(plan.arc_closed, 3, 1)  # a closed circle is at least a triangle
     # planes: (u, v) = A X + b, unit normal (outward), a point
     S, Su, Sv = prep.batch.partials(np.arange(F), np.array([b[0] for b in prep.batch.bu]), np.array([b[0] for b in prep.batch.bv]))
     M = np.stack([Su, Sv], axis=2)  # (F, 3, 2)
@@ -224,10 +229,71 @@ def build_plan(prep):
             fixed_T.append(T)
             fixed_face.append(np.full(len(T), f))
         else:
-            plan.curved_planes.append(f)
+            plan.curved_planes.append((f, plan.face_loops[f]))
     plan.fixed_T = np.concatenate(fixed_T) if fixed_T else np.zeros((0, 3), dtype=np.int64)
     plan.fixed_face = np.concatenate(fixed_face) if fixed_face else np.zeros(0, dtype=np.int64)
+    _derive(plan)
     return plan
+
+
+def _derive(plan):
+    """The flat arrays the per-call path indexes (see :class:`FastPlan`): per arc use ``au`` its
+    arc, direction, cylinder slot (-1 on a plane), angle offset and sense in the cylinder's
+    circle, constant ``v``, plane map; per cylinder slot its axis, orientation, ``u`` range and
+    the uses of its bottom and top chains; the circles' count factors; the planes' offsets."""
+    g = plan.use_group
+    plan.use_arc = plan.arc_of[g]
+    plan.start_vid = np.where(plan.use_flip, plan.end_vid[g, 1], plan.end_vid[g, 0])
+    plan.start_X = plan.corners[plan.start_vid]
+    au = plan.au = np.flatnonzero(plan.use_arc >= 0)
+    slots = sorted(plan.cyl)
+    slot_of_face = plan.slot_of_face = np.full(len(plan.faces), -1, dtype=np.int64)
+    slot_of_face[slots] = np.arange(len(slots))
+    plan.au_arc, plan.au_flip, plan.au_slot = plan.use_arc[au], plan.use_flip[au], slot_of_face[plan.use_face[au]]
+    plan.au_off, plan.au_sense = plan.use_arc_cyl[au, 0], plan.use_arc_cyl[au, 1]
+    plan.au_v = plan.use_uv0[au, 1]
+    plan.au_A, plan.au_b = plan.A[plan.use_face[au]], plan.b[plan.use_face[au]]
+    plan.face_first_use = np.searchsorted(plan.use_face, np.arange(len(plan.faces)))
+    # a circle's count factor: its parametric midpoints on a cylinder stray by up to kappa step^2 / 8
+    # radians along it (at right angles to the sagitta), so the deviation is at most about
+    # sagitta * sqrt(1 + kappa^2); 2% margin for the higher-order terms (the result is measured)
+    plan.arc_factor = np.ones(len(plan.arcs))
+    plan.zb_use = None
+    if slots:
+        plan.maps = CircleMaps([plan.cyl[f].cmap for f in slots])
+        on = plan.au_slot >= 0
+        np.maximum.at(plan.arc_factor, plan.au_arc[on], np.sqrt(1.0 + (1.02 * plan.maps.kappa[plan.au_slot[on]]) ** 2))
+        plan.slot_centre = np.array([plan.cyl[f].cmap.circle.centre for f in slots])
+        plan.slot_axis = np.array([plan.cyl[f].axis for f in slots])
+        plan.slot_radius = np.array([plan.cyl[f].cmap.circle.radius for f in slots])
+        plan.slot_sign = np.array([plan.cyl[f].sign * (-1.0 if plan.reversed[f] else 1.0) for f in slots])
+        zb, zbs, zt, zts, lo, hi = [], [], [], [], [], []
+        for q, f in enumerate(slots):
+            order, nb = plan.cyl_faces[f]
+            zb.append(order[: nb + 1])  # the bottom uses, then the ruling at u_hi (its start: the bottom's end)
+            zbs.append(np.full(nb + 1, q))
+            lo.append(plan.use_uv0[order[0], 0])
+            hi.append(plan.use_uv0[order[nb], 0])
+        for q, f in reversed(list(enumerate(slots))):  # reversed as a whole below: each top chain runs in u
+            order, nb = plan.cyl_faces[f]
+            zt.append(order[nb + 1 :])  # the top uses, then the ruling at u_lo
+            zts.append(np.full(len(order) - nb - 1, q))
+        plan.zb_use, plan.zb_slot = np.concatenate(zb), np.concatenate(zbs)
+        plan.zt_use, plan.zt_slot = np.concatenate(zt), np.concatenate(zts)
+        plan.slot_lo, plan.slot_hi = np.array(lo), np.array(hi)
+    # how far the planes' points lie off their planes (their deviation): corners, and circles
+    # (centre offset plus the tilt of their plane)
+    pu = np.flatnonzero(plan.kind[plan.use_face] == PLANE)
+    f = plan.use_face[pu]
+    off = np.abs(np.einsum("ij,ij->i", plan.start_X[pu] - plan.origin[f], plan.normal[f]))
+    a = plan.use_arc[pu]
+    arc = a >= 0
+    if arc.any():
+        n, aa = plan.normal[f[arc]], a[arc]
+        tilt = np.abs(np.einsum("ij,ij->i", n, plan.arc_e1[aa])) + np.abs(np.einsum("ij,ij->i", n, plan.arc_e2[aa]))
+        off[arc] = np.maximum(off[arc], np.abs(np.einsum("ij,ij->i", plan.arc_c[aa] - plan.origin[f[arc]], n)) + plan.arc_r[aa] * tilt)
+    plan.plane_offset = float(off.max()) if off.size else 0.0
+    plan.static = None
 
 
 def cyl_param(cmap, theta):
