@@ -19,12 +19,12 @@ the limit), it returns None and the caller runs the general path.
 
 from __future__ import annotations
 
+import mapbox_earcut as earcut
 import numpy as np
 
 from .. import limits
 from ..mesh.topology import ranges
 from .edges import MAX_SEGMENTS
-from .fast_plan import planar_triangles
 from .result import Tessellation
 from .surfaces import BYTES_PER_TRIANGLE
 
@@ -137,14 +137,37 @@ def _mesh(plan, tol, angle_tol):
     fstart = ustart[plan.face_first_use]
     tris = [plan.fixed_T + fstart[plan.fixed_face][:, None]]
     if plan.curved_planes:
+        # ear clipping per face (one call each); checked for all faces at once: every triangle
+        # counter-clockwise, n + 2 holes - 2 of them, their areas adding up to the polygon's
         loop_size = np.add.reduceat(cnt, plan.loop_first)
+        wanted, cp = 0, []
         for f, loops in plan.curved_planes:
             ends = np.cumsum(loop_size[loops])
             s0 = int(fstart[f])
-            T = planar_triangles(puv[s0 : s0 + int(ends[-1])], ends)
-            if T is None:
-                return None
-            tris.append(T + s0)
+            T = earcut.triangulate_float64(puv[s0 : s0 + int(ends[-1])], ends.astype(np.uint32))
+            wanted += int(ends[-1]) + 2 * len(loops) - 4
+            cp.append(T.astype(np.int64) + s0)
+        Tp = np.concatenate(cp).reshape(-1, 3)
+        if len(Tp) != wanted:
+            return None
+        a, b, c = puv[Tp[:, 0]], puv[Tp[:, 1]], puv[Tp[:, 2]]
+        area = (b[:, 0] - a[:, 0]) * (c[:, 1] - a[:, 1]) - (b[:, 1] - a[:, 1]) * (c[:, 0] - a[:, 0])
+        if not (area > 0).all():
+            return None
+        # per face: the triangles' areas against the polygon's (shoelace over its loops)
+        first = ustart[plan.loop_first[plan.cp_loops]]
+        size = loop_size[plan.cp_loops]
+        idx = ranges(first, size)
+        nxt = idx + 1
+        ends = np.cumsum(size) - 1
+        nxt[ends] = first
+        shoe = puv[idx, 0] * puv[nxt, 1] - puv[nxt, 0] * puv[idx, 1]
+        F = len(plan.faces)
+        poly = np.bincount(pface[idx], shoe, F)
+        got = np.bincount(pface[Tp[:, 0]], area, F)
+        if np.abs(got - poly).max() > 1e-9 * np.abs(poly).max():
+            return None
+        tris.append(Tp)
     max_dev = plan.plane_offset
     if plan.zb_use is not None:
         Tc, q = _zipper(plan, ustart, cnt, puv)

@@ -111,7 +111,7 @@ class FastPlan:
         # derived for the per-call path (:func:`_derive`)
         "use_arc", "start_vid", "start_X", "au", "au_arc", "au_flip", "au_slot", "au_off", "au_sense", "au_v",
         "au_A", "au_b", "arc_factor", "maps", "slot_of_face", "slot_centre", "slot_axis", "slot_sign", "slot_radius",
-        "slot_lo", "slot_hi", "arc_min", "zb_use", "zb_slot", "zt_use", "zt_slot", "face_first_use", "plane_offset", "static",
+        "slot_lo", "slot_hi", "arc_min", "cp_loops", "zb_use", "zb_slot", "zt_use", "zt_slot", "face_first_use", "plane_offset", "static",
     )  # fmt: skip
 
 
@@ -232,6 +232,7 @@ def build_plan(prep):
             plan.curved_planes.append((f, plan.face_loops[f]))
     plan.fixed_T = np.concatenate(fixed_T) if fixed_T else np.zeros((0, 3), dtype=np.int64)
     plan.fixed_face = np.concatenate(fixed_face) if fixed_face else np.zeros(0, dtype=np.int64)
+    plan.cp_loops = np.concatenate([loops for _, loops in plan.curved_planes]) if plan.curved_planes else np.zeros(0, dtype=np.int64)
     _derive(plan)
     return plan
 
