@@ -172,6 +172,7 @@ def _mesh(plan, tol, angle_tol):
     if plan.zb_use is not None:
         Tc, q = _zipper(plan, ustart, cnt, puv)
         tris.append(Tc)
+        # deviation of the cylinders
         # measured in closed form: S(u, v) = C(u) + (v - v0) D, so only u matters
         U3 = puv[Tc, 0]
         qq = np.repeat(q, 7)
