@@ -362,12 +362,18 @@ def main():
     ap.add_argument("--quick", action="store_true", help="smaller models and fewer repeats")
     ap.add_argument("--brep", action="store_true", help="only part 2 (trimmed B-rep solids)")
     ap.add_argument("--patches", action="store_true", help="only part 1 (untrimmed patch sets)")
+    ap.add_argument("--small", action="store_true",
+                    help="only the small B-rep parts, each timed back to back with OCC (best CPU time of --calls calls each)")
+    ap.add_argument("--calls", type=int, default=200, help="calls per mesher and row in --small (default 200)")
     ap.add_argument("--tols", default=None, help="comma-separated tolerances / size (default 1e-1 ... 1e-5)")
     ap.add_argument("--wide", type=float, default=1e-4, help="finest tolerance of part 1's models b and c (default 1e-4)")
     args = ap.parse_args()
     args.tols = tuple(float(x) for x in args.tols.split(",")) if args.tols else TOLERANCES
     print(f"# splinekit.tessellate vs OCC BRepMesh ({platform.machine()}, {os.cpu_count()} cores, "
           f"python {sys.version.split()[0]}, numpy {np.__version__}, load average {os.getloadavg()[0]:.1f})\n")
+    if args.small:
+        small_main(args)
+        return
     if not args.brep:
         patches_main(args)
     if not args.patches:
@@ -634,6 +640,66 @@ def brep_main(args):
         "cached on the faces; first-call time: that cache cleared before each call). OCC meshes each face with shared edge "
         "discretizations (one solid), serial."
     )
+
+
+def small_main(args):
+    """The small B-rep parts of part 2 (the fast path's planes and cylinders), each row timed
+    back to back: ``--calls`` calls of splinekit and of OCC alternating (OCC's deflection
+    matched as in part 2), the best CPU time of each, so that both see the same machine load."""
+    print("\n## small B-rep parts, splinekit and BRepMesh timed back to back (best CPU time of "
+          f"{args.calls} alternating calls each)\n")
+    try:
+        from OCP.BRepMesh import BRepMesh_IncrementalMesh
+        from OCP.BRepTools import BRepTools
+    except ImportError:
+        print("OCP not installed: skipped")
+        return
+    from splinekit.interop.occ_brep import brep_to_shape
+
+    names = ("cylinder 1 x 3", "box 20 x 30 x 10", "box 20 with hole r 4", "plate 40 x 30 x 5, 3 holes",
+             "build123d box - cylinder", "build123d chamfered block 20, 3")  # fmt: skip
+    print("| part | tol / size | splinekit triangles | OCC triangles | splinekit | OCC | time ratio |")
+    print("|---|---|---|---|---|---|---|")
+    for name, obj in brep_parts(True):
+        if name not in names:
+            continue
+        faces = _faces(obj)
+        shape = brep_to_shape(obj[0] if isinstance(obj, list) else obj)
+        size = float(np.linalg.norm(np.ptp(np.concatenate([np.asarray(f.surface.control_points).reshape(-1, 3) for f in faces]), axis=0)))
+        start = 1.0
+        for rel in args.tols:
+            tol = rel * size
+            mesh = sk.tessellate(obj, tol)
+            F = np.asarray(mesh.faces)
+            dev_sk = brep_deviation(faces, mesh.corner_uv, mesh.vertices[F], mesh.face_patch)
+
+            def measure_occ(shape=shape, faces=faces):
+                uv, xyz, fp = occ_brep_triangles(shape, len(faces))
+                return brep_deviation(faces, uv, xyz, fp), len(fp)
+
+            floor = 1e-9 * size  # planes: both at rounding level
+            d, dev_occ, n_occ = match_occ(lambda d, shape=shape: occ_brep_mesh(shape, max(d, 1e-6 * size)), measure_occ,
+                                          max(dev_sk, floor), tol, start)  # fmt: skip
+            d = max(d, 1e-6 * size)
+            start = d / tol
+            t_sk, t_occ = [], []
+            gc.collect()
+            gc.disable()
+            try:
+                for _ in range(args.calls):
+                    t0 = clock()
+                    sk.tessellate(obj, tol)
+                    t_sk.append(clock() - t0)
+                    BRepTools.Clean_s(shape)
+                    t0 = clock()
+                    BRepMesh_IncrementalMesh(shape, d, False, 0.5, False)
+                    t_occ.append(clock() - t0)
+            finally:
+                gc.enable()
+            a, b = min(t_sk), min(t_occ)
+            print(f"| {name} | {rel:g} | {mesh.n_faces:,} | {n_occ:,}{_above(dev_occ, max(dev_sk, floor))} | {a * 1e6:.0f} us | "
+                  f"{b * 1e6:.0f} us | {b / a:.2f}x |", flush=True)  # fmt: skip
+    print(f"\nload average after the run: {os.getloadavg()[0]:.1f}")
 
 
 if __name__ == "__main__":

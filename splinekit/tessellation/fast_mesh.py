@@ -38,7 +38,7 @@ def _arc_counts(plan, tol, angle_tol):
     """``(A,)`` segments per circle arc: the largest uniform angular step whose sagitta (times
     the arc's cylinder factor, see :func:`.fast_plan._derive`) is within ``tol`` and which meets
     the angle criterion; None past :data:`.edges.MAX_SEGMENTS`."""
-    step = 2.0 * np.arccos(np.clip(1.0 - tol / (plan.arc_r * plan.arc_factor), -1.0, 1.0))
+    step = 2.0 * np.arccos(np.maximum(1.0 - tol / (plan.arc_r * plan.arc_factor), -1.0))
     if angle_tol is not None:
         step = np.minimum(step, angle_tol)
     n = np.maximum(np.ceil(plan.arc_sweep / step * (1.0 + 1e-9)), plan.arc_min).astype(np.int64)
@@ -55,10 +55,21 @@ def _zipper(plan, ustart, cnt, puv):
     bp = ranges(ustart[plan.zb_use], cb)
     tp = ranges(ustart[plan.zt_use], ct)[::-1]
     bq = np.repeat(plan.zb_slot, cb)
+    ub, ut = puv[bp, 0], puv[tp, 0]
+    if len(bp) == len(tp) and (np.abs(ub - ut) <= 1e-9 * (plan.slot_hi - plan.slot_lo)[bq]).all():
+        # both chains at the same u up to rounding (the usual cylinder: two circles cut alike):
+        # two triangles per step, as the merge below makes them where the u are equal
+        step = np.ones(len(bp), dtype=bool)
+        step[np.cumsum(np.bincount(bq)) - 1] = False  # each chain's last point starts no step
+        i = np.flatnonzero(step)
+        T = np.empty((2 * i.size, 3), dtype=np.int64)
+        T[0::2, 0], T[0::2, 1], T[0::2, 2] = bp[i], bp[i + 1], tp[i]
+        T[1::2, 0], T[1::2, 1], T[1::2, 2] = bp[i + 1], tp[i + 1], tp[i]
+        return T, np.repeat(bq[i], 2)
     tq = np.repeat(plan.zt_slot, ct)[::-1]
     span = plan.slot_hi - plan.slot_lo
-    kb = 2.0 * bq + (puv[bp, 0] - plan.slot_lo[bq]) / span[bq]
-    kt = 2.0 * tq + (puv[tp, 0] - plan.slot_lo[tq]) / span[tq]
+    kb = 2.0 * bq + (ub - plan.slot_lo[bq]) / span[bq]
+    kt = 2.0 * tq + (ut - plan.slot_lo[tq]) / span[tq]
     # every point but each chain's first is a step
     sb = np.ones(len(bp), dtype=bool)
     sb[np.cumsum(np.bincount(bq, minlength=len(span))) - np.bincount(bq, minlength=len(span))] = False
@@ -100,7 +111,7 @@ def _mesh(plan, tol, angle_tol):
     cnt[au] = n[plan.au_arc]
     ustart = np.cumsum(cnt) - cnt
     n_pts = int(ustart[-1] + cnt[-1])
-    limits.check(n_pts * 4 * BYTES_PER_TRIANGLE, f"tessellation of trimmed faces at tolerance {tol:.3g} ({4 * n_pts:,} triangles)")
+    limits.check(n_pts * 4 * BYTES_PER_TRIANGLE, "tessellation of trimmed faces (planes and cylinders)")
     C = len(plan.corners)
     inner = n - 1
     abase = C + np.cumsum(inner) - inner  # first vertex id of each arc's inner points
@@ -177,7 +188,7 @@ def _mesh(plan, tol, angle_tol):
         U3 = puv[Tc, 0]
         qq = np.repeat(q, 7)
         th = plan.maps.angle(qq, np.concatenate([U3, U3 @ BARY.T], axis=1).ravel()).reshape(-1, 7)
-        if angle_tol is not None and (np.ptp(th[:, :3], axis=1) > angle_tol * (1.0 + 1e-9)).any():
+        if angle_tol is not None and (th[:, :3].max(axis=1) - th[:, :3].min(axis=1) > angle_tol * (1.0 + 1e-9)).any():
             return None
         dx = np.cos(th[:, 3:]) - np.cos(th[:, :3]) @ BARY.T
         dy = np.sin(th[:, 3:]) - np.sin(th[:, :3]) @ BARY.T
