@@ -22,13 +22,18 @@ from __future__ import annotations
 import mapbox_earcut as earcut
 import numpy as np
 
-from .. import limits
+from .. import _kernels, limits
 from ..mesh.topology import ranges
 from .edges import MAX_SEGMENTS
 from .result import Tessellation
 from .surfaces import BYTES_PER_TRIANGLE
 
 __all__ = ["fast_tessellation"]
+
+KERNELS = "splinekit.tessellation._fast_kernels"
+FIXED_WORK = 300
+"""Work of one call on the numpy path apart from its points (point-equivalents, see
+:mod:`splinekit._kernels`: about its cost in microseconds), counted towards loading the kernels."""
 
 BARY = np.array([[0.5, 0.5, 0.0], [0.0, 0.5, 0.5], [0.5, 0.0, 0.5], [1 / 3, 1 / 3, 1 / 3]])
 """Where a triangle is measured: its edges' midpoints and its centre (barycentric)."""
@@ -68,7 +73,7 @@ def _zipper(plan, ustart, cnt, puv):
         return T, np.repeat(bq[i], 2)
     tq = np.repeat(plan.zt_slot, ct)[::-1]
     span = plan.slot_hi - plan.slot_lo
-    kb = 2.0 * bq + (ub - plan.slot_lo[bq]) / span[bq]
+    kb = 2.0 * bq + (ub - plan.slot_lo[bq]) / span[bq] - 1e-9  # ties within 1e-9 of the span: bottom
     kt = 2.0 * tq + (ut - plan.slot_lo[tq]) / span[tq]
     # every point but each chain's first is a step
     sb = np.ones(len(bp), dtype=bool)
@@ -105,13 +110,16 @@ def _mesh(plan, tol, angle_tol):
     n = _arc_counts(plan, tol, angle_tol)
     if n is None:
         return None
+    n_pts = plan.n_line_uses + int(n[plan.au_arc].sum())
+    limits.check(n_pts * 4 * BYTES_PER_TRIANGLE, "tessellation of trimmed faces (planes and cylinders)")
+    K = _kernels.load(KERNELS, work=FIXED_WORK + 2 * n_pts, min_work=0)
+    if K is not None:
+        return _mesh_compiled(K, plan, n, tol, angle_tol)
     au = plan.au
     U = len(plan.use_group)
     cnt = np.ones(U, dtype=np.int64)
     cnt[au] = n[plan.au_arc]
     ustart = np.cumsum(cnt) - cnt
-    n_pts = int(ustart[-1] + cnt[-1])
-    limits.check(n_pts * 4 * BYTES_PER_TRIANGLE, "tessellation of trimmed faces (planes and cylinders)")
     C = len(plan.corners)
     inner = n - 1
     abase = C + np.cumsum(inner) - inner  # first vertex id of each arc's inner points
@@ -150,21 +158,14 @@ def _mesh(plan, tol, angle_tol):
     if plan.curved_planes:
         # ear clipping per face (one call each); checked for all faces at once: every triangle
         # counter-clockwise, n + 2 holes - 2 of them, their areas adding up to the polygon's
-        loop_size = np.add.reduceat(cnt, plan.loop_first)
-        wanted, cp = 0, []
-        for f, loops in plan.curved_planes:
-            ends = np.cumsum(loop_size[loops])
-            s0 = int(fstart[f])
-            T = earcut.triangulate_float64(puv[s0 : s0 + int(ends[-1])], ends.astype(np.uint32))
-            wanted += int(ends[-1]) + 2 * len(loops) - 4
-            cp.append(T.astype(np.int64) + s0)
-        Tp = np.concatenate(cp).reshape(-1, 3)
+        Tp, wanted = _ear_clip(plan, puv, ustart, cnt)
         if len(Tp) != wanted:
             return None
         a, b, c = puv[Tp[:, 0]], puv[Tp[:, 1]], puv[Tp[:, 2]]
         area = (b[:, 0] - a[:, 0]) * (c[:, 1] - a[:, 1]) - (b[:, 1] - a[:, 1]) * (c[:, 0] - a[:, 0])
         if not (area > 0).all():
             return None
+        loop_size = np.add.reduceat(cnt, plan.loop_first)
         # per face: the triangles' areas against the polygon's (shoelace over its loops)
         first = ustart[plan.loop_first[plan.cp_loops]]
         size = loop_size[plan.cp_loops]
@@ -214,3 +215,35 @@ def _mesh(plan, tol, angle_tol):
         d -= np.einsum("ij,ij->i", d, ax)[:, None] * ax
         N[sel] = d * (plan.slot_sign[q] / np.linalg.norm(d, axis=1))[:, None]
     return Tessellation._build(V, pvid[T], N, puv[rep], VP, tface, puv[T], max_dev, tol)
+
+
+def _ear_clip(plan, puv, ustart, cnt):
+    """The ear-clipping triangles (loop point indices) of every plane with circles, one call per
+    face, and how many a triangulation of those polygons has (points + 2 holes - 2 per face)."""
+    loop_size = np.add.reduceat(cnt, plan.loop_first)
+    fstart = ustart[plan.face_first_use]
+    wanted, cp = 0, []
+    for f, loops in plan.curved_planes:
+        ends = np.cumsum(loop_size[loops])
+        s0 = int(fstart[f])
+        T = earcut.triangulate_float64(puv[s0 : s0 + int(ends[-1])], ends.astype(np.uint32))
+        wanted += int(ends[-1]) + 2 * len(loops) - 4
+        cp.append(T.astype(np.int64) + s0)
+    return (np.concatenate(cp).reshape(-1, 3) if cp else np.zeros((0, 3), dtype=np.int64)), wanted
+
+
+def _mesh_compiled(K, plan, n, tol, angle_tol):
+    """:func:`_mesh` on the compiled kernels (:mod:`._fast_kernels`)."""
+    maps, angle, zips = plan.kernel_args
+    cnt, ustart, vid, X, uv, face, n_vid = K.points(
+        n, len(plan.corners), plan.use_face, plan.use_arc, plan.use_flip, plan.start_vid, plan.start_X, plan.use_uv0,
+        plan.use_slot, plan.use_off, plan.use_sense, plan.arc_c, plan.arc_r, plan.arc_e1, plan.arc_e2, plan.arc_sweep,
+        plan.A, plan.b, *maps)  # fmt: skip
+    Tp, wanted = _ear_clip(plan, uv, ustart, cnt)
+    ok, T, CUV, tf, V, N, UV, VP, max_dev = K.finish(
+        tol, -1.0 if angle_tol is None else angle_tol, ustart, cnt, vid, X, uv, face, n_vid, plan.fixed_T,
+        plan.fixed_face, plan.face_first_use, Tp, wanted, plan.cp_first_use, plan.cp_loop_uses, *zips, *angle,
+        plan.normal, plan.reversed, plan.slot_of_face, plan.plane_offset)  # fmt: skip
+    if not ok:
+        return None
+    return Tessellation._build(V, T, N, UV, VP, tf, CUV, max_dev, tol)

@@ -111,7 +111,9 @@ class FastPlan:
         # derived for the per-call path (:func:`_derive`)
         "use_arc", "start_vid", "start_X", "au", "au_arc", "au_flip", "au_slot", "au_off", "au_sense", "au_v",
         "au_A", "au_b", "arc_factor", "maps", "slot_of_face", "slot_centre", "slot_axis", "slot_sign", "slot_radius",
-        "slot_lo", "slot_hi", "arc_min", "cp_loops", "zb_use", "zb_slot", "zt_use", "zt_slot", "face_first_use", "plane_offset", "static",
+        "slot_lo", "slot_hi", "arc_min", "cp_loops", "cp_first_use", "cp_loop_uses", "use_slot", "use_off", "use_sense",
+        "n_line_uses", "kernel_args", "zb_use", "zb_slot", "zt_use", "zt_slot", "face_first_use", "plane_offset",
+        "static",
     )  # fmt: skip
 
 
@@ -233,6 +235,7 @@ def build_plan(prep):
     plan.fixed_T = np.concatenate(fixed_T) if fixed_T else np.zeros((0, 3), dtype=np.int64)
     plan.fixed_face = np.concatenate(fixed_face) if fixed_face else np.zeros(0, dtype=np.int64)
     plan.cp_loops = np.concatenate([loops for _, loops in plan.curved_planes]) if plan.curved_planes else np.zeros(0, dtype=np.int64)
+    plan.cp_first_use, plan.cp_loop_uses = prep.table.first[plan.cp_loops], prep.table.count[plan.cp_loops]
     _derive(plan)
     return plan
 
@@ -295,6 +298,19 @@ def _derive(plan):
         off[arc] = np.maximum(off[arc], np.abs(np.einsum("ij,ij->i", plan.arc_c[aa] - plan.origin[f[arc]], n)) + plan.arc_r[aa] * tilt)
     plan.plane_offset = float(off.max()) if off.size else 0.0
     plan.static = None
+    # per use (for the compiled kernels): cylinder slot (-1: a plane or a ruling), angle offset and sense
+    plan.use_slot = np.full(len(g), -1, dtype=np.int64)
+    plan.use_slot[au] = plan.au_slot
+    plan.use_off, plan.use_sense = plan.use_arc_cyl[:, 0].copy(), plan.use_arc_cyl[:, 1].copy()
+    plan.n_line_uses = int((plan.use_arc < 0).sum())
+    e, ei = np.zeros(0), np.zeros(0, dtype=np.int64)
+    m = plan.maps if slots else None
+    maps = (m.akey, m.table, m.first, m.last, m.sweep, m.full) if m else (e, np.zeros((0, 5)), ei, ei, e, True)
+    angle = (m.tkey, m.table, m.first, m.last, m.t0, m.t1) if m else (e, np.zeros((0, 5)), ei, ei, e, e)
+    zips = ((plan.zb_use, plan.zb_slot, plan.zt_use, plan.zt_slot, plan.slot_lo, plan.slot_hi, plan.slot_radius,
+             plan.slot_centre, plan.slot_axis, plan.slot_sign) if slots  # fmt: skip
+            else (ei, ei, ei, ei, e, e, e, np.zeros((0, 3)), np.zeros((0, 3)), e))
+    plan.kernel_args = maps, angle, zips
 
 
 def cyl_param(cmap, theta):
