@@ -18,7 +18,9 @@ from hypothesis import strategies as st
 from test_tessellation_brep import SOLIDS, measured_deviation
 
 import splinekit as sk
+from splinekit import _kernels
 from splinekit.brep import primitives
+from splinekit.tessellation import fast_mesh
 from splinekit.tessellation.arcs import CircleMap
 from splinekit.tessellation.trimmed import _general, _Prepared
 
@@ -27,6 +29,20 @@ MAKE = {
     "box": (lambda: primitives.box(20.0, 30.0, 10.0), 6000.0, 2 * (600 + 200 + 300)),
     **{name: SOLIDS[name][:3] for name in ("box_with_hole", "plate_with_holes", "cylinder")},
 }
+
+
+@pytest.fixture(params=["numpy", "numba"])
+def path(request, monkeypatch):
+    """Runs a test on the numpy path and on the compiled kernels (loaded at every size)."""
+    if request.param == "numba":
+        pytest.importorskip("numba")
+        monkeypatch.delenv("SPLINEKIT_NUMBA", raising=False)
+        monkeypatch.setattr(_kernels, "MIN_WORK", 0)
+        monkeypatch.setattr(_kernels, "LOAD_WORK", 0)
+        assert _kernels.load(fast_mesh.KERNELS) is not None
+    else:
+        monkeypatch.setenv("SPLINEKIT_NUMBA", "0")
+    return request.param
 
 
 def _plan(solid):
@@ -66,7 +82,7 @@ def _check(solid, mesh, volume, area):
 
 @pytest.mark.parametrize("rel", [1e-1, 1e-2, 1e-3, 1e-4, 1e-5])
 @pytest.mark.parametrize("name", FAST)
-def test_fast_path_keeps_every_guarantee(name, rel):
+def test_fast_path_keeps_every_guarantee(name, rel, path):
     make, volume, area = MAKE[name]
     solid = make()
     mesh = sk.tessellate(solid, rel, relative=True)
@@ -75,6 +91,28 @@ def test_fast_path_keeps_every_guarantee(name, rel):
     # a second call (plan cached) gives the same mesh as the first (plan built)
     again = sk.tessellate(solid, rel, relative=True)
     assert np.array_equal(again.faces, mesh.faces) and np.array_equal(again.vertices, mesh.vertices)
+
+
+@pytest.mark.parametrize("rel", [1e-1, 1e-2, 1e-4])
+@pytest.mark.parametrize("name", ["box_with_hole", "plate_with_holes", "cylinder"])
+def test_numpy_and_compiled_paths_agree(name, rel, monkeypatch):
+    pytest.importorskip("numba")
+    make = MAKE[name][0]
+    monkeypatch.setenv("SPLINEKIT_NUMBA", "0")
+    a = sk.tessellate(make(), rel, relative=True)
+    monkeypatch.delenv("SPLINEKIT_NUMBA")
+    monkeypatch.setattr(_kernels, "MIN_WORK", 0)
+    monkeypatch.setattr(_kernels, "LOAD_WORK", 0)
+    assert _kernels.load(fast_mesh.KERNELS) is not None
+    b = sk.tessellate(make(), rel, relative=True)
+    # the same counts (set by the circle counts), vertices, deviation and volume; the ear
+    # clipping may order triangles differently only where rounding moves one of its choices
+    assert (a.n_faces, a.n_vertices) == (b.n_faces, b.n_vertices)
+    assert np.abs(a.vertices - b.vertices).max() <= 1e-12 * np.abs(a.vertices).max()
+    assert np.abs(a.normals - b.normals).max() <= 1e-12
+    assert math.isclose(a.max_deviation, b.max_deviation, rel_tol=1e-9, abs_tol=1e-15)
+    assert math.isclose(a.volume, b.volume, rel_tol=1e-12)
+    assert np.array_equal(np.sort(a.face_patch), np.sort(b.face_patch))
 
 
 @pytest.mark.parametrize("rel", [1e-1, 1e-3, 1e-5])
@@ -113,12 +151,12 @@ def test_angle_tolerance_none_needs_fewer_triangles_at_a_coarse_tolerance():
     _check(solid, coarse, 3 * math.pi, 8 * math.pi)
 
 
-@settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture])
 @given(
     holes=st.lists(st.tuples(st.floats(0.15, 0.85), st.floats(0.15, 0.85), st.floats(0.02, 0.12)), min_size=1, max_size=4),
     rel=st.sampled_from([1e-1, 1e-2, 1e-3, 1e-4]),
 )
-def test_random_plates_with_holes(holes, rel):
+def test_random_plates_with_holes(holes, rel, path):
     # holes that keep clear of each other and of the sides
     dx, dy, dz = 40.0, 30.0, 5.0
     spec = []
