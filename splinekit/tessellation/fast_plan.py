@@ -112,7 +112,7 @@ class FastPlan:
         "use_arc", "start_vid", "start_X", "au", "au_arc", "au_flip", "au_slot", "au_off", "au_sense", "au_v",
         "au_A", "au_b", "arc_factor", "maps", "slot_of_face", "slot_centre", "slot_axis", "slot_sign", "slot_radius",
         "slot_lo", "slot_hi", "arc_min", "cp_loops", "cp_first_use", "cp_loop_uses", "use_slot", "use_off", "use_sense",
-        "n_line_uses", "kernel_args", "zb_use", "zb_slot", "zt_use", "zt_slot", "face_first_use", "plane_offset",
+        "n_line_uses", "kernel_args", "zb_use", "zb_slot", "zt_use", "zt_slot", "face_first_use", "plane_offset", "map_error",
         "static",
     )  # fmt: skip
 
@@ -210,10 +210,13 @@ def build_plan(prep):
         pred[i, :, 1] = use_uv0[i, 1]
         pred[i, 0], pred[i, -1] = use_uv0[i], use_uv1[i]
     back = prep.batch.evaluate(np.repeat(use_face, SAMPLES), pred[..., 0].ravel(), pred[..., 1].ravel())
-    if np.abs(back.reshape(U, SAMPLES, 3) - samples).max() > 1e3 * REL * size + 2.0 * prep.edge_tol:
+    # (a sloppy file's edges off their faces take the general path, which allows for that)
+    map_error = float(np.linalg.norm(back.reshape(U, SAMPLES, 3) - samples, axis=2).max())
+    if map_error > 10.0 * REL * size:
         return None
     if not _cylinder_loops(plan, prep, use_uv0, use_uv1):
         return None
+    plan.map_error = map_error
     # straight-edged planes: triangulated once (indices into the face's loop points, which are
     # its uses' start corners at every tolerance)
     fixed_T, fixed_face, plan.curved_planes, plan.face_loops = [], [], [], {}
@@ -296,7 +299,8 @@ def _derive(plan):
         n, aa = plan.normal[f[arc]], a[arc]
         tilt = np.abs(np.einsum("ij,ij->i", n, plan.arc_e1[aa])) + np.abs(np.einsum("ij,ij->i", n, plan.arc_e2[aa]))
         off[arc] = np.maximum(off[arc], np.abs(np.einsum("ij,ij->i", plan.arc_c[aa] - plan.origin[f[arc]], n)) + plan.arc_r[aa] * tilt)
-    plan.plane_offset = float(off.max()) if off.size else 0.0
+    # added to the measured deviation: how far the points may lie off their faces (rounding)
+    plan.plane_offset = max(float(off.max()) if off.size else 0.0, plan.map_error)
     plan.static = None
     # per use (for the compiled kernels): cylinder slot (-1: a plane or a ruling), angle offset and sense
     plan.use_slot = np.full(len(g), -1, dtype=np.int64)

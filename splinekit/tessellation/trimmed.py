@@ -1,7 +1,15 @@
 """Watertight tessellation of trimmed faces, shells and solids.
 
-Design (whole-array work; Python loops run over faces, edges and refinement rounds, never over
-points or triangles):
+Face sets made only of planes and right circular cylinders bounded by straight segments and
+circle arcs (boxes, plates with holes, chamfered blocks, cylinders: most machined parts) take a
+fast path (:mod:`.fast_plan`, :mod:`.fast_mesh`): a tolerance-independent plan, built once per
+face set after the general path below has checked it on the first call, and per call only the
+circles' counts in closed form, ear clipping of the planes' boundary polygons and strips on the
+cylinders, with the same guarantees and the same ``max_deviation`` yardstick. Every other face
+set, and any call the fast path cannot keep a guarantee on, takes the general path whole.
+
+Design of the general path (whole-array work; Python loops run over faces, edges and refinement
+rounds, never over points or triangles):
 
 1. Interior grid (:mod:`.face_grids`). Each face's surface is cut into Bézier cells
    (:mod:`.cells`); the same a-priori bounds on the second derivatives that size the untrimmed
