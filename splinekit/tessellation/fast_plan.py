@@ -105,15 +105,14 @@ class FastPlan:
 
     __slots__ = (
         "faces", "kind", "reversed", "corners", "end_vid", "arc_of", "arcs", "arc_c", "arc_r", "arc_e1", "arc_e2",
-        "arc_sweep", "arc_closed", "use_group", "use_face", "use_flip", "use_uv0", "use_uv1", "use_arc_cyl",
-        "arc_cyl_use", "cyl_arc_uses", "A", "b", "normal", "origin", "fixed_T", "fixed_face", "curved_planes",
-        "face_loops", "loop_first", "cyl", "cyl_faces",
+        "arc_sweep", "arc_closed", "arc_min", "arc_factor", "use_group", "use_face", "use_flip", "use_uv0",
+        "use_arc_cyl", "A", "b", "normal", "origin", "fixed_T", "fixed_face", "curved_planes", "face_loops",
+        "loop_first", "cyl", "cyl_faces", "map_error",
         # derived for the per-call path (:func:`_derive`)
         "use_arc", "start_vid", "start_X", "au", "au_arc", "au_flip", "au_slot", "au_off", "au_sense", "au_v",
-        "au_A", "au_b", "arc_factor", "maps", "slot_of_face", "slot_centre", "slot_axis", "slot_sign", "slot_radius",
-        "slot_lo", "slot_hi", "arc_min", "cp_loops", "cp_first_use", "cp_loop_uses", "use_slot", "use_off", "use_sense",
-        "n_line_uses", "kernel_args", "zb_use", "zb_slot", "zt_use", "zt_slot", "face_first_use", "plane_offset", "map_error",
-        "static",
+        "au_A", "au_b", "maps", "slot_of_face", "slot_centre", "slot_axis", "slot_sign", "slot_radius", "slot_lo",
+        "slot_hi", "cp_loops", "cp_first_use", "cp_loop_uses", "use_slot", "use_off", "use_sense", "n_line_uses",
+        "kernel_args", "zb_use", "zb_slot", "zt_use", "zt_slot", "face_first_use", "plane_offset", "static",
     )  # fmt: skip
 
 
@@ -166,7 +165,7 @@ def build_plan(prep):
     plan = FastPlan()
     plan.faces, plan.kind, plan.reversed, plan.arcs, plan.arc_of = faces, kind, prep.reversed, arcs, arc_of
     plan.corners, plan.end_vid = ends[first], vid.reshape(2, G).T.copy()
-    plan.use_group, plan.use_face, plan.use_flip, plan.use_uv0, plan.use_uv1 = use_group, use_face, use_flip, use_uv0, use_uv1
+    plan.use_group, plan.use_face, plan.use_flip, plan.use_uv0 = use_group, use_face, use_flip, use_uv0
     plan.arc_c = np.array([a.centre for a in arcs]).reshape(-1, 3)
     plan.arc_e1 = np.array([a.e1 for a in arcs]).reshape(-1, 3)
     plan.arc_e2 = np.array([a.e2 for a in arcs]).reshape(-1, 3)
@@ -175,10 +174,10 @@ def build_plan(prep):
     plan.arc_closed = np.array([a.closed for a in arcs], dtype=bool)
     plan.arc_min = np.where(plan.arc_closed, 3, 1)  # a closed circle is at least a triangle
     # planes: (u, v) = A X + b, unit normal (outward), a point
-    S, Su, Sv = prep.batch.partials(np.arange(F), np.array([b[0] for b in prep.batch.bu]), np.array([b[0] for b in prep.batch.bv]))
-    M = np.stack([Su, Sv], axis=2)  # (F, 3, 2)
-    plan.A = np.linalg.pinv(M)  # (F, 2, 3)
-    plan.b = np.column_stack([[b[0] for b in prep.batch.bu], [b[0] for b in prep.batch.bv]]) - np.einsum("fij,fj->fi", plan.A, S)
+    corner = np.column_stack([[b[0] for b in prep.batch.bu], [b[0] for b in prep.batch.bv]])  # (F, 2)
+    S, Su, Sv = prep.batch.partials(np.arange(F), corner[:, 0], corner[:, 1])
+    plan.A = np.linalg.pinv(np.stack([Su, Sv], axis=2))  # (F, 2, 3): (u, v) of a point of an affine face
+    plan.b = corner - np.einsum("fij,fj->fi", plan.A, S)
     n = np.cross(Su, Sv)
     plan.normal = n / np.linalg.norm(n, axis=1, keepdims=True) * np.where(prep.reversed, -1.0, 1.0)[:, None]
     plan.origin = S
@@ -195,8 +194,6 @@ def build_plan(prep):
         sense = 1.0 if np.mod(th[1] - th[0], 2 * np.pi) < np.pi else -1.0
         arc_cyl[i] = th[0], sense
     plan.use_arc_cyl = arc_cyl
-    plan.arc_cyl_use = np.flatnonzero(is_cyl_arc)
-    plan.cyl_arc_uses = {f: (c, is_cyl_arc & (use_face == f)) for f, c in cyl.items()}
     pred = np.empty((U, SAMPLES, 2))
     pred[:] = np.einsum("uij,usj->usi", plan.A[use_face], samples) + plan.b[use_face][:, None]
     for i in np.flatnonzero(kind[use_face] == CYLINDER):
