@@ -14,6 +14,7 @@ import math
 import numpy as np
 import pytest
 from test_tessellation_brep import measured_deviation
+from test_tessellation_fast import _check
 
 import splinekit as sk
 from splinekit.brep import primitives
@@ -52,7 +53,19 @@ def _occ_mesh(shape, deflection, faces):
     return count, worst
 
 
+def _z_filleted_plate():
+    # planes and quarter cylinders only (the vertical edges rounded), and two through holes
+    bd = pytest.importorskip("build123d")
+    from splinekit.interop.occ_brep import brep_from_shape
+
+    plate = bd.Box(40, 30, 5) - bd.Pos(5, 3, 0) * bd.Cylinder(4, 5) - bd.Pos(-8, -6, 0) * bd.Cylinder(2, 5)
+    part = bd.fillet(plate.edges().filter_by(bd.Axis.Z), 3)
+    got = brep_from_shape(part.wrapped)
+    return got[0] if isinstance(got, list) else got
+
+
 PARTS = {
+    "z-filleted plate with holes": _z_filleted_plate,
     "box_with_hole": lambda: primitives.box_with_hole(20.0, 4.0),
     "plate_with_holes": lambda: primitives.plate_with_holes(40.0, 30.0, 5.0, [(10, 10, 4), (28, 20, 5), (33, 8, 2.5)]),
     "cylinder": lambda: primitives.cylinder(1.0, 3.0),
@@ -88,13 +101,15 @@ def _b123d(name):
         "box - cylinder": lambda: bd.Box(20, 20, 20) - bd.Cylinder(4, 20),
         "filleted box": lambda: bd.fillet(bd.Box(20, 20, 20).edges(), 3),
         "chamfered block": lambda: bd.chamfer(bd.Box(20, 20, 20).edges(), 3),
+        "z-filleted box": lambda: bd.fillet(bd.Box(30, 20, 10).edges().filter_by(bd.Axis.Z), 4),
     }[name]()
     got = brep_from_shape(part.wrapped)
     return (got[0] if isinstance(got, list) else got), part
 
 
 @pytest.mark.parametrize("rel", [1e-1, 1e-3, 1e-4])
-@pytest.mark.parametrize(("name", "fast"), [("box - cylinder", True), ("chamfered block", True), ("filleted box", False)])
+@pytest.mark.parametrize(("name", "fast"), [("box - cylinder", True), ("chamfered block", True), ("z-filleted box", True),
+                                            ("filleted box", False)])  # fmt: skip
 def test_build123d_parts_closed_within_tolerance(name, fast, rel):
     # the filleted box mixes planes with cylinder fillets and sphere corners: the general path
     # meshes it whole; the others take the fast path
@@ -108,3 +123,5 @@ def test_build123d_parts_closed_within_tolerance(name, fast, rel):
     else:
         volume, area = part.volume, part.area
     assert 0 < mesh.volume and abs(mesh.volume - volume) <= area * mesh.tolerance
+    if fast:  # every guarantee, against the faces' own evaluators and normals
+        _check(solid, mesh, volume, area)
