@@ -214,3 +214,46 @@ def test_circle_map_against_the_curves_own_evaluator(start, sweep, radius, rho):
     assert np.abs(m.circle.points(theta) - X).max() <= 1e-9 * radius
     assert (np.diff(theta) > 0).all() and abs(theta[-1] - theta[0] - sweep) <= 1e-9
     assert np.abs(m.param(theta) - t).max() <= 1e-9 * (t[-1] - t[0])
+
+
+@settings(max_examples=40, deadline=None)
+@given(data=st.data())
+def test_strip_merge_triangulates_the_strip(data):
+    # two cylinders' bottom and top chains with points at unrelated u (the merge, not the regular
+    # strip): the triangles are counter-clockwise in (u, v) (bottom v = 0, top v = 1), use every
+    # point, and tile each strip exactly (their areas add up to its width)
+    class Plan:
+        pass
+
+    plan = Plan()
+    chains, uv = [], []
+    lo, hi = [], []
+    for q in range(2):
+        a, w = data.draw(st.floats(-5, 5)), data.draw(st.floats(0.5, 3))
+        for _side in range(2):
+            inner = sorted(set(data.draw(st.lists(st.floats(0.01, 0.99), max_size=8))))
+            u = a + w * np.array([0.0, *inner, 1.0])
+            chains.append((q, len(uv) if not uv else sum(len(c) for c in uv), u))
+            uv.append(u)
+        lo.append(a)
+        hi.append(a + w)
+    # one "use" per chain; its points are the chain's, in increasing u (the top chain is given
+    # in loop order, decreasing u, as a cylinder's loop runs)
+    pts, cnt, ustart = [], [], []
+    for k, (q, _, u) in enumerate(chains):
+        top = k % 2 == 1
+        ustart.append(len(pts))
+        cnt.append(len(u))
+        pts += [(x, 1.0 if top else 0.0) for x in (u[::-1] if top else u)]
+    puv = np.array(pts)
+    plan.zb_use, plan.zb_slot = np.array([0, 2]), np.array([0, 1])
+    plan.zt_use, plan.zt_slot = np.array([3, 1]), np.array([1, 0])  # slots in reverse order
+    plan.slot_lo, plan.slot_hi = np.array(lo), np.array(hi)
+    T, q = fast_mesh._zipper(plan, np.array(ustart), np.array(cnt), puv)
+    a, b, c = puv[T[:, 0]], puv[T[:, 1]], puv[T[:, 2]]
+    area = 0.5 * ((b[:, 0] - a[:, 0]) * (c[:, 1] - a[:, 1]) - (b[:, 1] - a[:, 1]) * (c[:, 0] - a[:, 0]))
+    assert (area > 0).all()
+    assert len(T) == len(puv) - 4
+    assert set(T.ravel().tolist()) == set(range(len(puv)))
+    for s in range(2):
+        assert math.isclose(area[q == s].sum(), hi[s] - lo[s], rel_tol=1e-12)
