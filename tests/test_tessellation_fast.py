@@ -257,3 +257,33 @@ def test_strip_merge_triangulates_the_strip(data):
     assert set(T.ravel().tolist()) == set(range(len(puv)))
     for s in range(2):
         assert math.isclose(area[q == s].sum(), hi[s] - lo[s], rel_tol=1e-12)
+
+
+def test_compiled_strip_matches_the_numpy_merge():
+    # the compiled strip (inside the second kernel pass) against the numpy merge, on chains with
+    # points at unrelated u, shared u and u within rounding of each other
+    pytest.importorskip("numba")
+    K = _kernels.load(fast_mesh.KERNELS)
+    rng = np.random.default_rng(5)
+
+    class Plan:
+        pass
+
+    for trial in range(60):
+        nb, nt = rng.integers(0, 9, 2)
+        ub = np.sort(rng.uniform(0.01, 0.99, nb))
+        ut = np.sort(rng.uniform(0.01, 0.99, nt)) if trial % 3 else ub + rng.uniform(-1e-12, 1e-12, nb)
+        ub, ut = np.concatenate([[0.0], ub, [1.0]]), np.concatenate([[0.0], ut, [1.0]])
+        lo, w = rng.uniform(-3, 3), rng.uniform(0.5, 2)
+        ub, ut = lo + w * ub, lo + w * ut
+        puv = np.concatenate([np.column_stack([ub, np.zeros_like(ub)]), np.column_stack([ut[::-1], np.ones_like(ut)])])
+        plan = Plan()
+        plan.zb_use, plan.zb_slot, plan.zt_use, plan.zt_slot = (np.array([k]) for k in (0, 0, 1, 0))
+        plan.slot_lo, plan.slot_hi = np.array([lo]), np.array([lo + w])
+        ustart, cnt = np.array([0, len(ub)]), np.array([len(ub), len(ut)])
+        want, _ = fast_mesh._zipper(plan, ustart, cnt, puv)
+        bp = np.arange(len(ub))
+        tp = np.arange(len(puv) - 1, len(ub) - 1, -1)
+        T = np.empty((len(bp) + len(tp) - 2, 3), dtype=np.int64)
+        assert K.strip(bp, len(bp), tp, len(tp), puv, lo, w, T, 0) == len(T)
+        assert np.array_equal(T, want)

@@ -117,6 +117,29 @@ def _chain(uses, slots, q, ustart, cnt, out):
 
 
 @njit(cache=True, nogil=True)
+def strip(bp, nb, tp, nt, uv, lo, span, T, w):
+    """Rows ``w ..`` of ``T``: the counter-clockwise triangles of the strip between the bottom
+    chain ``bp[:nb]`` and the top chain ``tp[:nt]`` (point indices, both in increasing ``u`` =
+    ``uv[:, 0]``, sharing their end ``u``): the chain whose next point comes first advances,
+    the bottom on ties within 1e-9 of the span (as :func:`.fast_mesh._zipper`). Returns the
+    next free row."""
+    i = j = 0
+    while i < nb - 1 or j < nt - 1:
+        bottom = j == nt - 1 or (i < nb - 1 and (uv[bp[i + 1], 0] - lo) / span - 1e-9 <= (uv[tp[j + 1], 0] - lo) / span)
+        T[w, 0] = bp[i]
+        if bottom:  # (b_i, b_i+1, t_j)
+            T[w, 1] = bp[i + 1]
+            T[w, 2] = tp[j]
+            i += 1
+        else:  # (b_i, t_j+1, t_j)
+            T[w, 1] = tp[j + 1]
+            T[w, 2] = tp[j]
+            j += 1
+        w += 1
+    return w
+
+
+@njit(cache=True, nogil=True)
 def finish(tol, angle_tol, ustart, cnt, vid, X, uv, face, n_vid, fixed_T, fixed_face, face_first_use, Tp, wanted,
            cp_first_use, cp_loop_uses, zb_use, zb_slot, zt_use, zt_slot, slot_lo, slot_hi, slot_radius, slot_centre,
            slot_axis, slot_sign, tkey, table, first, last, t0, t1, normal, reversed_, slot_of_face, plane_offset):  # fmt: skip
@@ -183,36 +206,25 @@ def finish(tol, angle_tol, ustart, cnt, vid, X, uv, face, n_vid, fixed_T, fixed_
                     tp[m] = ustart[i] + k
                     m += 1
         nt = m
-        lo, span = slot_lo[q], slot_hi[q] - slot_lo[q]
-        i = j = 0
         f = face[bp[0]]
-        while i < nb - 1 or j < nt - 1:
-            bottom = j == nt - 1 or (i < nb - 1 and (uv[bp[i + 1], 0] - lo) / span - 1e-9 <= (uv[tp[j + 1], 0] - lo) / span)
-            T[w, 0] = bp[i]
-            if bottom:
-                T[w, 1] = bp[i + 1]
-                i += 1
-                T[w, 2] = tp[j]
-            else:
-                T[w, 1] = tp[j + 1]
-                T[w, 2] = tp[j]
-                j += 1
-            tf[w] = f
+        w0 = w
+        w = strip(bp, nb, tp, nt, uv, slot_lo[q], slot_hi[q] - slot_lo[q], T, w)
+        for t in range(w0, w):
+            tf[t] = f
             # measured in closed form: S(u, v) = C(u) + (v - v0) D, so only u matters
             th = np.empty(3)
             cs = np.empty((3, 2))
             for c in range(3):
-                th[c] = _angle(q, uv[T[w, c], 0], tkey, table, first, last, t0, t1)
+                th[c] = _angle(q, uv[T[t, c], 0], tkey, table, first, last, t0, t1)
                 cs[c, 0], cs[c, 1] = math.cos(th[c]), math.sin(th[c])
             if angle_tol > 0 and max(th[0], th[1], th[2]) - min(th[0], th[1], th[2]) > angle_tol * (1.0 + 1e-9):
                 ok = False
             for r in range(4):
-                ub = bary[r, 0] * uv[T[w, 0], 0] + bary[r, 1] * uv[T[w, 1], 0] + bary[r, 2] * uv[T[w, 2], 0]
+                ub = bary[r, 0] * uv[T[t, 0], 0] + bary[r, 1] * uv[T[t, 1], 0] + bary[r, 2] * uv[T[t, 2], 0]
                 tm = _angle(q, ub, tkey, table, first, last, t0, t1)
                 dx = math.cos(tm) - (bary[r, 0] * cs[0, 0] + bary[r, 1] * cs[1, 0] + bary[r, 2] * cs[2, 0])
                 dy = math.sin(tm) - (bary[r, 0] * cs[0, 1] + bary[r, 1] * cs[1, 1] + bary[r, 2] * cs[2, 1])
                 max_dev = max(max_dev, slot_radius[q] * math.sqrt(dx * dx + dy * dy))
-            w += 1
     if max_dev > tol:
         ok = False
     # vertices: the first loop point of each is its representative (face, (u, v), normal)
