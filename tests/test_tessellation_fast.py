@@ -22,6 +22,7 @@ from splinekit import _kernels
 from splinekit.brep import primitives
 from splinekit.tessellation import fast_mesh
 from splinekit.tessellation.arcs import CircleMap
+from splinekit.tessellation import trimmed
 from splinekit.tessellation.trimmed import _general, _Prepared
 
 FAST = ["box", "box_with_hole", "plate_with_holes", "cylinder"]
@@ -287,3 +288,18 @@ def test_compiled_strip_matches_the_numpy_merge():
         T = np.empty((len(bp) + len(tp) - 2, 3), dtype=np.int64)
         assert K.strip(bp, len(bp), tp, len(tp), puv, lo, w, T, 0) == len(T)
         assert np.array_equal(T, want)
+
+
+@pytest.mark.parametrize("name", ["box_with_hole", "plate_with_holes", "cylinder"])
+def test_fast_path_serves_every_tolerance(name, monkeypatch, path):
+    # the circle counts meet the tolerance and the angle criterion at once (no call falls back to
+    # the general path): a sweep of tolerances, with and without the angle criterion
+    solid = MAKE[name][0]()
+    sk.tessellate(solid, 1e-2, relative=True)  # the plan
+    calls = []
+    monkeypatch.setattr(trimmed, "_general", lambda *a: calls.append(a))
+    for rel in np.geomspace(1e-6, 0.5, 40):
+        for angle in (0.5, None, 0.1):
+            mesh = sk.tessellate(solid, rel, relative=True, angle_tolerance=angle)
+            assert mesh.max_deviation <= mesh.tolerance
+    assert not calls
