@@ -6,6 +6,7 @@ Run from the repository root::
     python benchmarks/bench_tessellate.py --quick   # smaller models, fewer repeats
     python benchmarks/bench_tessellate.py --brep    # only part 2, trimmed B-rep solids vs BRepMesh
     python benchmarks/bench_tessellate.py --patches --tols 1e-1,1e-2   # only part 1, two tolerances
+    python benchmarks/bench_tessellate.py --small   # small B-rep parts timed back to back with OCC
 
 (with the worktree first on the path, e.g. ``PYTHONPATH=$PWD python benchmarks/...``).
 
@@ -90,25 +91,39 @@ calls vary 3-10x and only best-of-N figures repeat):
   ``max_deviation`` (and for this benchmark), which changes the documented contract of
   ``Tessellation.max_deviation``: left for a decision.
 
-Small planar parts, later session (load average 13-15 on 2 cores; ``--brep --tols 1e-1,1e-2,1e-3``
-run on the code before and after, same meshes): cProfile of the box with a hole showed ~4,200
-Python-level calls per tessellation, spread over the stages. Cut: the loops are gathered and
-checked as flat arrays (the per-use indices kept with the face set) instead of per-loop numpy
-calls; a line segment used only by affine faces (planes parametrized as parallelograms) is
-sampled at its two ends once per face set, with no measuring round; an affine face's deviation
-is the mean of its corners' offsets and its normals its constant partials (no evaluation); the
-edge ends' welding, the angle criterion's counts, the model size and, where every edge is such a
-segment, the loops' crossing test are kept with the face set; planar faces skip the grid-point
-clearance work. OCC time / splinekit time, before -> after: box 0.21-0.42x -> 0.50-0.52x
-(2.2 -> 0.9 ms, OCC 0.5 ms), chamfered block 0.45-0.50x -> 1.46-1.67x (3.5 -> 1.3 ms), box with a
-hole 0.43-0.51x -> 0.61-0.67x (3.4-4.1 -> 2.5-3.0 ms), plate with 3 holes 0.81-0.89x ->
-1.02-1.20x (4.6-5.1 -> 3.8-3.9 ms), box - cylinder 0.52-0.56x -> 0.59-0.67x. 10x is out of reach
-on this path: what is left of a box-with-hole call (section medians, 1e-2) is edge sampling of
-the circles and the seam 0.7 ms (one measure round over all curved edges: ~100 numpy calls),
-the cylinder's grid 0.4 ms, Triangle 0.23 ms, the assembly 0.15 ms, the crossing test 0.14 ms,
-the inside/outside labelling 0.12 ms, the loops 0.11 ms: no stage dominates, and OCC meshes the
-same part in 1.7 ms (the box in 0.5 ms). 10x needs a compiled per-call driver, not more numpy
-batching.
+Small planar parts, earlier sessions: cutting the general path's numpy calls took the box from
+2.2 to 0.9 ms and the box with a hole from 3.4-4.1 to 2.5-3.0 ms (OCC 0.5 and 1.7 ms), and no
+stage of it dominated (edge sampling 0.7 ms, the cylinder's grid 0.4 ms, Triangle 0.23 ms, ...).
+
+Fast path (this session; ``splinekit.tessellation.fast_plan`` / ``fast_mesh``): face sets made of
+planes and right circular cylinders bounded by lines and circles (box, box with a hole, plate
+with holes, cylinder, build123d box - cylinder and chamfered block) are recognised once per face
+set and meshed without the general machinery: circle counts in closed form, no interior points,
+ear clipping (``mapbox_earcut``) of the planes' boundary polygons, strips on the cylinders, the
+deviation in closed form; a face set without circles keeps its mesh (the same at every
+tolerance). Triangles at equal measured deviation: 0.48-0.95 of OCC's (1.00 on the box and the
+chamfered block, both at 2 per rectangle). ``--small`` (idle machine at the start, load average
+3.5-4.5 during the run: other sessions), best CPU time of 200 calls in blocks, OCC / splinekit:
+cylinder 13.8x / 11.4x / 17.5x / 78x / 748x (1e-1 ... 1e-5; 83 us against OCC's 1,145 us at
+1e-1), box 32x (13 us), box with a hole 17.9x / 17.1x / 17.4x / 40x / 564x (85 us), plate with
+3 holes 28x / 23x / 24x / 28x / 85x (129 us), build123d box - cylinder 17.5x / 17.3x / 17.8x /
+46x / 584x, chamfered block 105-113x (15 us). The same calls alternating one splinekit, one OCC
+call: 6.1-9.4x on the cylinder, box with a hole and box - cylinder at 1e-1 ... 1e-3, 11-12x on
+the box and the plate, 16-36x on the chamfered block: after an OCC call the Python side starts
+with cold caches (the box's 13 us call, which only builds the result, takes 39 us), OCC's own
+time barely moves.
+
+Where a fast call's time goes (compiled kernels loaded, best of 400, 1e-2; cylinder / box with
+a hole): circle counts (numpy) 9.4 / 9.6 us, first kernel pass (points, (u, v)) 8.0 / 8.3 us,
+ear clipping of 2 faces with its numpy glue 19 / 22 us, second kernel pass (checks, strips,
+closed-form deviation, vertices, normals) 23 / 23 us (about half of it numba's dispatch of ~40
+array arguments), ``Tessellation._build`` 8 us, the rest (``tessellate``'s argument checks and
+face gathering, the cached preparation's lookup, the memory budget check, the kernel lookup)
+~25 us: 82-98 us in all. On the numpy path (kernels not loaded) the same calls take 350-400 us
+(about 150 numpy calls of 1-3 us: 3-4x OCC at coarse tolerances); the kernels load through
+``splinekit._kernels`` as the other tessellation kernels do (at once under ``SPLINEKIT_NUMBA=1``,
+which this benchmark sets). The box's 13 us are ``tessellate``'s front (~6-8 us) and
+``Tessellation._build`` (~6 us).
 
 Last run (the session before, load average 15-18 on 2 cores, CPU times, best of N; time ratio = OCC's
 time / splinekit's at the same measured deviation; triangle ratio = splinekit's / OCC's):
@@ -122,8 +137,8 @@ time / splinekit's at the same measured deviation; triangle ratio = splinekit's 
   114 s), torus 1.5x / 3.2x / 17.8x, with 0.28-0.41 of OCC's triangles (torus at 1e-1: 1.5x
   its triangles, at a deviation 0.07 against OCC's 0.12 of the tolerance);
 * small analytic parts at 1e-1 ... 1e-3: 0.37-0.96x (ours 2.9-4.9 ms, OCC 1.1-4.3 ms), at 1e-4
-  2.2-8.8x, at 1e-5 16-113x; filleted box (26 faces) 0.7x, 0.7x, 1.3x, 5.4x, 16x (1e-1 ...
-  1e-5); foreign STEP files at 1e-3 0.23-1.35x. The slowest, ideas_io1_allbspline (80 ms against
+  2.2-8.8x, at 1e-5 16-113x (before the fast path: see above for today's figures); filleted box
+  (26 faces) 0.7x, 0.7x, 1.3x, 5.4x, 16x (1e-1 ... 1e-5); foreign STEP files at 1e-3 0.23-1.35x. The slowest, ideas_io1_allbspline (80 ms against
   OCC's 18.5 ms), spent 77% of its time projecting edge samples onto their pcurves (Gauss-Newton
   where the affine map from the edge's parameter misses), one edge use at a time; all uses now
   go at once (CPU after the run: 20 ms, about 0.9x; proe2001_k1_extrusion 62 -> 32 ms, about
@@ -362,12 +377,18 @@ def main():
     ap.add_argument("--quick", action="store_true", help="smaller models and fewer repeats")
     ap.add_argument("--brep", action="store_true", help="only part 2 (trimmed B-rep solids)")
     ap.add_argument("--patches", action="store_true", help="only part 1 (untrimmed patch sets)")
+    ap.add_argument("--small", action="store_true",
+                    help="only the small B-rep parts, each timed back to back with OCC (best CPU time of --calls calls each)")
+    ap.add_argument("--calls", type=int, default=200, help="calls per mesher and row in --small (default 200; fewer past 10 s a row)")
     ap.add_argument("--tols", default=None, help="comma-separated tolerances / size (default 1e-1 ... 1e-5)")
     ap.add_argument("--wide", type=float, default=1e-4, help="finest tolerance of part 1's models b and c (default 1e-4)")
     args = ap.parse_args()
     args.tols = tuple(float(x) for x in args.tols.split(",")) if args.tols else TOLERANCES
     print(f"# splinekit.tessellate vs OCC BRepMesh ({platform.machine()}, {os.cpu_count()} cores, "
           f"python {sys.version.split()[0]}, numpy {np.__version__}, load average {os.getloadavg()[0]:.1f})\n")
+    if args.small:
+        small_main(args)
+        return
     if not args.brep:
         patches_main(args)
     if not args.patches:
@@ -634,6 +655,90 @@ def brep_main(args):
         "cached on the faces; first-call time: that cache cleared before each call). OCC meshes each face with shared edge "
         "discretizations (one solid), serial."
     )
+
+
+def small_main(args):
+    """The small B-rep parts of part 2 (the fast path's planes and cylinders), each row timed
+    back to back in one process (OCC's deflection matched as in part 2): ``--calls`` calls of
+    splinekit then ``--calls`` of OCC, and the same number alternating one call of each; the
+    best CPU time of each, so that both see the same machine load."""
+    print("\n## small B-rep parts, splinekit and BRepMesh timed back to back (best CPU time of "
+          f"{args.calls} calls each, in blocks and alternating)\n")
+    try:
+        from OCP.BRepMesh import BRepMesh_IncrementalMesh
+        from OCP.BRepTools import BRepTools
+    except ImportError:
+        print("OCP not installed: skipped")
+        return
+    from splinekit.interop.occ_brep import brep_to_shape
+
+    names = ("cylinder 1 x 3", "box 20 x 30 x 10", "box 20 with hole r 4", "plate 40 x 30 x 5, 3 holes",
+             "build123d box - cylinder", "build123d chamfered block 20, 3")  # fmt: skip
+    print("| part | tol / size | splinekit triangles | OCC triangles | splinekit | OCC | time ratio | "
+          "splinekit, alternating | OCC, alternating | time ratio, alternating |")
+    print("|---|---|---|---|---|---|---|---|---|---|")
+    for name, obj in brep_parts(True):
+        if name not in names:
+            continue
+        faces = _faces(obj)
+        shape = brep_to_shape(obj[0] if isinstance(obj, list) else obj)
+        size = float(np.linalg.norm(np.ptp(np.concatenate([np.asarray(f.surface.control_points).reshape(-1, 3) for f in faces]), axis=0)))
+        start = 1.0
+        for rel in args.tols:
+            tol = rel * size
+            mesh = sk.tessellate(obj, tol)
+            F = np.asarray(mesh.faces)
+            dev_sk = brep_deviation(faces, mesh.corner_uv, mesh.vertices[F], mesh.face_patch)
+
+            def measure_occ(shape=shape, faces=faces):
+                uv, xyz, fp = occ_brep_triangles(shape, len(faces))
+                return brep_deviation(faces, uv, xyz, fp), len(fp)
+
+            floor = 1e-9 * size  # planes: both at rounding level
+            d, dev_occ, n_occ = match_occ(lambda d, shape=shape: occ_brep_mesh(shape, max(d, 1e-6 * size)), measure_occ,
+                                          max(dev_sk, floor), tol, start)  # fmt: skip
+            d = max(d, 1e-6 * size)
+            start = d / tol
+            # blocks: --calls of splinekit, then --calls of OCC; alternating: one call of each in turn
+            # (each mesher then starts from caches the other has filled)
+            blocks = [[], []]
+            alternating = [[], []]
+
+            def run_sk(out, obj=obj, tol=tol):
+                t0 = clock()
+                sk.tessellate(obj, tol)
+                out.append(clock() - t0)
+
+            def run_occ(out, shape=shape, d=d):
+                BRepTools.Clean_s(shape)
+                t0 = clock()
+                BRepMesh_IncrementalMesh(shape, d, False, 0.5, False)
+                out.append(clock() - t0)
+
+            def over(t):  # OCC at 1e-5: ~0.5 s a call
+                return len(t[1]) >= 5 and sum(t[0]) + sum(t[1]) > 10.0
+
+            gc.collect()
+            gc.disable()
+            try:
+                for _ in range(args.calls):
+                    run_sk(blocks[0])
+                for _ in range(args.calls):
+                    if over(blocks):
+                        break
+                    run_occ(blocks[1])
+                for _ in range(args.calls):
+                    if over(alternating):
+                        break
+                    run_sk(alternating[0])
+                    run_occ(alternating[1])
+            finally:
+                gc.enable()
+            a, b = min(blocks[0]), min(blocks[1])
+            c, e = min(alternating[0]), min(alternating[1])
+            print(f"| {name} | {rel:g} | {mesh.n_faces:,} | {n_occ:,}{_above(dev_occ, max(dev_sk, floor))} | {a * 1e6:.0f} us | "
+                  f"{b * 1e6:.0f} us | {b / a:.2f}x | {c * 1e6:.0f} us | {e * 1e6:.0f} us | {e / c:.2f}x |", flush=True)  # fmt: skip
+    print(f"\nload average after the run: {os.getloadavg()[0]:.1f}")
 
 
 if __name__ == "__main__":

@@ -191,7 +191,10 @@ def tessellate(obj, tolerance=None, *, angle_tolerance=DEFAULT_ANGLE_TOLERANCE, 
     are the constraints of a constrained Delaunay triangulation of each face's
     parameter plane (scaled so that the interior grid's step is one in both
     directions), refined where the measured deviation exceeds the tolerance.
-    Triangles follow the faces' orientation (``reversed``). ``max_deviation``
+    Triangles follow the faces' orientation (``reversed``). Planes and right
+    circular cylinders bounded by straight edges and circle arcs get no
+    interior points (ear clipping of the planes' boundary polygons, strips on
+    the cylinders, circles cut at uniform angle; see :mod:`.trimmed`). ``max_deviation``
     is measured as above, at every triangle's centre and edge midpoint. A face
     whose trims are invalid (not closed, leaving the domain, crossing, facing
     the wrong way, a hole outside the outer loop) raises ParameterError naming

@@ -1,7 +1,15 @@
 """Watertight tessellation of trimmed faces, shells and solids.
 
-Design (whole-array work; Python loops run over faces, edges and refinement rounds, never over
-points or triangles):
+Face sets made only of planes and right circular cylinders bounded by straight segments and
+circle arcs (boxes, plates with holes, chamfered blocks, cylinders: most machined parts) take a
+fast path (:mod:`.fast_plan`, :mod:`.fast_mesh`): a tolerance-independent plan, built once per
+face set after the general path below has checked it on the first call, and per call only the
+circles' counts in closed form, ear clipping of the planes' boundary polygons and strips on the
+cylinders, with the same guarantees and the same ``max_deviation`` yardstick. Every other face
+set, and any call the fast path cannot keep a guarantee on, takes the general path whole.
+
+Design of the general path (whole-array work; Python loops run over faces, edges and refinement
+rounds, never over points or triangles):
 
 1. Interior grid (:mod:`.face_grids`). Each face's surface is cut into Bézier cells
    (:mod:`.cells`); the same a-priori bounds on the second derivatives that size the untrimmed
@@ -54,6 +62,8 @@ from .batch import CurveBatch, SurfaceBatch
 from .cells import second_derivative_bounds
 from .edges import _face_name, _pieces, check_domains, edge_uses, group_uses, sample_groups
 from .face_grids import face_grids
+from .fast_mesh import fast_tessellation
+from .fast_plan import build_plan
 from .loops import Layout, LoopTable, gather_loops
 from .result import Tessellation
 from .surfaces import BYTES_PER_TRIANGLE
@@ -248,8 +258,27 @@ def tessellate_faces(faces, tol: float, angle_tol, size: float) -> Tessellation:
     """Tessellate :class:`~splinekit.brep.TrimmedFace` objects as one watertight mesh (see
     :func:`splinekit.tessellation.tessellate`). ``tol``: absolute chordal tolerance;
     ``angle_tol``: radians or None; ``size``: model size (bounding-box diagonal)."""
-    triangle = _triangulator()
     prep = _Prepared.of(faces, size)
+    plan = prep.memo.get("fast", False)  # False: not decided yet for this face set
+    if plan:
+        mesh = fast_tessellation(plan, tol, angle_tol)
+        if mesh is not None:
+            return mesh
+    mesh = _general(prep, faces, tol, angle_tol, size)
+    if plan is False:
+        # decided after the general path has checked the face set (it raises on bad loops), so
+        # both paths refuse the same input; the first call already returns the fast mesh, so
+        # every call on a face set gives the same kind of mesh
+        plan = prep.memo["fast"] = build_plan(prep)
+        fast = fast_tessellation(plan, tol, angle_tol) if plan is not None else None
+        if fast is not None:
+            return fast
+    return mesh
+
+
+def _general(prep, faces, tol, angle_tol, size):
+    """The general path (the module docstring's steps 1-6) on the prepared face set ``prep``."""
+    triangle = _triangulator()
     batch, uses, groups, edge_tol = prep.batch, prep.uses, prep.groups, prep.edge_tol
     grids = face_grids(batch, tol, angle_tol, prep.bounds, prep.memo)
     scales = np.stack([g.scale for g in grids])

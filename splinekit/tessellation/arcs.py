@@ -1,0 +1,218 @@
+"""Circles and straight segments recognised among B-rep edges and surfaces, with closed-form maps.
+
+A circular arc in splinekit is a rational quadratic NURBS curve (The NURBS Book A7.1). Its
+parameter does not run at uniform angle, but each rational quadratic Bézier piece with end
+weights ``w0, w2`` and middle weight ``w1`` becomes, after the Möbius reparametrization
+``s = t / (t + lam (1 - t))`` with ``lam = sqrt(w0 / w2)``, the symmetric piece with weights
+``1, cos(a), 1`` (``a``: half the piece's sweep), on which ``tan(phi / 2)`` is linear in ``s``:
+``phi = a + 2 atan(tan(a / 2) (2 s - 1))`` is the angle swept from the piece's start. So the
+angle <-> parameter map of a circle is exact and costs a few numpy calls for any number of
+points (:class:`CircleMap`). Every map built here is checked against the curve's own evaluator
+when it is built; a curve that fails the check is not a circle for the tessellator.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = ["Circle", "CircleMap", "fit_circle", "is_segment"]
+
+REL = 1e-10
+"""Relative agreement (of the radius, or of the model size) required to call samples a circle
+or a straight segment; rational evaluation rounds at ~1e-15, files written by CAD systems keep
+circles to ~1e-12 of their size."""
+
+
+class Circle:
+    """An arc of a circle in space: ``centre + radius (cos(theta) e1 + sin(theta) e2)`` for
+    ``theta`` from 0 to ``sweep`` (radians, > 0); ``e1, e2`` orthonormal ``(3,)``,
+    ``normal = e1 x e2``; ``closed``: the arc is the whole circle."""
+
+    __slots__ = ("centre", "radius", "e1", "e2", "normal", "sweep", "closed")
+
+    def points(self, theta):
+        """``(n, 3)`` points at angles ``theta`` ``(n,)``."""
+        return self.centre + self.radius * (np.cos(theta)[:, None] * self.e1 + np.sin(theta)[:, None] * self.e2)
+
+    def angles(self, X):
+        """``(n,)`` angles in ``[0, 2 pi)`` of the points ``X`` ``(n, 3)`` about the axis."""
+        d = X - self.centre
+        return np.mod(np.arctan2(d @ self.e2, d @ self.e1), 2.0 * np.pi)
+
+
+def _circumcentre(a, b, c):
+    u, v = b - a, c - a
+    n = np.cross(u, v)
+    nn = float(n @ n)
+    if not nn > 0:
+        return None, None
+    return a + (np.cross(n, u) * (v @ v) + np.cross(v, n) * (u @ u)) / (2.0 * nn), n
+
+
+def fit_circle(X, scale) -> Circle | None:
+    """The circle arc through the samples ``X`` ``(k, 3)`` (in order along the curve, ``k >= 7``,
+    uniform in the curve's parameter) if every sample lies on one circle within
+    ``REL * max(radius, scale)`` and the angle grows monotonically, else None. Conics (rational
+    quadratic pieces) with five points on a circle are that circle, so enough samples per piece
+    make this exact for the curves the tessellator meets."""
+    k = len(X)
+    c, n = _circumcentre(X[0], X[k // 3], X[(2 * k) // 3])
+    if c is None:
+        return None
+    r = float(np.linalg.norm(X[0] - c))
+    eps = REL * max(r, scale)
+    d = X - c
+    normal = n / np.linalg.norm(n)
+    if np.abs(np.linalg.norm(d, axis=1) - r).max() > eps or np.abs(d @ normal).max() > eps:
+        return None
+    out = Circle()
+    out.centre, out.radius, out.normal = c, r, normal
+    out.e1 = d[0] / r
+    out.e2 = np.cross(normal, out.e1)
+    theta = np.unwrap(np.arctan2(d @ out.e2, d @ out.e1))
+    step = np.diff(theta)
+    if not (step > 0).all() or step.max() >= np.pi / 2:
+        return None
+    out.closed = bool(np.linalg.norm(X[-1] - X[0]) <= eps)
+    out.sweep = 2.0 * np.pi if out.closed else float(theta[-1] - theta[0])
+    if out.sweep > 2.0 * np.pi + 1e-9:
+        return None
+    return out
+
+
+def is_segment(X, scale) -> bool:
+    """Whether the samples ``X`` ``(k, 3)`` lie on the straight segment between the first and
+    the last (within ``REL * scale``), in order, with distinct ends."""
+    a, b = X[0], X[-1]
+    L = float(np.linalg.norm(b - a))
+    if not L > REL * scale:
+        return False
+    t = (X - a) @ (b - a) / (L * L)
+    off = np.linalg.norm(X - a - t[:, None] * (b - a), axis=1)
+    return bool(off.max() <= REL * scale and (np.diff(t) > 0).all())
+
+
+class CircleMap:
+    """The exact angle <-> parameter map of a rational quadratic B-spline circle (arc).
+
+    Attributes: ``circle`` (:class:`Circle`, its angle 0 at the curve's start and growing with
+    the parameter), per Bézier piece ``lo, hi`` (parameters), ``start`` (angle at the piece's
+    start), ``half`` (half its sweep) and ``lam`` (the Möbius factor). Built by :meth:`of`.
+    """
+
+    __slots__ = ("circle", "lo", "hi", "start", "half", "lam", "t_half")
+
+    @classmethod
+    def of(cls, curve, scale):
+        """The map of ``curve`` (a :class:`~splinekit.NurbsCurve` or B-spline of degree 2 in 3-D),
+        or None if it is not a circle arc in this exact sense."""
+        if curve.degree != 2 or curve.weights is None:
+            return None
+        pieces = curve.to_bezier()
+        breaks = np.unique(np.asarray(curve.knots, dtype=np.float64))
+        if len(breaks) != len(pieces) + 1:
+            return None
+        lo, hi = curve.domain
+        X = curve.evaluate(np.linspace(lo, hi, 8 * len(pieces) + 1))
+        circle = fit_circle(X, scale)
+        if circle is None:
+            return None
+        P = np.array([p.control_points for p in pieces])  # (k, 3, 3)
+        W = np.array([p.weights for p in pieces])  # (k, 3)
+        if (W <= 0).any():
+            return None
+        cos_half = W[:, 1] / np.sqrt(W[:, 0] * W[:, 2])
+        if (cos_half <= 0).any() or (cos_half >= 1).any():
+            return None
+        m = cls()
+        m.circle, m.lo, m.hi = circle, breaks[:-1], breaks[1:]
+        m.half = np.arccos(cos_half)
+        m.start = np.unwrap(circle.angles(P[:, 0]))
+        m.start -= m.start[0]
+        m.lam = np.sqrt(W[:, 0] / W[:, 2])
+        m.t_half = np.tan(m.half / 2.0)
+        # checked against the evaluator: the map's angles at the samples' parameters
+        t = np.linspace(lo, hi, 8 * len(pieces) + 1)
+        if np.abs(circle.points(m.angle(t)) - X).max() > REL * max(circle.radius, scale):
+            return None
+        return m
+
+    def _piece(self, t):
+        return np.clip(np.searchsorted(self.hi, t, side="left"), 0, len(self.hi) - 1)
+
+    def angle(self, t):
+        """``(n,)`` angles (from the curve's start) at parameters ``t`` ``(n,)``."""
+        k = self._piece(t)
+        x = (t - self.lo[k]) / (self.hi[k] - self.lo[k])
+        s = x / (x + self.lam[k] * (1.0 - x))
+        return self.start[k] + self.half[k] + 2.0 * np.arctan(self.t_half[k] * (2.0 * s - 1.0))
+
+    def param(self, theta):
+        """``(n,)`` parameters at angles ``theta`` ``(n,)`` (from the curve's start, in
+        ``[0, sweep]``)."""
+        ends = self.start + 2.0 * self.half
+        k = np.clip(np.searchsorted(ends, theta, side="left"), 0, len(ends) - 1)
+        s = 0.5 * (np.tan((theta - self.start[k] - self.half[k]) / 2.0) / self.t_half[k] + 1.0)
+        x = self.lam[k] * s / ((1.0 - s) + self.lam[k] * s)
+        return self.lo[k] + x * (self.hi[k] - self.lo[k])
+
+
+class CircleMaps:
+    """Several :class:`CircleMap` as one table, so that points on different circles are mapped
+    in one pass: :meth:`angle` and :meth:`param` take the map ``q`` ``(n,)`` of every point."""
+
+    __slots__ = ("lo", "hi", "start", "half", "lam", "t_half", "first", "last", "t0", "t1", "tkey", "akey", "sweep",
+                 "kappa", "full", "table")  # fmt: skip
+
+    def __init__(self, maps):
+        cat = lambda name: np.concatenate([getattr(m, name) for m in maps])  # noqa: E731
+        self.lo, self.hi, self.start, self.half = cat("lo"), cat("hi"), cat("start"), cat("half")
+        self.lam, self.t_half = cat("lam"), cat("t_half")
+        count = np.array([len(m.lo) for m in maps], dtype=np.int64)
+        self.first = np.cumsum(count) - count
+        self.last = self.first + count - 1
+        self.t0 = np.array([m.lo[0] for m in maps])
+        self.t1 = np.array([m.hi[-1] for m in maps])
+        self.sweep = np.array([m.circle.sweep for m in maps])
+        q = np.repeat(np.arange(len(maps)), count)
+        # sorted search keys: map q's pieces end at 2 q + (fraction of its domain), 8 q + angle
+        self.tkey = 2.0 * q + (self.hi - self.t0[q]) / (self.t1 - self.t0)[q]
+        self.akey = 8.0 * q + self.start + 2.0 * self.half
+        self.kappa = np.array([_kappa(m) for m in maps])
+        self.full = bool((self.sweep >= 2.0 * np.pi - 1e-12).all())
+        # per piece, the columns both maps read (one gather per call instead of six)
+        self.table = np.column_stack([self.lo, self.hi - self.lo, self.start + self.half, self.lam, self.t_half])
+
+    def _piece(self, keys, key, q):
+        return np.minimum(np.maximum(np.searchsorted(keys, key, side="left"), self.first[q]), self.last[q])
+
+    def angle(self, q, t):
+        """Angles (from each circle's start) at parameters ``t`` of maps ``q`` (same shapes)."""
+        k = self._piece(self.tkey, 2.0 * q + (t - self.t0[q]) / (self.t1 - self.t0)[q], q)
+        lo, span, mid, lam, th = self.table[k].T
+        x = (t - lo) / span
+        s = x / (x + lam * (1.0 - x))
+        return mid + 2.0 * np.arctan(th * (2.0 * s - 1.0))
+
+    def param(self, q, theta):
+        """Parameters of maps ``q`` at angles ``theta`` (any branch: taken into ``[0, sweep]``,
+        an arc's far side split halfway)."""
+        th = np.mod(theta, 2.0 * np.pi)
+        if not self.full:
+            sw = self.sweep[q]
+            th = np.where(th > 0.5 * (sw + 2.0 * np.pi), th - 2.0 * np.pi, th)
+        k = self._piece(self.akey, 8.0 * q + th, q)
+        lo, span, mid, lam, tq = self.table[k].T
+        s = 0.5 * (np.tan(0.5 * (th - mid)) / tq + 1.0)
+        return lo + span * (lam * s / ((1.0 - s) + lam * s))
+
+
+def _kappa(m) -> float:
+    """``max |u''(theta) / u'(theta)|`` of a circle map (``u``: parameter, ``theta``: angle),
+    sampled densely: how far a parametric midpoint strays from the angular one, in units of
+    the squared step (it moves by ``kappa step^2 / 8`` radians to leading order)."""
+    th = np.linspace(0.0, m.circle.sweep, 20001)
+    u = m.param(th)
+    g1 = np.gradient(u, th)
+    g2 = np.gradient(g1, th)
+    return float(np.abs(g2 / g1).max())

@@ -1,0 +1,356 @@
+"""The tolerance-independent plan of the fast B-rep tessellation path (:mod:`.fast_mesh`).
+
+Most faces of machined parts are planes bounded by lines and circles, and cylinders (holes,
+bosses) bounded by two circles and their seam or rulings. On such faces the tessellation needs
+no interior points and no measuring rounds:
+
+* a plane's deviation is zero inside: its boundary polygon (with holes) is the whole mesh, and
+  with only straight edges that polygon is the same at every tolerance;
+* a circle needs ``ceil(sweep / step)`` segments, with the step given in closed form by the
+  sagitta ``r (1 - cos(step / 2)) <= tol`` and the angle criterion;
+* a right circular cylinder is straight along its rulings: a strip of triangles between its two
+  circles is exact along them and errs across them exactly as its circles do.
+
+:func:`build_plan` recognises such a face set once (faces are immutable: the plan is kept with
+the tessellator's per-face-set preparation) and returns None for any other: those go through
+the general path (:mod:`.trimmed`) whole. Everything the plan claims is checked against the
+faces' own evaluators when it is built (the edges' samples against the recognised lines and
+circles, every use's ``(u, v)`` map against its surface).
+"""
+
+from __future__ import annotations
+
+import mapbox_earcut as earcut
+import numpy as np
+
+from ..tolerances import WELD
+from .arcs import REL, CircleMap, CircleMaps, fit_circle, is_segment
+from .welding import close_pairs, components
+
+__all__ = ["FastPlan", "build_plan", "planar_triangles"]
+
+SAMPLES = 129
+"""Samples per edge used to recognise its shape (at least 8 per conic piece for 16 pieces)."""
+
+PLANE, CYLINDER = 0, 1
+
+
+def planar_triangles(uv, ring_ends):
+    """Triangles ``(t, 3)`` (indices into ``uv`` ``(n, 2)``, counter-clockwise) of the polygon
+    whose rings (outer first, then holes) end at ``ring_ends``, by ear clipping; None unless it
+    is a proper triangulation: every point used, ``n + 2 holes - 2`` triangles, their areas
+    summing to the polygon's (ear clipping drops collinear points and does not check that
+    holes lie inside)."""
+    T = earcut.triangulate_float64(uv, ring_ends.astype(np.uint32)).reshape(-1, 3).astype(np.int64)
+    n, holes = len(uv), len(ring_ends) - 1
+    if len(T) != n + 2 * holes - 2:
+        return None
+    a, b, c = uv[T[:, 0]], uv[T[:, 1]], uv[T[:, 2]]
+    area = (b[:, 0] - a[:, 0]) * (c[:, 1] - a[:, 1]) - (b[:, 1] - a[:, 1]) * (c[:, 0] - a[:, 0])
+    T = np.where((area < 0)[:, None], T[:, [0, 2, 1]], T)
+    nxt = np.arange(1, n + 1)
+    starts = np.concatenate([[0], ring_ends[:-1]])
+    nxt[ring_ends - 1] = starts
+    shoelace = uv[:, 0] * uv[nxt, 1] - uv[nxt, 0] * uv[:, 1]
+    ring = np.repeat(np.arange(len(ring_ends)), np.diff(np.concatenate([[0], ring_ends])))
+    signed = np.bincount(ring, shoelace, len(ring_ends))
+    # the outer ring counter-clockwise, the holes clockwise: the material on the loops' left
+    if not (signed[0] > 0 and (signed[1:] < 0).all()):
+        return None
+    if abs(np.abs(area).sum() - signed.sum()) > 1e-9 * np.abs(signed).sum():
+        return None
+    return T
+
+
+class _Cylinder:
+    """A right circular cylinder face: ``S(u, v) = C(u) + (v - v0) D`` with ``C`` a circle
+    (``cmap``: its :class:`.arcs.CircleMap`) whose axis is along ``D``."""
+
+    __slots__ = ("cmap", "axis", "sign")
+
+
+def _cylinder(surface, batch, f, scale):
+    """The :class:`_Cylinder` of face ``f``'s surface, or None."""
+    if surface.degree_v != 1 or surface.degree_u != 2 or surface.weights is None:
+        return None
+    P = np.asarray(surface.control_points)
+    W = np.asarray(surface.weights)
+    kv = np.asarray(surface.knots_v)
+    if P.shape[1] != 2 or np.abs(W[:, 1] - W[:, 0]).max() > 1e-14 * W.max():
+        return None
+    D = P[:, 1] - P[:, 0]
+    if np.abs(D - D[0]).max() > REL * scale:
+        return None
+    cmap = CircleMap.of(surface.isocurve(v=kv[0]), scale)
+    if cmap is None:
+        return None
+    axis = D[0] / np.linalg.norm(D[0])
+    if np.linalg.norm(np.cross(axis, cmap.circle.normal)) > REL:
+        return None
+    c = _Cylinder()
+    c.cmap, c.axis = cmap, axis
+    # which way Su x Sv points: outward (from the axis) or inward
+    (u0, u1), (v0, v1) = surface.domain
+    S, Su, Sv = batch.partials(np.array([f]), np.array([0.5 * (u0 + u1)]), np.array([0.5 * (v0 + v1)]))
+    radial = S[0] - cmap.circle.centre
+    radial -= (radial @ axis) * axis
+    c.sign = 1.0 if np.cross(Su[0], Sv[0]) @ radial > 0 else -1.0
+    return c
+
+
+class FastPlan:
+    """What :func:`.fast_mesh.fast_tessellation` needs at every tolerance (see the module
+    docstring). Arrays per edge group ``g`` (G), per use ``i`` (U, in :func:`.edges.edge_uses`
+    order) and per face ``f`` (F); arcs are numbered ``a`` among the circle groups."""
+
+    __slots__ = (
+        "faces", "kind", "reversed", "corners", "end_vid", "arc_of", "arcs", "arc_c", "arc_r", "arc_e1", "arc_e2",
+        "arc_sweep", "arc_closed", "arc_min", "arc_factor", "use_group", "use_face", "use_flip", "use_uv0",
+        "use_arc_cyl", "A", "b", "normal", "origin", "fixed_T", "fixed_face", "curved_planes", "face_loops",
+        "loop_first", "cyl", "cyl_faces", "map_error",
+        # derived for the per-call path (:func:`_derive`)
+        "use_arc", "start_vid", "start_X", "au", "au_arc", "au_flip", "au_slot", "au_off", "au_sense", "au_v",
+        "au_A", "au_b", "maps", "slot_of_face", "slot_centre", "slot_axis", "slot_sign", "slot_radius", "slot_lo",
+        "slot_hi", "cp_loops", "cp_first_use", "cp_loop_uses", "use_slot", "use_off", "use_sense", "n_line_uses",
+        "kernel_args", "zb_use", "zb_slot", "zt_use", "zt_slot", "face_first_use", "plane_offset", "static",
+    )  # fmt: skip
+
+
+def build_plan(prep):
+    """The :class:`FastPlan` of the face set ``prep`` (:class:`.trimmed._Prepared`), or None if
+    any face is not a plane or a right circular cylinder of the shapes above, or any edge is
+    neither a straight segment nor a circle arc."""
+    faces, uses, groups, size = prep.faces, prep.uses, prep.groups, prep.size
+    if not uses or any(u.edge.degenerate for u in uses):
+        return None
+    F, U, G = len(faces), len(uses), len(groups)
+    kind = np.full(F, PLANE)
+    cyl = {}
+    for f, face in enumerate(faces):
+        if not prep.affine[f]:
+            c = _cylinder(face.surface, prep.batch, f, size)
+            if c is None:
+                return None
+            kind[f], cyl[f] = CYLINDER, c
+    use_face = np.array([u.f for u in uses], dtype=np.int64)
+    use_group = prep.table.group_of
+    pdom = np.column_stack([prep.pcurves.breaks.lo, prep.pcurves.breaks.hi])
+    # every group's shape, from its first use's surface at its pcurve
+    rep = np.array([g[0] for g in groups], dtype=np.int64)
+    r = np.linspace(0.0, 1.0, SAMPLES)
+    t = (pdom[rep, :1] + (pdom[rep, 1:] - pdom[rep, :1]) * r).ravel()
+    uv = prep.pcurves.evaluate(np.repeat(rep, SAMPLES), t)
+    X = prep.batch.evaluate(np.repeat(use_face[rep], SAMPLES), uv[:, 0], uv[:, 1]).reshape(G, SAMPLES, 3)
+    arcs, arc_of = [], np.full(G, -1, dtype=np.int64)
+    for g in range(G):
+        if is_segment(X[g], size):
+            continue
+        c = fit_circle(X[g], size)
+        if c is None:
+            return None
+        arc_of[g] = len(arcs)
+        arcs.append(c)
+    # each use's direction against its group's samples, and its (u, v) at its start
+    third = prep.pcurves.evaluate(np.arange(U), pdom[:, 0] + (pdom[:, 1] - pdom[:, 0]) / 3.0)
+    Y = prep.batch.evaluate(use_face, third[:, 0], third[:, 1])
+    nearest = np.argmin(np.linalg.norm(X[use_group] - Y[:, None], axis=2), axis=1)
+    use_flip = nearest > SAMPLES // 2
+    use_uv0 = prep.pcurves.evaluate(np.arange(U), pdom[:, 0])
+    use_uv1 = prep.pcurves.evaluate(np.arange(U), pdom[:, 1])
+    # the corners: the groups' end points welded as the general path welds them
+    ends = np.concatenate([X[:, 0], X[:, -1]])
+    pairs = close_pairs(ends, max(WELD * size, 10.0 * prep.edge_tol))
+    lab = components(len(ends), pairs[:, 0], pairs[:, 1]) if len(pairs) else np.arange(len(ends))
+    first, vid = np.unique(lab, return_index=True, return_inverse=True)[1:]
+    plan = FastPlan()
+    plan.faces, plan.kind, plan.reversed, plan.arcs, plan.arc_of = faces, kind, prep.reversed, arcs, arc_of
+    plan.corners, plan.end_vid = ends[first], vid.reshape(2, G).T.copy()
+    plan.use_group, plan.use_face, plan.use_flip, plan.use_uv0 = use_group, use_face, use_flip, use_uv0
+    plan.arc_c = np.array([a.centre for a in arcs]).reshape(-1, 3)
+    plan.arc_e1 = np.array([a.e1 for a in arcs]).reshape(-1, 3)
+    plan.arc_e2 = np.array([a.e2 for a in arcs]).reshape(-1, 3)
+    plan.arc_r = np.array([a.radius for a in arcs], dtype=np.float64)
+    plan.arc_sweep = np.array([a.sweep for a in arcs], dtype=np.float64)
+    plan.arc_closed = np.array([a.closed for a in arcs], dtype=bool)
+    plan.arc_min = np.where(plan.arc_closed, 3, 1)  # a closed circle is at least a triangle
+    # planes: (u, v) = A X + b, unit normal (outward), a point
+    corner = np.column_stack([[b[0] for b in prep.batch.bu], [b[0] for b in prep.batch.bv]])  # (F, 2)
+    S, Su, Sv = prep.batch.partials(np.arange(F), corner[:, 0], corner[:, 1])
+    plan.A = np.linalg.pinv(np.stack([Su, Sv], axis=2))  # (F, 2, 3): (u, v) of a point of an affine face
+    plan.b = corner - np.einsum("fij,fj->fi", plan.A, S)
+    n = np.cross(Su, Sv)
+    plan.normal = n / np.linalg.norm(n, axis=1, keepdims=True) * np.where(prep.reversed, -1.0, 1.0)[:, None]
+    plan.origin = S
+    plan.cyl = cyl
+    # every use's (u, v) map, checked on its group's samples against its surface
+    samples = X[use_group]  # (U, SAMPLES, 3)
+    samples = np.where(use_flip[:, None, None], samples[:, ::-1], samples)
+    arc_cyl = np.zeros((U, 2))  # per cylinder arc use: (offset, sense) of its angles in the face's circle
+    is_cyl_arc = (kind[use_face] == CYLINDER) & (arc_of[use_group] >= 0)
+    for i in np.flatnonzero(is_cyl_arc):
+        cm = cyl[int(use_face[i])].cmap
+        a = arcs[arc_of[use_group[i]]]
+        th = cm.circle.angles(a.points(np.array([0.0, 0.25 * a.sweep])))
+        sense = 1.0 if np.mod(th[1] - th[0], 2 * np.pi) < np.pi else -1.0
+        arc_cyl[i] = th[0], sense
+    plan.use_arc_cyl = arc_cyl
+    pred = np.empty((U, SAMPLES, 2))
+    pred[:] = np.einsum("uij,usj->usi", plan.A[use_face], samples) + plan.b[use_face][:, None]
+    for i in np.flatnonzero(kind[use_face] == CYLINDER):
+        if arc_of[use_group[i]] < 0:
+            pred[i] = np.linspace(use_uv0[i], use_uv1[i], SAMPLES)  # a ruling: iso-u, v affine along it
+            continue
+        g = use_group[i]
+        theta = np.unwrap(arcs[arc_of[g]].angles(X[g]))
+        theta = (theta - theta[0])[::-1] if use_flip[i] else theta - theta[0]
+        pred[i, :, 0] = cyl_param(cyl[int(use_face[i])].cmap, arc_cyl[i, 0] + arc_cyl[i, 1] * theta)
+        pred[i, :, 1] = use_uv0[i, 1]
+        pred[i, 0], pred[i, -1] = use_uv0[i], use_uv1[i]
+    back = prep.batch.evaluate(np.repeat(use_face, SAMPLES), pred[..., 0].ravel(), pred[..., 1].ravel())
+    # (a sloppy file's edges off their faces take the general path, which allows for that)
+    map_error = float(np.linalg.norm(back.reshape(U, SAMPLES, 3) - samples, axis=2).max())
+    if map_error > 10.0 * REL * size:
+        return None
+    if not _cylinder_loops(plan, prep, use_uv0, use_uv1):
+        return None
+    plan.map_error = map_error
+    # straight-edged planes: triangulated once (indices into the face's loop points, which are
+    # its uses' start corners at every tolerance)
+    fixed_T, fixed_face, plan.curved_planes, plan.face_loops = [], [], [], {}
+    plan.loop_first = prep.table.first
+    for f in range(F):
+        if kind[f] != PLANE:
+            continue
+        plan.face_loops[f] = np.flatnonzero(prep.table.loop_face == f)
+        mine = np.flatnonzero(use_face == f)
+        if (arc_of[use_group[mine]] < 0).all():
+            ring_ends = np.cumsum(prep.table.count[plan.face_loops[f]])
+            T = planar_triangles(use_uv0[mine], ring_ends)
+            if T is None:
+                return None
+            fixed_T.append(T)
+            fixed_face.append(np.full(len(T), f))
+        else:
+            plan.curved_planes.append((f, plan.face_loops[f]))
+    plan.fixed_T = np.concatenate(fixed_T) if fixed_T else np.zeros((0, 3), dtype=np.int64)
+    plan.fixed_face = np.concatenate(fixed_face) if fixed_face else np.zeros(0, dtype=np.int64)
+    plan.cp_loops = np.concatenate([loops for _, loops in plan.curved_planes]) if plan.curved_planes else np.zeros(0, dtype=np.int64)
+    plan.cp_first_use, plan.cp_loop_uses = prep.table.first[plan.cp_loops], prep.table.count[plan.cp_loops]
+    _derive(plan)
+    return plan
+
+
+def _derive(plan):
+    """The flat arrays the per-call path indexes (see :class:`FastPlan`): per arc use ``au`` its
+    arc, direction, cylinder slot (-1 on a plane), angle offset and sense in the cylinder's
+    circle, constant ``v``, plane map; per cylinder slot its axis, orientation, ``u`` range and
+    the uses of its bottom and top chains; the circles' count factors; the planes' offsets."""
+    g = plan.use_group
+    plan.use_arc = plan.arc_of[g]
+    plan.start_vid = np.where(plan.use_flip, plan.end_vid[g, 1], plan.end_vid[g, 0])
+    plan.start_X = plan.corners[plan.start_vid]
+    au = plan.au = np.flatnonzero(plan.use_arc >= 0)
+    slots = sorted(plan.cyl)
+    slot_of_face = plan.slot_of_face = np.full(len(plan.faces), -1, dtype=np.int64)
+    slot_of_face[slots] = np.arange(len(slots))
+    plan.au_arc, plan.au_flip, plan.au_slot = plan.use_arc[au], plan.use_flip[au], slot_of_face[plan.use_face[au]]
+    plan.au_off, plan.au_sense = plan.use_arc_cyl[au, 0], plan.use_arc_cyl[au, 1]
+    plan.au_v = plan.use_uv0[au, 1]
+    plan.au_A, plan.au_b = plan.A[plan.use_face[au]], plan.b[plan.use_face[au]]
+    plan.face_first_use = np.searchsorted(plan.use_face, np.arange(len(plan.faces)))
+    # a circle's count factor: its parametric midpoints on a cylinder stray by up to kappa step^2 / 8
+    # radians along it (at right angles to the sagitta), so the deviation is at most about
+    # sagitta * sqrt(1 + kappa^2); 2% margin for the higher-order terms (the result is measured)
+    plan.arc_factor = np.ones(len(plan.arcs))
+    plan.zb_use = None
+    if slots:
+        plan.maps = CircleMaps([plan.cyl[f].cmap for f in slots])
+        on = plan.au_slot >= 0
+        np.maximum.at(plan.arc_factor, plan.au_arc[on], np.sqrt(1.0 + (1.02 * plan.maps.kappa[plan.au_slot[on]]) ** 2))
+        plan.slot_centre = np.array([plan.cyl[f].cmap.circle.centre for f in slots])
+        plan.slot_axis = np.array([plan.cyl[f].axis for f in slots])
+        plan.slot_radius = np.array([plan.cyl[f].cmap.circle.radius for f in slots])
+        plan.slot_sign = np.array([plan.cyl[f].sign * (-1.0 if plan.reversed[f] else 1.0) for f in slots])
+        zb, zbs, zt, zts, lo, hi = [], [], [], [], [], []
+        for q, f in enumerate(slots):
+            order, nb = plan.cyl_faces[f]
+            zb.append(order[: nb + 1])  # the bottom uses, then the ruling at u_hi (its start: the bottom's end)
+            zbs.append(np.full(nb + 1, q))
+            lo.append(plan.use_uv0[order[0], 0])
+            hi.append(plan.use_uv0[order[nb], 0])
+        for q, f in reversed(list(enumerate(slots))):  # reversed as a whole below: each top chain runs in u
+            order, nb = plan.cyl_faces[f]
+            zt.append(order[nb + 1 :])  # the top uses, then the ruling at u_lo
+            zts.append(np.full(len(order) - nb - 1, q))
+        plan.zb_use, plan.zb_slot = np.concatenate(zb), np.concatenate(zbs)
+        plan.zt_use, plan.zt_slot = np.concatenate(zt), np.concatenate(zts)
+        plan.slot_lo, plan.slot_hi = np.array(lo), np.array(hi)
+    # how far the planes' points lie off their planes (their deviation): corners, and circles
+    # (centre offset plus the tilt of their plane)
+    pu = np.flatnonzero(plan.kind[plan.use_face] == PLANE)
+    f = plan.use_face[pu]
+    off = np.abs(np.einsum("ij,ij->i", plan.start_X[pu] - plan.origin[f], plan.normal[f]))
+    a = plan.use_arc[pu]
+    arc = a >= 0
+    if arc.any():
+        n, aa = plan.normal[f[arc]], a[arc]
+        tilt = np.abs(np.einsum("ij,ij->i", n, plan.arc_e1[aa])) + np.abs(np.einsum("ij,ij->i", n, plan.arc_e2[aa]))
+        off[arc] = np.maximum(off[arc], np.abs(np.einsum("ij,ij->i", plan.arc_c[aa] - plan.origin[f[arc]], n)) + plan.arc_r[aa] * tilt)
+    # added to the measured deviation: how far the points may lie off their faces (rounding)
+    plan.plane_offset = max(float(off.max()) if off.size else 0.0, plan.map_error)
+    plan.static = None
+    # per use (for the compiled kernels): cylinder slot (-1: a plane or a ruling), angle offset and sense
+    plan.use_slot = np.full(len(g), -1, dtype=np.int64)
+    plan.use_slot[au] = plan.au_slot
+    plan.use_off, plan.use_sense = plan.use_arc_cyl[:, 0].copy(), plan.use_arc_cyl[:, 1].copy()
+    plan.n_line_uses = int((plan.use_arc < 0).sum())
+    e, ei = np.zeros(0), np.zeros(0, dtype=np.int64)
+    m = plan.maps if slots else None
+    maps = (m.akey, m.table, m.first, m.last, m.sweep, m.full) if m else (e, np.zeros((0, 5)), ei, ei, e, True)
+    angle = (m.tkey, m.table, m.first, m.last, m.t0, m.t1) if m else (e, np.zeros((0, 5)), ei, ei, e, e)
+    zips = ((plan.zb_use, plan.zb_slot, plan.zt_use, plan.zt_slot, plan.slot_lo, plan.slot_hi, plan.slot_radius,
+             plan.slot_centre, plan.slot_axis, plan.slot_sign) if slots  # fmt: skip
+            else (ei, ei, ei, ei, e, e, e, np.zeros((0, 3)), np.zeros((0, 3)), e))
+    plan.kernel_args = maps, angle, zips
+
+
+def cyl_param(cmap, theta):
+    """Parameters of the cylinder's circle ``cmap`` at angles ``theta`` (in its circle's frame,
+    any branch): the angle is taken into ``[0, sweep]`` (an arc's far side is split halfway)."""
+    sweep = float(cmap.circle.sweep)
+    th = np.mod(theta, 2.0 * np.pi)
+    if sweep < 2.0 * np.pi - 1e-12:
+        th = np.where(th > 0.5 * (sweep + 2.0 * np.pi), th - 2.0 * np.pi, th)
+    return cmap.param(th)
+
+
+def _cylinder_loops(plan, prep, uv0, uv1) -> bool:
+    """Whether every cylinder face has one loop that is a rectangle in ``(u, v)``: circle arcs
+    along ``v = v_lo`` (u increasing, the bottom), a ruling at ``u = u_hi``, arcs along
+    ``v = v_hi`` (u decreasing, the top) and a ruling at ``u = u_lo``. Keeps per face the loop's
+    uses rotated to start at the bottom: ``cyl_faces[f] = (uses, n_bottom)``."""
+    plan.cyl_faces = {}
+    for f in plan.cyl:
+        mine = np.flatnonzero(plan.use_face == f)
+        if (prep.table.loop[mine] != 0).any():
+            return False
+        a, b = uv0[mine], uv1[mine]
+        lo, hi = np.minimum(a, b).min(axis=0), np.maximum(a, b).max(axis=0)
+        eps = 1e-9 * (hi - lo)
+        arc = plan.arc_of[plan.use_group[mine]] >= 0
+        bottom = arc & (np.abs(a[:, 1] - lo[1]) <= eps[1]) & (np.abs(b[:, 1] - lo[1]) <= eps[1]) & (b[:, 0] > a[:, 0])
+        top = arc & (np.abs(a[:, 1] - hi[1]) <= eps[1]) & (np.abs(b[:, 1] - hi[1]) <= eps[1]) & (b[:, 0] < a[:, 0])
+        right = ~arc & (np.abs(a[:, 0] - hi[0]) <= eps[0]) & (np.abs(b[:, 0] - hi[0]) <= eps[0]) & (b[:, 1] > a[:, 1])
+        left = ~arc & (np.abs(a[:, 0] - lo[0]) <= eps[0]) & (np.abs(b[:, 0] - lo[0]) <= eps[0]) & (b[:, 1] < a[:, 1])
+        label = np.select([bottom, right, top, left], [0, 1, 2, 3], -1)
+        if (label < 0).any() or (label == 1).sum() != 1 or (label == 3).sum() != 1:
+            return False
+        start = int(np.flatnonzero(label == 1)[0])
+        start = (start - int((label == 0).sum())) % len(mine)
+        order = np.roll(mine, -start)
+        lab = label[np.roll(np.arange(len(mine)), -start)]
+        nb, nt = int((lab == 0).sum()), int((lab == 2).sum())
+        if not (lab == np.repeat([0, 1, 2, 3], [nb, 1, nt, 1])).all():
+            return False
+        plan.cyl_faces[f] = (order, nb)
+    return True
