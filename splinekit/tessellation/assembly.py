@@ -45,6 +45,20 @@ def _edge_locals(n, m):
 
 
 @functools.lru_cache(maxsize=256)
+def _edge_slots(n, m):
+    """``(slots (4, max(n, m) + 1), first (4,))``: the ring slots (:func:`_ring_split`) of the
+    local vertices along the four cell edges of :func:`_edge_locals`, rows padded with their
+    last value, and each edge's first slot (cached, read-only)."""
+    slot = _ring_split(n, m)[2]
+    width = max(n, m) + 1
+    out = np.stack([np.pad(slot[loc], (0, width - loc.size), mode="edge") for loc in _edge_locals(n, m)])
+    first = out[:, 0].copy()
+    for a in (out, first):
+        a.setflags(write=False)
+    return out, first
+
+
+@functools.lru_cache(maxsize=256)
 def _ring_split(n, m):
     """Index tables of an ``(n + 1) x (m + 1)`` grid (cached, read-only): interior and
     ring (border) local vertices ``Li``, ``Lr``; each vertex's ``slot`` among its kind;
@@ -111,10 +125,15 @@ class _Piece:
         col = collapsed[b.cells[keep]]
         if col.any():
             if b.kind == "cells":
-                for e, loc in enumerate(_edge_locals(n, m)):
-                    # every collapsed edge e of a cell k: its ring vertices -> the edge's first one
-                    r = (np.flatnonzero(col[:, e])[:, None] * self.Lr.size + slot[loc]).ravel()
-                    pins.append(np.column_stack([r, np.repeat(r[:: loc.size], loc.size)]))
+                # every collapsed edge e of a cell k: its ring vertices -> the edge's first one
+                edge_slots, edge_first = _edge_slots(n, m)
+                k, e = np.nonzero(col)
+                base = k * self.Lr.size
+                L = np.where(e < 2, n + 1, m + 1)[:, None]
+                r = base[:, None] + edge_slots[e]  # (pairs, max(n, m) + 1): rows padded past their L
+                to = np.broadcast_to((base + edge_first[e])[:, None], r.shape)
+                live = np.arange(r.shape[1]) < L
+                pins.append(np.column_stack([r[live], to[live]]))
             else:
                 cu, cv = b.counts
                 r0s, c0s = np.concatenate([[0], np.cumsum(cu)]), np.concatenate([[0], np.cumsum(cv)])
