@@ -131,9 +131,8 @@ class _Piece:
                 base = k * self.Lr.size
                 L = np.where(e < 2, n + 1, m + 1)[:, None]
                 r = base[:, None] + edge_slots[e]  # (pairs, max(n, m) + 1): rows padded past their L
-                to = np.broadcast_to((base + edge_first[e])[:, None], r.shape)
                 live = np.arange(r.shape[1]) < L
-                pins.append(np.column_stack([r[live], to[live]]))
+                pins.append(np.column_stack([r[live], np.repeat(base + edge_first[e], L.ravel())]))
             else:
                 cu, cv = b.counts
                 r0s, c0s = np.concatenate([[0], np.cumsum(cu)]), np.concatenate([[0], np.cumsum(cv)])

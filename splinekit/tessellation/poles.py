@@ -21,6 +21,7 @@ class CellIndex:
         self.cellsets, self.offsets = cellsets, offsets
         self.first, self.n_cells, self.nsv, self.box_of = first, n_cells, nsv, box_of
         self.set_of = np.repeat(np.arange(len(cellsets)), np.diff(offsets))
+        self.any_multi = bool((n_cells > 1).any())
         self._corners = None  # (C, 4, 3) limit normals at the cells' corners, made at first use
 
     def corner_normals(self) -> np.ndarray:
@@ -40,7 +41,7 @@ class CellIndex:
     def locate(self, P, u, v):
         """Global cell ``(k,)`` and local ``(s, t)`` of the points ``(P[i], u[i], v[i])``."""
         g = self.first[P]  # right for single-cell patches
-        for p in np.unique(P[self.n_cells[P] > 1]):
+        for p in np.unique(P[self.n_cells[P] > 1]) if self.any_multi else ():
             sel = np.flatnonzero(P == p)
             ns_v = self.nsv[p]
             ns_u = self.n_cells[p] // ns_v

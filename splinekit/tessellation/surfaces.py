@@ -59,7 +59,7 @@ from .. import _kernels, limits
 from ..tolerances import WELD
 from .assembly import assemble, outward
 from .cells import cells_of_patches, second_derivative_bounds
-from .counts import MAX_COUNT, initial_counts, node_groups, propagate
+from .counts import MAX_COUNT, count_rates, counts_from_rates, node_groups, propagate
 from .grids import Grid
 from .poles import CellIndex
 from .result import Tessellation
@@ -105,7 +105,7 @@ class _Prepared:
         self.nsv = np.zeros(len(patches), dtype=np.int64)
         np.maximum.at(self.nsv, self.patch_of, self.span_of[:, 1] + 1)
         self.labels, self.collapsed = node_groups(cellsets, self.patch_of, self.span_of, self.nsv, weld_tol)
-        self.bounds = [second_derivative_bounds(cs) for cs in cellsets]
+        self.rates = count_rates(cellsets, [second_derivative_bounds(cs) for cs in cellsets])
         self.cell_index = CellIndex(cellsets, self.offsets, self.first, self.n_cells, self.nsv, self.box_of)
 
     @classmethod
@@ -136,7 +136,7 @@ def tessellate_patches(patches, tol: float, angle_tol, weld_scale: float) -> Tes
     labels, collapsed = prep.labels, prep.collapsed
     any_collapsed = collapsed.any(axis=1)
     multi = n_cells[patch_of] > 1
-    nu, nv = initial_counts(cellsets, tol, angle_tol, prep.bounds)
+    nu, nv = counts_from_rates(prep.rates, tol, angle_tol)
     done_u = np.zeros(C, dtype=np.int64)  # counts each cell was last evaluated with
     done_v = np.zeros(C, dtype=np.int64)
     record = np.full(C, -1, dtype=np.int64)  # which grid holds each cell's latest evaluation
@@ -166,11 +166,14 @@ def tessellate_patches(patches, tol: float, angle_tol, weld_scale: float) -> Tes
             # one int64 key per cell, ordered like the rows (set, nu, nv): counts are <= MAX_COUNT
             base = MAX_COUNT + 1
             key = (set_of[single] * base + nu[single]) * base + nv[single]
-            uniq, inverse = np.unique(key, return_inverse=True)
-            order = np.argsort(inverse, kind="stable")
-            bounds = np.searchsorted(inverse[order], np.arange(len(uniq) + 1))
-            for g, (s, n, m) in enumerate(zip(uniq // base**2, uniq // base % base, uniq % base)):
-                members = single[order[bounds[g] : bounds[g + 1]]]
+            if (key == key[0]).all():  # one group (a pilot round of one cell set): no sort
+                uniq, groups = key[:1], [single]
+            else:
+                uniq, inverse = np.unique(key, return_inverse=True)
+                order = np.argsort(inverse, kind="stable")
+                bounds = np.searchsorted(inverse[order], np.arange(len(uniq) + 1))
+                groups = [single[order[bounds[g] : bounds[g + 1]]] for g in range(len(uniq))]
+            for members, s, n, m in zip(groups, uniq // base**2, uniq // base % base, uniq % base):
                 flags = any_collapsed[offsets[s] : offsets[s + 1]]
                 grid = Grid.cells(cellsets[s], members - offsets[s], int(n), int(m), tol, angle_tol, weld_tol, flags)
                 grid.cells = members
