@@ -12,6 +12,7 @@ path's results bit for bit.
 from __future__ import annotations
 
 import functools
+import itertools
 
 import numpy as np
 
@@ -260,13 +261,13 @@ def assemble(grids, record, collapsed, span_of, cell_index, tol, weld_tol):
         if keep.size == 0:
             continue
         pieces.append(_Piece(b, keep, collapsed, span_of))
-        max_dev = max(max_dev, float(np.max(b.err_u[keep])), float(np.max(b.err_v[keep])), float(np.max(b.err_d[keep])))
-    n_int = [p.c * p.Li.size for p in pieces]
-    n_ring = [p.c * p.Lr.size for p in pieces]
-    int_base = np.concatenate([[0], np.cumsum(n_int)]).astype(np.int64)
-    NI = int(int_base[-1])
-    ring_base = NI + np.concatenate([[0], np.cumsum(n_ring)]).astype(np.int64)
-    NR = int(ring_base[-1]) - NI
+        errs = (b.err_u, b.err_v, b.err_d) if keep.size == len(b.cells) else (b.err_u[keep], b.err_v[keep], b.err_d[keep])
+        max_dev = max(max_dev, *(float(e.max()) for e in errs))
+    # first interior and first ring vertex of each piece (Python ints: a handful of pieces)
+    int_base = [0, *itertools.accumulate(p.c * p.Li.size for p in pieces)]
+    NI = int_base[-1]
+    ring_base = [NI + r for r in (0, *itertools.accumulate(p.c * p.Lr.size for p in pieces))]
+    NR = ring_base[-1] - NI
     # vertex data: interior vertices of every piece, then ring vertices
     jit = _kernels.get("splinekit.tessellation._kernels")
     if jit is not None:

@@ -145,6 +145,7 @@ def tessellate_patches(patches, tol: float, angle_tol, weld_scale: float, *, ori
     labels, collapsed = prep.labels, prep.collapsed
     any_collapsed = collapsed.any(axis=1)
     multi = n_cells[patch_of] > TENSOR_CELLS
+    any_multi = bool(multi.any())
     nu, nv = counts_from_rates(prep.rates, tol, angle_tol)
     done_u = np.zeros(C, dtype=np.int64)  # counts each cell was last evaluated with
     done_v = np.zeros(C, dtype=np.int64)
@@ -189,7 +190,7 @@ def tessellate_patches(patches, tol: float, angle_tol, weld_scale: float, *, ori
                 grid.cells = members
                 new.append(grid)
         # larger multi-span patches: one tensor grid each, on the concatenated span samples
-        for P in np.unique(patch_of[todo[multi[todo]]]):
+        for P in np.unique(patch_of[todo[multi[todo]]]) if any_multi else ():
             cells = np.arange(first[P], first[P] + n_cells[P])
             shape = (n_cells[P] // nsv[P], nsv[P])
             counts_u = nu[cells].reshape(shape).max(axis=1)
