@@ -437,3 +437,71 @@ def weld_triangles(E0, FE, rep, NI, NR, T, FP):
             FP[row] = FE[f]
             row += 1
     return count, E0_kept, kept
+
+
+@njit(cache=True, nogil=True)
+def _bernstein_pair(p, x, B, D):
+    """Bernstein values ``B`` and first derivatives ``D`` ``(p + 1,)`` of degree ``p`` at ``x``
+    (the triangular recurrence of :func:`.batch._bernstein`, the same operations)."""
+    for i in range(p + 1):
+        B[i] = 0.0
+        D[i] = 0.0
+    B[0] = 1.0
+    y = 1.0 - x
+    for j in range(1, p):  # degree p - 1 first: the derivatives come from it
+        saved = 0.0
+        for k in range(j):
+            tmp = B[k]
+            B[k] = saved + y * tmp
+            saved = x * tmp
+        B[j] = saved
+    if p == 0:
+        return
+    for i in range(p):
+        D[i] -= p * B[i]
+        D[i + 1] += p * B[i]
+    saved = 0.0
+    for k in range(p):
+        tmp = B[k]
+        B[k] = saved + y * tmp
+        saved = x * tmp
+    B[p] = saved
+
+
+@njit(cache=True, nogil=True)
+def cell_points(nets, offset, box, g, s, t, sel, partial, S, Su, Sv):
+    """Points ``S`` (and, with ``partial``, first partials ``Su``, ``Sv`` in the surfaces' own
+    parameters) of the homogeneous Bézier cells ``nets`` ``(C, p + 1, q + 1, 4)`` (global cells
+    ``offset ..`` of the table ``box`` ``(*, 4)`` of cell rectangles): for every query ``i`` in
+    ``sel``, cell ``g[i]`` at local ``(s[i], t[i])``, written to row ``i`` of the ``(n, 3)``
+    outputs (:meth:`.batch.SurfaceBatch.partials`, one query at a time, no gathered copies)."""
+    p, q = nets.shape[1] - 1, nets.shape[2] - 1
+    Bu, Du = np.empty(p + 1), np.empty(p + 1)
+    Bv, Dv = np.empty(q + 1), np.empty(q + 1)
+    h, hu, hv = np.empty(4), np.empty(4), np.empty(4)
+    for i in sel:
+        _bernstein_pair(p, s[i], Bu, Du)
+        _bernstein_pair(q, t[i], Bv, Dv)
+        net = nets[g[i] - offset]
+        for c in range(4):
+            h[c] = 0.0
+            hu[c] = 0.0
+            hv[c] = 0.0
+        for a in range(p + 1):
+            for b in range(q + 1):
+                wb, wd = Bu[a] * Bv[b], Du[a] * Bv[b]
+                we = Bu[a] * Dv[b]
+                for c in range(4):
+                    x = net[a, b, c]
+                    h[c] += wb * x
+                    if partial:
+                        hu[c] += wd * x
+                        hv[c] += we * x
+        for d in range(3):
+            S[i, d] = h[d] / h[3]
+        if partial:
+            wu = h[3] * (box[g[i], 1] - box[g[i], 0])
+            wv = h[3] * (box[g[i], 3] - box[g[i], 2])
+            for d in range(3):
+                Su[i, d] = (hu[d] - hu[3] * S[i, d]) / wu
+                Sv[i, d] = (hv[d] - hv[3] * S[i, d]) / wv

@@ -13,6 +13,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.sparse import csr_matrix
 
+from .. import _kernels
 from .cells import bezier_matrix, cells_of_patches
 
 __all__ = ["CurveBatch", "SurfaceBatch"]
@@ -199,9 +200,14 @@ class SurfaceBatch:
             return tuple(out) if partial else out[0]
         g, s, t = self._cells(k, np.asarray(u, dtype=np.float64), np.asarray(v, dtype=np.float64))
         sets = self.set_of[g]
-        for c in np.unique(sets):
+        jit = _kernels.get("splinekit.tessellation._kernels")
+        for c in np.flatnonzero(np.bincount(sets, minlength=len(self.cellsets))):
             sel = np.flatnonzero(sets == c) if len(self.cellsets) > 1 else np.arange(n)
             cs = self.cellsets[c]
+            if jit is not None:  # one query at a time, compiled, straight into the outputs
+                S, Su, Sv = out if partial else (out[0], out[0], out[0])
+                jit.cell_points(cs.nets, int(self.offsets[c]), self.box, g, s, t, sel, partial, S, Su, Sv)
+                continue
             table = cs.nets.reshape(-1, 4)  # (cells * (p + 1) * (q + 1), 4) homogeneous
             m = (cs.p + 1) * (cs.q + 1)
             for lo in range(0, sel.size, CHUNK):

@@ -46,7 +46,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .. import limits
+from .. import _kernels, limits
 from .._signals import reraise_interrupt
 from ..errors import BackendError, ParameterError
 from ..tolerances import WELD
@@ -276,6 +276,9 @@ def _tessellate_trimmed(prep, tol: float, angle_tol) -> Tessellation:
     faces, size = prep.faces, prep.size
     batch, uses, groups, edge_tol = prep.batch, prep.uses, prep.groups, prep.edge_tol
     grids = face_grids(batch, tol, angle_tol, prep.bounds, prep.memo)
+    # the compiled kernels (scattered surface evaluation, welds) serve once loaded; a grid point
+    # costs the numpy path several evaluations and its share of the triangulation
+    _kernels.load("splinekit.tessellation._kernels", work=4.0 * sum(g.us.size * g.vs.size for g in grids), min_work=0)
     scales = np.stack([g.scale for g in grids])
     samples = sample_groups(uses, groups, scales, tol, angle_tol, batch, prep.pcurves, prep.memo, prep.affine)
     vid_of_group, edge_xyz = _edge_vertices(samples, size, edge_tol, prep.memo)
