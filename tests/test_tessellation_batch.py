@@ -16,7 +16,7 @@ def kernel_path(request, monkeypatch):
     if request.param == "1":
         pytest.importorskip("numba")
         monkeypatch.delenv("SPLINEKIT_NUMBA", raising=False)
-        assert _kernels.load("splinekit.tessellation._kernels") is not None
+        assert _kernels.load("splinekit.tessellation._batch_kernels") is not None
     else:
         monkeypatch.setenv("SPLINEKIT_NUMBA", "0")
     return request.param
@@ -45,3 +45,25 @@ def test_points_and_partials_match_the_surfaces_own_evaluators(kernel_path):
         assert np.allclose(S[sel], D[0, 0], rtol=0, atol=1e-13 * scale)
         assert np.allclose(Su[sel], D[1, 0], rtol=0, atol=1e-11 * scale)
         assert np.allclose(Sv[sel], D[0, 1], rtol=0, atol=1e-11 * scale)
+
+
+def test_cell_location_is_the_same_on_both_paths(monkeypatch):
+    pytest.importorskip("numba")
+    faces = primitives.torus(2.0, 0.6).faces + primitives.plate_with_holes(40.0, 30.0, 5.0, [(10, 10, 4)]).faces
+    batch = SurfaceBatch([f.surface for f in faces])
+    rng = np.random.default_rng(8)
+    n = 2000
+    k = rng.integers(0, len(faces), n)
+    dom = np.array([[*f.surface.domain[0], *f.surface.domain[1]] for f in faces])[k]
+    # inside, on the ends and a little outside the domains (pcurves of CAD files stray)
+    u = dom[:, 0] + (dom[:, 1] - dom[:, 0]) * rng.uniform(-0.01, 1.01, n)
+    v = dom[:, 2] + (dom[:, 3] - dom[:, 2]) * rng.uniform(-0.01, 1.01, n)
+    u[:40], v[40:80] = dom[:40, 1], dom[40:80, 2]
+    got = []
+    for env in ("0", "1"):
+        monkeypatch.setenv("SPLINEKIT_NUMBA", env)
+        if env == "1":
+            assert _kernels.load("splinekit.tessellation._batch_kernels") is not None
+        got.append(batch._cells(k, u, v))
+    for a, b in zip(*got):
+        assert np.array_equal(a, b)

@@ -278,7 +278,9 @@ def _tessellate_trimmed(prep, tol: float, angle_tol) -> Tessellation:
     grids = face_grids(batch, tol, angle_tol, prep.bounds, prep.memo)
     # the compiled kernels (scattered surface evaluation, welds) serve once loaded; a grid point
     # costs the numpy path several evaluations and its share of the triangulation
-    _kernels.load("splinekit.tessellation._kernels", work=4.0 * sum(g.us.size * g.vs.size for g in grids), min_work=0)
+    work = 4.0 * sum(g.us.size * g.vs.size for g in grids)
+    for module in ("splinekit.tessellation._kernels", "splinekit.tessellation._batch_kernels"):
+        _kernels.load(module, work=work, min_work=0)
     scales = np.stack([g.scale for g in grids])
     samples = sample_groups(uses, groups, scales, tol, angle_tol, batch, prep.pcurves, prep.memo, prep.affine)
     vid_of_group, edge_xyz = _edge_vertices(samples, size, edge_tol, prep.memo)
