@@ -110,6 +110,40 @@ the inside/outside labelling 0.12 ms, the loops 0.11 ms: no stage dominates, and
 same part in 1.7 ms (the box in 0.5 ms). 10x needs a compiled per-call driver, not more numpy
 batching.
 
+Natural-domain faces and the fixed cost of the patch path, later session (idle machine at the
+start, load average 4-6 later; best CPU times):
+
+* Patch sets (part 1 sphere at 1e-1, one pilot round, no refinement): 825 Python-level calls per
+  tessellation, of which the pole normals (Bernstein tables and a limit-normal kernel call for
+  four points per call) 0.13 ms, the collapsed-edge pins 0.06 ms (a loop over the four cell
+  edges), the a-priori counts 0.05 ms (a loop over cell sets), the grouping sort 0.02 ms. Cut: a
+  pole's welded vertex is a corner of its cells at every tolerance, so the limit normals at every
+  cell's corners are computed once and kept with the patch set; the pins are built in one pass
+  over the (cell, edge) pairs; the counts' tolerance-independent factors are kept with the patch
+  set (one division per call); a round whose cells share one (set, nu, nv) skips the sort. 564
+  calls, 0.54 -> 0.39-0.42 ms on the idle machine (OCC 4.6-4.8 ms: 8.2x -> 11-12x).
+* B-rep sphere and torus (one face bounded by its natural domain: a seam and pole edges, no
+  edge shared with another face): they went through the trimmed path (edge sampling, Triangle,
+  the inside/outside labelling) for what is an untrimmed patch. Such faces now go to the patch
+  path (``splinekit/tessellation/natural.py``: the seam welded and the poles collapsed there,
+  the face's ``reversed`` applied, no volume-based turning). A first try sent the one 8-cell
+  NURBS through the patch path's multi-span tensor grid: 2.7 ms, ten sparse collocation
+  matrices built per call (0.8 ms of design-matrix set-up each); patches of at most 16 cells now
+  go cell by cell like a Bézier patch set (the 12 x 12 bicubic net, 81 cells, stays a tensor
+  grid: 17 ms against 24 by cells at 1e-3). Sphere 1e-1: 3.1 -> 0.44-0.48 ms; torus 3.5 ->
+  0.41 ms; at 1e-4 the sphere 12.5 -> 4.8 ms, the torus 14.1 -> 7.1 ms.
+* Filleted box (26 trimmed faces) at 1e-4, 12,716 triangles, one Triangle round (the interior
+  grids need no refinement): Triangle ~16%, the scattered surface evaluations (the measured
+  counts of the interior grids, the grid points, the measurement at edge midpoints and triangle
+  centres, the normals' partials) ~35-40%, the grid points' clearance test (a k-d tree) ~10%,
+  the labelling's components ~5%; the rest is ~1,800 numpy reductions and copies. The
+  evaluations now run compiled once the kernels are loaded (``_batch_kernels``: the query's
+  cell located and its point and partials combined one query at a time, 3.8x numpy's sparse
+  product at 20k queries, 10x at 20): 41-44 -> 32-35 ms at load 4-5. 10x OCC at 1e-4 (OCC ~180 ms)
+  needs ~18 ms: what is left is spread over Triangle, the clearance test and the numpy glue of
+  the measurement round (no stage above a fifth); a compiled clearance test on the tensor grid
+  (rasterize the trims) and a compiled measurement round are the next steps.
+
 Last run (the session before, load average 15-18 on 2 cores, CPU times, best of N; time ratio = OCC's
 time / splinekit's at the same measured deviation; triangle ratio = splinekit's / OCC's):
 
@@ -593,6 +627,7 @@ def brep_main(args):
             for _ in range(repeats):
                 for f in faces:
                     f._cache.pop("tessellate", None)
+                    f.surface._cache.pop("tessellate_patches", None)  # faces meshed by the patch path
                 t0 = clock()
                 sk.tessellate(obj, tol)
                 cold.append(clock() - t0)
