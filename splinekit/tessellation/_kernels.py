@@ -437,4 +437,3 @@ def weld_triangles(E0, FE, rep, NI, NR, T, FP):
             FP[row] = FE[f]
             row += 1
     return count, E0_kept, kept
-

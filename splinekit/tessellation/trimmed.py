@@ -1,7 +1,9 @@
 """Watertight tessellation of trimmed faces, shells and solids.
 
 Design (whole-array work; Python loops run over faces, edges and refinement rounds, never over
-points or triangles):
+points or triangles). Faces bounded by their natural domain that share no edge with another face
+(a whole sphere or torus: only seams and poles) need none of the steps below: they are meshed by
+the patch path (:mod:`.natural`), the others as follows.
 
 1. Interior grid (:mod:`.face_grids`). Each face's surface is cut into Bézier cells
    (:mod:`.cells`); the same a-priori bounds on the second derivatives that size the untrimmed
