@@ -4,6 +4,7 @@ Run from the repository root::
 
     PYTHONPATH=$PWD python benchmarks/bench_tessellate_pairs.py            # 1e-1 ... 1e-4
     PYTHONPATH=$PWD python benchmarks/bench_tessellate_pairs.py --tols 1e-1,1e-2 --calls 40
+    PYTHONPATH=$PWD python benchmarks/bench_tessellate_pairs.py --quick    # 1e-1 and 1e-2, 10 calls
 
 :mod:`bench_tessellate` times each mesher in its own block of calls; on a machine shared with
 other jobs (load averages of 4-16 on 2 cores while this was written) the two blocks meet
@@ -71,7 +72,10 @@ def main():
     ap.add_argument("--tols", default="1e-1,1e-2,1e-3,1e-4", help="tolerances / model size (the B-rep sphere and torus stop at 1e-3)")
     ap.add_argument("--calls", type=int, default=30, help="calls per row (each way)")
     ap.add_argument("--block", type=int, default=1, help="calls in a row before switching (default 1: strictly alternating)")
+    ap.add_argument("--quick", action="store_true", help="1e-1 and 1e-2 only, 10 calls each way")
     args = ap.parse_args()
+    if args.quick:
+        args.tols, args.calls = "1e-1,1e-2", 10
     tols = [float(x) for x in args.tols.split(",")]
     print(f"# splinekit vs BRepMesh, alternating blocks of {args.block} call(s) (load average {os.getloadavg()[0]:.1f})\n")
     print("| part | tol / size | triangles | OCC triangles | dev / tol | OCC dev / tol | time | OCC time | time ratio |")
