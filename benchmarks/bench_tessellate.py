@@ -125,6 +125,62 @@ face gathering, the cached preparation's lookup, the memory budget check, the ke
 which this benchmark sets). The box's 13 us are ``tessellate``'s front (~6-8 us) and
 ``Tessellation._build`` (~6 us).
 
+Natural-domain faces and the fixed cost of the patch path, later session (idle machine at the
+start, load average 4-6 later; best CPU times):
+
+* Patch sets (part 1 sphere at 1e-1, one pilot round, no refinement): 825 Python-level calls per
+  tessellation, of which the pole normals (Bernstein tables and a limit-normal kernel call for
+  four points per call) 0.13 ms, the collapsed-edge pins 0.06 ms (a loop over the four cell
+  edges), the a-priori counts 0.05 ms (a loop over cell sets), the grouping sort 0.02 ms. Cut: a
+  pole's welded vertex is a corner of its cells at every tolerance, so the limit normals at every
+  cell's corners are computed once and kept with the patch set; the pins are built in one pass
+  over the (cell, edge) pairs; the counts' tolerance-independent factors are kept with the patch
+  set (one division per call); a round whose cells share one (set, nu, nv) skips the sort. 564
+  calls, 0.54 -> 0.39-0.42 ms on the idle machine (OCC 4.6-4.8 ms: 8.2x -> 11-12x).
+* B-rep sphere and torus (one face bounded by its natural domain: a seam and pole edges, no
+  edge shared with another face): they went through the trimmed path (edge sampling, Triangle,
+  the inside/outside labelling) for what is an untrimmed patch. Such faces now go to the patch
+  path (``splinekit/tessellation/natural.py``: the seam welded and the poles collapsed there,
+  the face's ``reversed`` applied, no volume-based turning). A first try sent the one 8-cell
+  NURBS through the patch path's multi-span tensor grid: 2.7 ms, ten sparse collocation
+  matrices built per call (0.8 ms of design-matrix set-up each); patches of at most 16 cells now
+  go cell by cell like a Bézier patch set (the 12 x 12 bicubic net, 81 cells, stays a tensor
+  grid: 17 ms against 24 by cells at 1e-3). Sphere 1e-1: 3.1 -> 0.44-0.48 ms; torus 3.5 ->
+  0.41 ms; at 1e-4 the sphere 12.5 -> 4.8 ms, the torus 14.1 -> 7.1 ms.
+* Filleted box (26 trimmed faces) at 1e-4, 12,716 triangles, one Triangle round (the interior
+  grids need no refinement): Triangle ~16%, the scattered surface evaluations (the measured
+  counts of the interior grids, the grid points, the measurement at edge midpoints and triangle
+  centres, the normals' partials) ~35-40%, the grid points' clearance test (a k-d tree) ~10%,
+  the labelling's components ~5%; the rest is ~1,800 numpy reductions and copies. The
+  evaluations now run compiled once the kernels are loaded (``_batch_kernels``: the query's
+  cell located and its point and partials combined one query at a time, 3.8x numpy's sparse
+  product at 20k queries, 10x at 20): 41-44 -> 32-35 ms at load 4-5. 10x OCC at 1e-4 (OCC ~180 ms)
+  needs ~18 ms: what is left is spread over Triangle, the clearance test and the numpy glue of
+  the measurement round (no stage above a fifth); a compiled clearance test on the tensor grid
+  (rasterize the trims) and a compiled measurement round are the next steps.
+
+This session's runs (load average 3.8-4.6 on 2 cores; CPU times, best of N; ``--patches --tols
+1e-1,1e-2,1e-3`` and ``--brep --quick``; time ratio = OCC's time / splinekit's at the same
+measured deviation):
+
+* part 1, NURBS sphere (8 patches): 1e-1 11.9x (0.4 ms against 4.8), 1e-2 27x, 1e-3 75x, with
+  0.45-0.54 of OCC's triangles; models b and c at 1e-3: 216x and 38x;
+* part 2, B-rep sphere 21x / 38x / 98x (1e-1 / 1e-2 / 1e-3; 0.5, 0.5, 0.8 ms), torus 41x / 38x
+  / 78x (0.4, 0.4, 1.3 ms), with 0.30-0.55 of OCC's triangles. At 1e-1 OCC's deflection search
+  now lands lower than before (0.06 of the tolerance for the sphere: 1,304 triangles in 9.6 ms)
+  because splinekit's mesh is finer than the tolerance asks (deviation 0.09 of it: the patch
+  path's pilot grid of 8 steps per cell is already within it);
+* filleted box (26 trimmed faces) 1.08x / 0.99x / 1.83x / 5.8x / 14.7x (1e-1 ... 1e-5: 6.3,
+  6.6, 9.4, 34, 275 ms), 0.41-0.54 of OCC's triangles; small analytic parts unchanged (the
+  planar and ruled faces are another engineer's this session).
+* ``bench_tessellate_pairs.py`` (the same parts, OCC matched the same way, calls in alternating
+  blocks of 5, load 4.0-4.5): NURBS sphere 10.3x / 24.6x / 72x / 172x (1e-1 ... 1e-4), B-rep
+  sphere 22x / 39x / 105x, torus 31x / 34x / 73x, filleted box 1.0x / 0.9x / 1.9x / 5.4x.
+  Strictly alternating (``--block 1``) the small calls lose about a third: the NURBS sphere at
+  1e-1 takes 0.72 ms after each OCC call against 0.46 ms in a row (6.2x), the B-rep sphere 1.08
+  ms (8.9x), the torus 0.90 ms (15.5x), while OCC's own times barely move: a call that follows
+  OCC's finds the caches cold, so the sub-millisecond calls' ratio depends on what ran before.
+
 Last run (the session before, load average 15-18 on 2 cores, CPU times, best of N; time ratio = OCC's
 time / splinekit's at the same measured deviation; triangle ratio = splinekit's / OCC's):
 
@@ -614,6 +670,7 @@ def brep_main(args):
             for _ in range(repeats):
                 for f in faces:
                     f._cache.pop("tessellate", None)
+                    f.surface._cache.pop("tessellate_patches", None)  # faces meshed by the patch path
                 t0 = clock()
                 sk.tessellate(obj, tol)
                 cold.append(clock() - t0)

@@ -55,6 +55,7 @@ BENCHMARKS = {
     "subdiv_compose": (["--quick"], 600),
     "sweep": (["--quick"], 900),
     "tessellate": (["--quick"], 1200),
+    "tessellate_pairs": (["--quick"], 600),
 }
 RATIO = re.compile(PATTERN)
 SKIPPED = re.compile(r"^skipped peer: (?P<what>.*)$")

@@ -23,7 +23,7 @@ from splinekit.brep import primitives
 from splinekit.tessellation import fast_mesh
 from splinekit.tessellation.arcs import CircleMap
 from splinekit.tessellation import trimmed
-from splinekit.tessellation.trimmed import _general, _Prepared
+from splinekit.tessellation.trimmed import _Prepared, _tessellate_trimmed
 
 FAST = ["box", "box_with_hole", "plate_with_holes", "cylinder"]
 MAKE = {
@@ -122,7 +122,7 @@ def test_no_more_triangles_than_the_general_path(name, rel):
     solid = MAKE[name][0]()
     fast = sk.tessellate(solid, rel, relative=True)
     prep = _Prepared.of(solid.faces, solid.faces[0]._cache["diagonal"][1])
-    general = _general(prep, solid.faces, fast.tolerance, 0.5, prep.size)
+    general = _tessellate_trimmed(prep, fast.tolerance, 0.5)
     assert general.max_deviation <= fast.tolerance * (1 + 1e-9)
     assert fast.n_faces <= general.n_faces
 
@@ -297,7 +297,7 @@ def test_fast_path_serves_every_tolerance(name, monkeypatch, path):
     solid = MAKE[name][0]()
     sk.tessellate(solid, 1e-2, relative=True)  # the plan
     calls = []
-    monkeypatch.setattr(trimmed, "_general", lambda *a: calls.append(a))
+    monkeypatch.setattr(trimmed, "_tessellate_trimmed", lambda *a: calls.append(a))
     for rel in np.geomspace(1e-6, 0.5, 40):
         for angle in (0.5, None, 0.1):
             mesh = sk.tessellate(solid, rel, relative=True, angle_tolerance=angle)

@@ -12,6 +12,7 @@ path's results bit for bit.
 from __future__ import annotations
 
 import functools
+import itertools
 
 import numpy as np
 
@@ -42,6 +43,20 @@ def _edge_locals(n, m):
     for a in out:
         a.setflags(write=False)
     return out
+
+
+@functools.lru_cache(maxsize=256)
+def _edge_slots(n, m):
+    """``(slots (4, max(n, m) + 1), first (4,))``: the ring slots (:func:`_ring_split`) of the
+    local vertices along the four cell edges of :func:`_edge_locals`, rows padded with their
+    last value, and each edge's first slot (cached, read-only)."""
+    slot = _ring_split(n, m)[2]
+    width = max(n, m) + 1
+    out = np.stack([np.pad(slot[loc], (0, width - loc.size), mode="edge") for loc in _edge_locals(n, m)])
+    first = out[:, 0].copy()
+    for a in (out, first):
+        a.setflags(write=False)
+    return out, first
 
 
 @functools.lru_cache(maxsize=256)
@@ -111,10 +126,14 @@ class _Piece:
         col = collapsed[b.cells[keep]]
         if col.any():
             if b.kind == "cells":
-                for e, loc in enumerate(_edge_locals(n, m)):
-                    # every collapsed edge e of a cell k: its ring vertices -> the edge's first one
-                    r = (np.flatnonzero(col[:, e])[:, None] * self.Lr.size + slot[loc]).ravel()
-                    pins.append(np.column_stack([r, np.repeat(r[:: loc.size], loc.size)]))
+                # every collapsed edge e of a cell k: its ring vertices -> the edge's first one
+                edge_slots, edge_first = _edge_slots(n, m)
+                k, e = np.nonzero(col)
+                base = k * self.Lr.size
+                L = np.where(e < 2, n + 1, m + 1)[:, None]
+                r = base[:, None] + edge_slots[e]  # (pairs, max(n, m) + 1): rows padded past their L
+                live = np.arange(r.shape[1]) < L
+                pins.append(np.column_stack([r[live], np.repeat(base + edge_first[e], L.ravel())]))
             else:
                 cu, cv = b.counts
                 r0s, c0s = np.concatenate([[0], np.cumsum(cu)]), np.concatenate([[0], np.cumsum(cv)])
@@ -242,13 +261,13 @@ def assemble(grids, record, collapsed, span_of, cell_index, tol, weld_tol):
         if keep.size == 0:
             continue
         pieces.append(_Piece(b, keep, collapsed, span_of))
-        max_dev = max(max_dev, float(np.max(b.err_u[keep])), float(np.max(b.err_v[keep])), float(np.max(b.err_d[keep])))
-    n_int = [p.c * p.Li.size for p in pieces]
-    n_ring = [p.c * p.Lr.size for p in pieces]
-    int_base = np.concatenate([[0], np.cumsum(n_int)]).astype(np.int64)
-    NI = int(int_base[-1])
-    ring_base = NI + np.concatenate([[0], np.cumsum(n_ring)]).astype(np.int64)
-    NR = int(ring_base[-1]) - NI
+        errs = (b.err_u, b.err_v, b.err_d) if keep.size == len(b.cells) else (b.err_u[keep], b.err_v[keep], b.err_d[keep])
+        max_dev = max(max_dev, *(float(e.max()) for e in errs))
+    # first interior and first ring vertex of each piece (Python ints: a handful of pieces)
+    int_base = [0, *itertools.accumulate(p.c * p.Li.size for p in pieces)]
+    NI = int_base[-1]
+    ring_base = [NI + r for r in (0, *itertools.accumulate(p.c * p.Lr.size for p in pieces))]
+    NR = ring_base[-1] - NI
     # vertex data: interior vertices of every piece, then ring vertices
     jit = _kernels.get("splinekit.tessellation._kernels")
     if jit is not None:

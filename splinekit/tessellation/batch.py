@@ -13,10 +13,13 @@ from __future__ import annotations
 import numpy as np
 from scipy.sparse import csr_matrix
 
+from .. import _kernels
 from .cells import bezier_matrix, cells_of_patches
 
 __all__ = ["CurveBatch", "SurfaceBatch"]
 
+KERNELS = "splinekit.tessellation._batch_kernels"
+"""The compiled kernels of the surface batch (:mod:`._batch_kernels`), used once loaded."""
 CHUNK = 1 << 14
 """Queries evaluated per block (bounds the temporaries' memory)."""
 SPARSE_FROM = 2048
@@ -64,6 +67,8 @@ class _Breaks:
         # all breaks on one increasing axis: object k occupies [2 k, 2 k + 1]
         self.key = np.concatenate([2 * k + (b[:-1] - b[0]) / (b[-1] - b[0]) for k, b in enumerate(breaks)])
         self.start = np.concatenate([[0], np.cumsum(self.count)[:-1]]).astype(np.int64)
+        # the arrays :meth:`locate` reads, for the compiled kernel
+        self.table = (self.key, self.lo, self.hi, self.start, self.count, self.a, self.b)
 
     def locate(self, k, t):
         """``(piece (n,), local (n,))``: the piece of object ``k`` holding ``t`` (by object
@@ -177,6 +182,11 @@ class SurfaceBatch:
         self.box = box
 
     def _cells(self, k, u, v):
+        jit = _kernels.get(KERNELS)
+        if jit is not None:
+            g, s, t = np.empty(k.size, dtype=np.int64), np.empty(k.size), np.empty(k.size)
+            jit.locate_cells(k, u, v, self.lu.table, self.lv.table, self.first, self.nsv, g, s, t)
+            return g, s, t
         iu, s = self.lu.locate(k, u)
         iv, t = self.lv.locate(k, v)
         iu -= self.lu.start[k]
@@ -199,9 +209,14 @@ class SurfaceBatch:
             return tuple(out) if partial else out[0]
         g, s, t = self._cells(k, np.asarray(u, dtype=np.float64), np.asarray(v, dtype=np.float64))
         sets = self.set_of[g]
-        for c in np.unique(sets):
+        jit = _kernels.get(KERNELS)
+        for c in np.flatnonzero(np.bincount(sets, minlength=len(self.cellsets))):
             sel = np.flatnonzero(sets == c) if len(self.cellsets) > 1 else np.arange(n)
             cs = self.cellsets[c]
+            if jit is not None:  # one query at a time, compiled, straight into the outputs
+                S, Su, Sv = out if partial else (out[0], out[0], out[0])
+                jit.cell_points(cs.nets, int(self.offsets[c]), self.box, g, s, t, sel, partial, S, Su, Sv)
+                continue
             table = cs.nets.reshape(-1, 4)  # (cells * (p + 1) * (q + 1), 4) homogeneous
             m = (cs.p + 1) * (cs.q + 1)
             for lo in range(0, sel.size, CHUNK):

@@ -15,7 +15,7 @@ import numpy as np
 from .cells import edge_samples, second_derivative_bounds
 from .welding import close_pairs, components
 
-__all__ = ["MAX_COUNT", "initial_counts", "node_groups", "propagate"]
+__all__ = ["MAX_COUNT", "count_rates", "counts_from_rates", "initial_counts", "node_groups", "propagate"]
 
 MAX_COUNT = 4096
 """Largest number of segments per cell and direction."""
@@ -65,20 +65,34 @@ def node_groups(cellsets, patch_of, span_of, nsv, weld_tol):
 def initial_counts(cellsets, tol, angle_tol, bounds=None):
     """A-priori sample counts ``(nu, nv)`` per global cell (``bounds``: the cell sets'
     :func:`.cells.second_derivative_bounds` when already computed; they do not depend on ``tol``)."""
-    nu, nv = [], []
+    return counts_from_rates(count_rates(cellsets, bounds), tol, angle_tol)
+
+
+def count_rates(cellsets, bounds=None):
+    """``(4, C)`` tolerance-independent factors of the a-priori counts of every global cell:
+    the chordal ones ``sqrt((Muu + Muv) / 4)``, ``sqrt((Mvv + Muv) / 4)`` (steps times
+    ``sqrt(tol)``) and the angular ones ``Muu / Lu``, ``Mvv / Lv`` (steps times the angle
+    tolerance; 0 where the first derivative bound is 0). NaN marks an unbounded cell."""
+    rows = []
     for i, cs in enumerate(cellsets):
         Muu, Muv, Mvv, Lu, Lv = second_derivative_bounds(cs) if bounds is None else bounds[i]
         # h_u^2 (Muu + Muv) / 8 + h_v^2 (Mvv + Muv) / 8 >= the bound (h_u^2 Muu + 2 h_u h_v Muv + h_v^2 Mvv) / 8
-        a = np.sqrt((Muu + Muv) / (4.0 * tol))
-        b = np.sqrt((Mvv + Muv) / (4.0 * tol))
-        if angle_tol is not None:
-            with np.errstate(divide="ignore", invalid="ignore"):
-                a = np.maximum(a, np.where(Lu > 0, Muu / (Lu * angle_tol), 0.0))
-                b = np.maximum(b, np.where(Lv > 0, Mvv / (Lv * angle_tol), 0.0))
-        # NaN (an unbounded cell) counts as the most steps; clip takes +inf to MAX_COUNT
-        nu.append(np.clip(np.ceil(np.where(np.isnan(a), MAX_COUNT, a)), 1, MAX_COUNT))
-        nv.append(np.clip(np.ceil(np.where(np.isnan(b), MAX_COUNT, b)), 1, MAX_COUNT))
-    return np.concatenate(nu).astype(np.int64), np.concatenate(nv).astype(np.int64)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            rows.append(np.stack([np.sqrt((Muu + Muv) / 4.0), np.sqrt((Mvv + Muv) / 4.0),
+                                  np.where(Lu > 0, Muu / Lu, 0.0), np.where(Lv > 0, Mvv / Lv, 0.0)]))  # fmt: skip
+    return np.concatenate(rows, axis=1) if rows else np.zeros((4, 0))
+
+
+def counts_from_rates(rates, tol, angle_tol):
+    """``(nu, nv)`` int64 counts from :func:`count_rates` at the chordal tolerance ``tol`` and
+    the angle tolerance ``angle_tol`` (radians or None)."""
+    ab = rates[:2] / np.sqrt(tol)
+    if angle_tol is not None:
+        ab = np.maximum(ab, rates[2:] / angle_tol)  # NaN (unbounded) propagates
+    # NaN (an unbounded cell) counts as the most steps; clip takes +inf to MAX_COUNT
+    ab[np.isnan(ab)] = MAX_COUNT
+    counts = np.clip(np.ceil(ab), 1, MAX_COUNT).astype(np.int64)
+    return counts[0], counts[1]
 
 
 def propagate(nu, nv, labels):

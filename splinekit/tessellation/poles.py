@@ -21,11 +21,27 @@ class CellIndex:
         self.cellsets, self.offsets = cellsets, offsets
         self.first, self.n_cells, self.nsv, self.box_of = first, n_cells, nsv, box_of
         self.set_of = np.repeat(np.arange(len(cellsets)), np.diff(offsets))
+        self.any_multi = bool((n_cells > 1).any())
+        self._corners = None  # (C, 4, 3) limit normals at the cells' corners, made at first use
+
+    def corner_normals(self) -> np.ndarray:
+        """``(C, 4, 3)`` limit normals at every cell's corners ``(s, t)`` = (0, 0), (0, 1), (1, 0),
+        (1, 1) (:func:`_limit_normals`), computed once: a pole's welded vertex is a corner of
+        its cells at every tolerance, so the normals there need no evaluation per call."""
+        if self._corners is None:
+            C = int(self.offsets[-1])
+            g = np.repeat(np.arange(C), 4)
+            s = np.tile([0.0, 0.0, 1.0, 1.0], C)
+            t = np.tile([0.0, 1.0, 0.0, 1.0], C)
+            out = np.empty((4 * C, 3))
+            _limit_normals(out, np.arange(4 * C), g, s, t, self)
+            self._corners = out.reshape(C, 4, 3)
+        return self._corners
 
     def locate(self, P, u, v):
         """Global cell ``(k,)`` and local ``(s, t)`` of the points ``(P[i], u[i], v[i])``."""
         g = self.first[P]  # right for single-cell patches
-        for p in np.unique(P[self.n_cells[P] > 1]):
+        for p in np.unique(P[self.n_cells[P] > 1]) if self.any_multi else ():
             sel = np.flatnonzero(P == p)
             ns_v = self.nsv[p]
             ns_u = self.n_cells[p] // ns_v
@@ -71,9 +87,23 @@ def _cross(a, b):
 def fix_weak_normals(N, weak, UV, VP, cells: CellIndex):
     """Limit normals where ``Su x Sv`` vanishes (a collapsed edge such as a pole): the
     direction ``Su x Suv + Suv x Sv`` (the limit of ``Su x Sv / v`` at ``v -> 0``),
-    oriented like the normal at a point slightly inside the cell."""
+    oriented like the normal at a point slightly inside the cell. Points at a cell's corner
+    (where welding leaves a pole's vertex) take the cell's cached corner normals."""
     idx = np.flatnonzero(weak)
     g, s, t = cells.locate(VP[idx], UV[idx, 0], UV[idx, 1])
+    rs, rt = np.rint(s), np.rint(t)
+    corner = (np.abs(s - rs) <= 1e-12) & (np.abs(t - rt) <= 1e-12) & (np.abs(rs - 0.5) == 0.5) & (np.abs(rt - 0.5) == 0.5)
+    at = np.flatnonzero(corner)
+    if at.size:
+        N[idx[at]] = cells.corner_normals()[g[at], (2 * rs[at] + rt[at]).astype(np.int64)]
+    rest = np.flatnonzero(~corner)
+    if rest.size:
+        _limit_normals(N, idx[rest], g[rest], s[rest], t[rest], cells)
+
+
+def _limit_normals(N, rows, g, s, t, cells: CellIndex):
+    """Write into ``N[rows]`` the limit normals of cells ``g`` at local ``(s, t)`` (all ``(k,)``),
+    see :func:`fix_weak_normals`."""
     sets = cells.set_of[g]
     jit = _kernels.get("splinekit.tessellation._kernels")
     for k in np.unique(sets):
@@ -83,7 +113,7 @@ def fix_weak_normals(N, weak, UV, VP, cells: CellIndex):
         s_in, t_in = s[sel] + 1e-3 * (0.5 - s[sel]), t[sel] + 1e-3 * (0.5 - t[sel])
         if jit is not None:
             Bu, Bv = _partial_tables(np.concatenate([s[sel], s_in]), np.concatenate([t[sel], t_in]), cs.p, cs.q)
-            N[idx[sel]] = jit.limit_normals(nets, np.ascontiguousarray(Bu), np.ascontiguousarray(Bv))
+            N[rows[sel]] = jit.limit_normals(nets, np.ascontiguousarray(Bu), np.ascontiguousarray(Bv))
             continue
         # the points and the points slightly inside, in one evaluation
         _, Su, Sv, Suv = _cell_partials(np.concatenate([nets, nets]), np.concatenate([s[sel], s_in]),
@@ -95,5 +125,4 @@ def fix_weak_normals(N, weak, UV, VP, cells: CellIndex):
         size = np.linalg.norm(alt, axis=1)
         tiny = size <= 1e-14 * (np.linalg.norm(ref, axis=1) + 1e-300)
         alt[tiny] = ref[tiny]
-        N[idx[sel]] = alt / np.maximum(np.linalg.norm(alt, axis=1), 1e-300)[:, None]
-
+        N[rows[sel]] = alt / np.maximum(np.linalg.norm(alt, axis=1), 1e-300)[:, None]

@@ -16,10 +16,11 @@ triangles):
    connected set of nodes takes the largest count of its members
    (:mod:`.counts`). Uniform samples of a whole edge are symmetric under
    reversal, so orientation does not matter.
-3. Evaluation (:mod:`.grids`): single-cell patches (Bézier patch sets) in batches
-   of equal degrees and counts as ``Bu @ net @ Bv^T`` (two products for the whole
-   batch); a multi-span patch as one tensor grid on the concatenation of its
-   spans' samples (banded collocation matrices). Each grid is evaluated at the
+3. Evaluation (:mod:`.grids`): the cells of single-cell patches (Bézier patch sets)
+   and of patches of at most ``TENSOR_CELLS`` cells in batches of equal degrees and
+   counts as ``Bu @ net @ Bv^T`` (two products for the whole batch); a larger
+   multi-span patch as one tensor grid on the concatenation of its spans' samples
+   (banded collocation matrices). Each grid is evaluated at the
    vertices (with first partials, for the normals), at the half-step points
    (edge midpoints, quad centres) and at the triangle centres, and one fused
    pass measures the deviations and normal angles per cell.
@@ -59,7 +60,7 @@ from .. import _kernels, limits
 from ..tolerances import WELD
 from .assembly import assemble, outward
 from .cells import cells_of_patches, second_derivative_bounds
-from .counts import MAX_COUNT, initial_counts, node_groups, propagate
+from .counts import MAX_COUNT, count_rates, counts_from_rates, node_groups, propagate
 from .grids import Grid
 from .poles import CellIndex
 from .result import Tessellation
@@ -74,6 +75,12 @@ BYTES_PER_TRIANGLE = 420
 """Peak memory per triangle of a tessellation (the sample grids of every round, the
 welding tables and the result), measured on the teapot at 1.6 and 5.5 million
 triangles (405-410 bytes); what :func:`splinekit.limits.check` is given."""
+TENSOR_CELLS = 16
+"""A patch of more Bézier cells than this is evaluated as one tensor grid on the concatenation of
+its spans' samples (banded collocation matrices, no welds along its knot lines); a smaller one
+goes cell by cell like a Bézier patch set, its cells' shared edges welded. The tensor grid's
+set-up (ten sparse collocation matrices) costs ~2.5 ms, five times a whole 8-cell sphere by cells;
+at 81 cells (a 12 x 12 bicubic net) the cells' welds cost more (24 against 17 ms at 1e-3)."""
 PILOT = 8
 """Largest per-direction count of the first (pilot) evaluation of a cell."""
 PILOT_TARGET = 0.8
@@ -105,7 +112,7 @@ class _Prepared:
         self.nsv = np.zeros(len(patches), dtype=np.int64)
         np.maximum.at(self.nsv, self.patch_of, self.span_of[:, 1] + 1)
         self.labels, self.collapsed = node_groups(cellsets, self.patch_of, self.span_of, self.nsv, weld_tol)
-        self.bounds = [second_derivative_bounds(cs) for cs in cellsets]
+        self.rates = count_rates(cellsets, [second_derivative_bounds(cs) for cs in cellsets])
         self.cell_index = CellIndex(cellsets, self.offsets, self.first, self.n_cells, self.nsv, self.box_of)
 
     @classmethod
@@ -122,12 +129,14 @@ class _Prepared:
         return prep
 
 
-def tessellate_patches(patches, tol: float, angle_tol, weld_scale: float) -> Tessellation:
+def tessellate_patches(patches, tol: float, angle_tol, weld_scale: float, *, orient: bool = True) -> Tessellation:
     """Tessellate validated 3-D spline patches (see :func:`splinekit.tessellation.tessellate`).
 
     ``tol`` is the absolute chordal tolerance, ``angle_tol`` radians or None,
     ``weld_scale`` the model size (bounding-box diagonal) used for welding. The
     tolerance-independent preparation is cached on the first patch (:class:`_Prepared`).
+    ``orient``: turn a closed body that faces inward outward (:func:`.assembly.outward`);
+    False keeps every patch's ``Su x Sv`` (B-rep faces, whose orientation is given).
     """
     weld_tol = WELD * weld_scale
     prep = _Prepared.of(patches, weld_tol)
@@ -135,8 +144,9 @@ def tessellate_patches(patches, tol: float, angle_tol, weld_scale: float) -> Tes
     patch_of, span_of, box_of, n_cells, first, nsv = prep.patch_of, prep.span_of, prep.box_of, prep.n_cells, prep.first, prep.nsv
     labels, collapsed = prep.labels, prep.collapsed
     any_collapsed = collapsed.any(axis=1)
-    multi = n_cells[patch_of] > 1
-    nu, nv = initial_counts(cellsets, tol, angle_tol, prep.bounds)
+    multi = n_cells[patch_of] > TENSOR_CELLS
+    any_multi = bool(multi.any())
+    nu, nv = counts_from_rates(prep.rates, tol, angle_tol)
     done_u = np.zeros(C, dtype=np.int64)  # counts each cell was last evaluated with
     done_v = np.zeros(C, dtype=np.int64)
     record = np.full(C, -1, dtype=np.int64)  # which grid holds each cell's latest evaluation
@@ -160,23 +170,27 @@ def tessellate_patches(patches, tol: float, angle_tol, weld_scale: float) -> Tes
         work = 4 * float((nu[todo].astype(np.float64) * nv[todo]).sum())
         _kernels.load("splinekit.tessellation._kernels", work=work, min_work=0)
         new = []
-        # single-cell patches: group by (cell set, nu, nv), evaluate each group at once
+        # cells evaluated as cells (single-cell and small patches): group by (cell set, nu, nv),
+        # evaluate each group at once
         single = todo[~multi[todo]]
         if single.size:
             # one int64 key per cell, ordered like the rows (set, nu, nv): counts are <= MAX_COUNT
             base = MAX_COUNT + 1
             key = (set_of[single] * base + nu[single]) * base + nv[single]
-            uniq, inverse = np.unique(key, return_inverse=True)
-            order = np.argsort(inverse, kind="stable")
-            bounds = np.searchsorted(inverse[order], np.arange(len(uniq) + 1))
-            for g, (s, n, m) in enumerate(zip(uniq // base**2, uniq // base % base, uniq % base)):
-                members = single[order[bounds[g] : bounds[g + 1]]]
+            if (key == key[0]).all():  # one group (a pilot round of one cell set): no sort
+                uniq, groups = key[:1], [single]
+            else:
+                uniq, inverse = np.unique(key, return_inverse=True)
+                order = np.argsort(inverse, kind="stable")
+                bounds = np.searchsorted(inverse[order], np.arange(len(uniq) + 1))
+                groups = [single[order[bounds[g] : bounds[g + 1]]] for g in range(len(uniq))]
+            for members, s, n, m in zip(groups, uniq // base**2, uniq // base % base, uniq % base):
                 flags = any_collapsed[offsets[s] : offsets[s + 1]]
                 grid = Grid.cells(cellsets[s], members - offsets[s], int(n), int(m), tol, angle_tol, weld_tol, flags)
                 grid.cells = members
                 new.append(grid)
-        # multi-span patches: one tensor grid each, on the concatenated span samples
-        for P in np.unique(patch_of[todo[multi[todo]]]):
+        # larger multi-span patches: one tensor grid each, on the concatenated span samples
+        for P in np.unique(patch_of[todo[multi[todo]]]) if any_multi else ():
             cells = np.arange(first[P], first[P] + n_cells[P])
             shape = (n_cells[P] // nsv[P], nsv[P])
             counts_u = nu[cells].reshape(shape).max(axis=1)
@@ -230,5 +244,5 @@ def tessellate_patches(patches, tol: float, angle_tol, weld_scale: float) -> Tes
         nu = np.where(over_u, np.maximum(grow_u, np.minimum(nu + 1, MAX_COUNT)), nu)
         nv = np.where(over_v, np.maximum(grow_v, np.minimum(nv + 1, MAX_COUNT)), nv)
     mesh, welded, V, T = assemble(grids, record, collapsed, span_of, prep.cell_index, tol, weld_tol)
-    return outward(mesh, welded, V, T)
+    return outward(mesh, welded, V, T) if orient else mesh
 

@@ -1,10 +1,12 @@
 """Watertight tessellation of trimmed faces, shells and solids.
 
-Face sets made only of planes and right circular cylinders bounded by straight segments and
-circle arcs (boxes, plates with holes, chamfered blocks, cylinders: most machined parts) take a
-fast path (:mod:`.fast_plan`, :mod:`.fast_mesh`): a tolerance-independent plan, built once per
-face set after the general path below has checked it on the first call, and per call only the
-circles' counts in closed form, ear clipping of the planes' boundary polygons and strips on the
+Faces bounded by their natural domain that share no edge with another face (a whole sphere or
+torus: only seams and poles) are meshed by the patch path (:mod:`.natural`). Face sets made only
+of planes and right circular cylinders bounded by straight segments and circle arcs (boxes,
+plates with holes, chamfered blocks, cylinders: most machined parts) take a fast path
+(:mod:`.fast_plan`, :mod:`.fast_mesh`): a tolerance-independent plan, built once per face set
+after the general path below has checked it on the first call, and per call only the circles'
+counts in closed form, ear clipping of the planes' boundary polygons and strips on the
 cylinders, with the same guarantees and the same ``max_deviation`` yardstick. Every other face
 set, and any call the fast path cannot keep a guarantee on, takes the general path whole.
 
@@ -54,7 +56,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .. import limits
+from .. import _kernels, limits
 from .._signals import reraise_interrupt
 from ..errors import BackendError, ParameterError
 from ..tolerances import WELD
@@ -65,6 +67,7 @@ from .face_grids import face_grids
 from .fast_mesh import fast_tessellation
 from .fast_plan import build_plan
 from .loops import Layout, LoopTable, gather_loops
+from .natural import concatenate, natural_faces, surfaces_of, tessellate_natural
 from .result import Tessellation
 from .surfaces import BYTES_PER_TRIANGLE
 from .untangle import crossing, untangle
@@ -150,7 +153,7 @@ def _densify(P, segs, step):
     return a[seg] + (b - a)[seg] * frac[:, None]
 
 
-def _without_crossings(faces, uses, batch, layout, pface, puv, pxyz, segs, owner):
+def _without_crossings(faces, index, uses, batch, layout, pface, puv, pxyz, segs, owner):
     """The boundary points' ``(u, v)`` ``(n, 2)``, where trims cross moved apart as far as the
     edges' own tolerances allow (:func:`.untangle.untangle`: the surface at a moved point's new
     ``(u, v)`` must lie within its edge's tolerance of its 3-D point); else ParameterError
@@ -169,7 +172,7 @@ def _without_crossings(faces, uses, batch, layout, pface, puv, pxyz, segs, owner
         if np.all(off <= weight[owner[k]]):
             return uv
     f = int(pface[segs[bad, 0]])
-    raise ParameterError(f"{_face_name(faces[f], f)}: its trimming loops cross or touch each other (or themselves)")
+    raise ParameterError(f"{_face_name(faces[f], index[f])}: its trimming loops cross or touch each other (or themselves)")
 
 
 def _half_edges(T):
@@ -223,10 +226,11 @@ class _Prepared:
     tolerance-independent memo of the edge sampler and the grids."""
 
     __slots__ = ("faces", "size", "batch", "bounds", "edge_tol", "uses", "pcurves", "groups", "table", "affine",
-                 "partials", "reversed", "memo")
+                 "partials", "reversed", "memo", "index", "natural", "rest")
 
-    def __init__(self, faces, size):
+    def __init__(self, faces, size, index=None):
         self.faces, self.size = tuple(faces), size
+        self.index = np.arange(len(faces)) if index is None else index  # the faces' numbers in messages
         self.batch = SurfaceBatch([face.surface for face in faces])
         self.bounds = [second_derivative_bounds(cs) for cs in self.batch.cellsets]
         self.edge_tol = max((e.tolerance for face in faces for e in face.edges), default=0.0)
@@ -241,6 +245,16 @@ class _Prepared:
         self.partials = self.batch.partials(np.arange(len(faces)), corner[0], corner[1])[1:]
         self.reversed = np.array([face.reversed for face in faces], dtype=bool)
         self.memo = {}
+        # faces bounded by their natural domain that share no edge go to the patch path
+        # (.natural); the others, if any, keep a preparation of their own (.rest)
+        natural = natural_faces(self.faces, self.uses, self.groups) if index is None else np.zeros(len(faces), bool)
+        self.natural = self.rest = None
+        if natural.any():
+            k = np.flatnonzero(natural)
+            self.natural = k, surfaces_of([faces[i] for i in k]), self.reversed[k]
+            if not natural.all():
+                k = np.flatnonzero(~natural)
+                self.rest = _Prepared([faces[i] for i in k], size, k)
 
     @classmethod
     def of(cls, faces, size):
@@ -259,12 +273,18 @@ def tessellate_faces(faces, tol: float, angle_tol, size: float) -> Tessellation:
     :func:`splinekit.tessellation.tessellate`). ``tol``: absolute chordal tolerance;
     ``angle_tol``: radians or None; ``size``: model size (bounding-box diagonal)."""
     prep = _Prepared.of(faces, size)
+    if prep.natural is not None:  # faces bounded by their natural domain (a whole sphere, torus): .natural
+        k, surfaces, flip = prep.natural
+        mesh = tessellate_natural(surfaces, flip, tol, angle_tol, size)
+        if prep.rest is None:
+            return mesh
+        return concatenate([(mesh, k), (_tessellate_trimmed(prep.rest, tol, angle_tol), prep.rest.index)], tol)
     plan = prep.memo.get("fast", False)  # False: not decided yet for this face set
     if plan:
         mesh = fast_tessellation(plan, tol, angle_tol)
         if mesh is not None:
             return mesh
-    mesh = _general(prep, faces, tol, angle_tol, size)
+    mesh = _tessellate_trimmed(prep, tol, angle_tol)
     if plan is False:
         # decided after the general path has checked the face set (it raises on bad loops), so
         # both paths refuse the same input; the first call already returns the fast mesh, so
@@ -276,11 +296,17 @@ def tessellate_faces(faces, tol: float, angle_tol, size: float) -> Tessellation:
     return mesh
 
 
-def _general(prep, faces, tol, angle_tol, size):
+def _tessellate_trimmed(prep, tol: float, angle_tol) -> Tessellation:
     """The general path (the module docstring's steps 1-6) on the prepared face set ``prep``."""
     triangle = _triangulator()
+    faces, size = prep.faces, prep.size
     batch, uses, groups, edge_tol = prep.batch, prep.uses, prep.groups, prep.edge_tol
     grids = face_grids(batch, tol, angle_tol, prep.bounds, prep.memo)
+    # the compiled kernels (scattered surface evaluation, welds) serve once loaded; a grid point
+    # costs the numpy path several evaluations and its share of the triangulation
+    work = 4.0 * sum(g.us.size * g.vs.size for g in grids)
+    for module in ("splinekit.tessellation._kernels", "splinekit.tessellation._batch_kernels"):
+        _kernels.load(module, work=work, min_work=0)
     scales = np.stack([g.scale for g in grids])
     samples = sample_groups(uses, groups, scales, tol, angle_tol, batch, prep.pcurves, prep.memo, prep.affine)
     vid_of_group, edge_xyz = _edge_vertices(samples, size, edge_tol, prep.memo)
@@ -297,7 +323,7 @@ def _general(prep, faces, tol, angle_tol, size):
     # tolerance: their crossing test (and any untangling) is done once per face set
     fixed = bool(prep.memo["straight"][0].all())
     if not (fixed and "untangled" in prep.memo):
-        puv = _without_crossings(faces, uses, batch, layout, pface, puv, pxyz, segs, owner)
+        puv = _without_crossings(faces, prep.index, uses, batch, layout, pface, puv, pxyz, segs, owner)
         if fixed:
             prep.memo["untangled"] = puv
     puv = prep.memo["untangled"] if fixed else puv
@@ -331,13 +357,13 @@ def _general(prep, faces, tol, angle_tol, size):
         if len(r["vertices"]) != nP:  # Triangle split crossing segments at new points
             x = r["vertices"][nP, 0]
             f = int(np.searchsorted(layout.x0, x, side="right") - 1)
-            raise ParameterError(f"{_face_name(faces[f], f)}: its trimming loops cross or touch each other (or themselves)")
+            raise ParameterError(f"{_face_name(faces[f], prep.index[f])}: its trimming loops cross or touch each other (or themselves)")
         T = np.asarray(r["triangles"], dtype=np.int64)
         N = np.asarray(r["neighbors"], dtype=np.int64)
         keep, conflict, along = _keep_inside(T, N, nxt)
         if conflict >= 0:
             f = int(pface[T[conflict, 0]])
-            raise ParameterError(f"{_face_name(faces[f], f)}: its trimming loops cross, overlap or nest wrongly (a hole outside the outer loop?)")
+            raise ParameterError(f"{_face_name(faces[f], prep.index[f])}: its trimming loops cross, overlap or nest wrongly (a hole outside the outer loop?)")
         ha, hb = _half_edges(T)
         if round_ == 0:  # every trim must bound some material on its left
             covered = np.zeros(nb, dtype=bool)
@@ -346,7 +372,7 @@ def _general(prep, faces, tol, angle_tol, size):
             if not covered.all():
                 k = int(np.flatnonzero(~covered)[0])
                 f, l = int(pface[k]), int(seg_loop[k])
-                raise ParameterError(f"{_face_name(faces[f], f)}: loop {l} bounds no material: it lies outside the outer loop "
+                raise ParameterError(f"{_face_name(faces[f], prep.index[f])}: loop {l} bounds no material: it lies outside the outer loop "
                                      "or inside another hole, or the loops cross")
         V = pvid[T]
         live = keep & (V[:, 0] != V[:, 1]) & (V[:, 1] != V[:, 2]) & (V[:, 2] != V[:, 0])  # not collapsed at a pole
