@@ -39,15 +39,21 @@ def _cell(x, lo, inv, n_cells):
     return min(max(c, 0), n_cells - 1)
 
 
+@njit(cache=True, inline="always")
+def _key(P, i, lo, inv, dims):
+    """Cell number of point ``P[i]``."""
+    nx, ny = dims[0], dims[1]
+    return _cell(P[i, 0], lo[0], inv, nx) + nx * (_cell(P[i, 1], lo[1], inv, ny) + ny * _cell(P[i, 2], lo[2], inv, dims[2]))
+
+
 @njit(cache=True)
 def occupied_cells(P, lo, h, dims):
     """Number of non-empty cells of the grid of side ``h`` (``dims``: cells per axis)."""
-    nx, ny, nz = dims[0], dims[1], dims[2]
     inv = 1.0 / h
-    seen = np.zeros(nx * ny * nz, dtype=np.uint8)
+    seen = np.zeros(dims[0] * dims[1] * dims[2], dtype=np.uint8)
     count = 0
     for i in range(P.shape[0]):
-        key = _cell(P[i, 0], lo[0], inv, nx) + nx * (_cell(P[i, 1], lo[1], inv, ny) + ny * _cell(P[i, 2], lo[2], inv, nz))
+        key = _key(P, i, lo, inv, dims)
         if seen[key] == 0:
             seen[key] = 1
             count += 1
@@ -55,29 +61,42 @@ def occupied_cells(P, lo, h, dims):
 
 
 @njit(cache=True)
+def bounds(P):
+    """Lower and upper corners ``(3,), (3,)`` of the box of ``P (n, 3)`` (one pass; numpy's
+    reduction along the short axis of an ``(n, 3)`` array is several times slower)."""
+    lo = P[0].copy()
+    hi = P[0].copy()
+    for i in range(1, P.shape[0]):
+        for ax in range(3):
+            lo[ax] = min(lo[ax], P[i, ax])
+            hi[ax] = max(hi[ax], P[i, ax])
+    return lo, hi
+
+
+@njit(cache=True)
 def build(P, lo, h, dims):
     """Counting sort of ``P (n, 3)`` by cell: ``(S (n, 3) the points in cell order, order (n,)
     grid position -> original index, start (cells + 1,) the run of each cell, crowding)``, where
-    ``crowding`` is the mean number of points in a point's own cell (sum of squared counts / n)."""
+    ``crowding`` is the mean number of points in a point's own cell (sum of squared counts / n).
+    Cell numbers are computed twice rather than stored (cheaper than another n-array)."""
     n = P.shape[0]
-    nx, ny, nz = dims[0], dims[1], dims[2]
     inv = 1.0 / h
-    keys = np.empty(n, dtype=np.int64)
-    start = np.zeros(nx * ny * nz + 1, dtype=np.int64)
+    cells = dims[0] * dims[1] * dims[2]
+    start = np.zeros(cells + 1, dtype=np.int64)
     for i in range(n):
-        key = _cell(P[i, 0], lo[0], inv, nx) + nx * (_cell(P[i, 1], lo[1], inv, ny) + ny * _cell(P[i, 2], lo[2], inv, nz))
-        keys[i] = key
-        start[key + 1] += 1
+        start[_key(P, i, lo, inv, dims)] += 1
     crowding = 0.0
-    for c in range(nx * ny * nz):
-        crowding += float(start[c + 1]) * start[c + 1]
-        start[c + 1] += start[c]
-    fill = start[:-1].copy()
+    for c in range(cells):
+        crowding += float(start[c]) * start[c]
+    for c in range(1, cells):  # start[c] = end of cell c
+        start[c] += start[c - 1]
+    start[cells] = n
     order = np.empty(n, dtype=np.int64)
     S = np.empty((n, 3))
-    for i in range(n):
-        pos = fill[keys[i]]
-        fill[keys[i]] = pos + 1
+    for i in range(n - 1, -1, -1):  # filled from each cell's end: start[c] ends at its beginning
+        key = _key(P, i, lo, inv, dims)
+        pos = start[key] - 1
+        start[key] = pos
         order[pos] = i
         S[pos, 0] = P[i, 0]
         S[pos, 1] = P[i, 1]

@@ -31,7 +31,7 @@ from .. import _kernels
 KERNELS = "splinekit.pointcloud._cellgrid_kernels"
 """The grid kernels; the hierarchy's are its attribute ``hierarchy``."""
 
-OCCUPANCY = 0.3
+OCCUPANCY = 0.4
 """Target points per non-empty cell, as a fraction of ``k``: for a surface this makes the cell
 side about 1.2 times the typical k-th neighbour distance, so the 27 cells around a point hold
 its neighbourhood with room to spare (measured fastest on torus clouds of 100k-1M points)."""
@@ -100,9 +100,9 @@ class _Grid:
     """The points sorted by cell of a uniform grid (module notes of the grid kernels)."""
 
     def __init__(self, kernels, P: np.ndarray, k: int):
-        self.lo = P.min(axis=0)
+        self.lo, hi = kernels.bounds(P)
         with np.errstate(over="ignore", invalid="ignore"):
-            ext = P.max(axis=0) - self.lo
+            ext = hi - self.lo
         h = cell_side(kernels, P, self.lo, ext, k)
         self.fits = h is not None
         if not self.fits:
