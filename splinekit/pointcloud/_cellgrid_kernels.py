@@ -196,12 +196,11 @@ def _select(S, i, m, buf, ids, work, k, guess, bd, bi):
     """The ``k`` nearest of point ``i`` among the ``m`` gathered candidates into ``bd, bi``
     (ascending, ``i`` first); returns the count found (``min(k, m)``).
 
-    Branch-free throughout, so that the loops vectorize and nothing waits on a mispredicted
-    branch: squared distances to all candidates; a threshold, the previous query's k-th squared
-    distance ``guess`` doubled until at least ``k`` candidates fall within it and narrowed while
-    more than ``3k`` do (1.5 counting passes on average); the few within it (about 1.5 k) are
-    compacted, and each one's rank among them (by distance, then position) is counted: rank
-    ``r < k`` puts it at ``bd[r]``. ``work (3, >= m)`` is scratch."""
+    Few branches that can mispredict: squared distances to all candidates (a loop that
+    vectorizes); a threshold, the previous query's k-th squared distance ``guess``, doubled
+    until at least ``k`` candidates fall within it and narrowed while more than ``1.5 k`` do
+    (counting passes that vectorize too); the candidates within it compacted without a branch;
+    only those (``k`` to ``1.5 k`` of about ``6 k``) go through the ordered insertion. ``work (3, >= m)`` is scratch."""
     px, py, pz = S[i, 0], S[i, 1], S[i, 2]
     d2 = work[0]
     for j in range(m):
@@ -216,7 +215,7 @@ def _select(S, i, m, buf, ids, work, k, guess, bd, bi):
         if c < k and tau < np.inf:
             low = tau
             tau = tau * 2.0 if tau * 2.0 < np.inf else np.inf
-        elif c > 3 * k and tau > low * 1.0625 and tau < np.inf:
+        elif 2 * c > 3 * k and tau > low * 1.0625 and tau < np.inf:
             tau = 0.5 * (tau + low) if low > 0.0 else 0.5 * tau
         else:
             break
@@ -226,21 +225,13 @@ def _select(S, i, m, buf, ids, work, k, guess, bd, bi):
         cd[c] = d2[j]
         cj[c] = j
         c += d2[j] <= tau
+    bd[0] = 0.0
+    bi[0] = i
+    count = 1
     for a in range(c):
-        da = cd[a]
-        r = 0
-        for b in range(c):
-            r += (cd[b] < da) | ((cd[b] == da) & (b < a))
-        if r < k:
-            bd[r] = da
-            bi[r] = ids[int(cj[a])]
-    count = min(c, k)
-    if bi[0] != i:  # exact duplicates tie with the point at distance 0: the point itself goes first
-        for j in range(1, count):
-            if bi[j] == i:
-                bi[j] = bi[0]
-                break
-        bi[0] = i
+        j = ids[int(cj[a])]
+        if j != i and (count < k or cd[a] < bd[k - 1]):
+            count = _insert(bd, bi, count, k, cd[a], j)
     return count
 
 
@@ -301,26 +292,33 @@ def search(S, order, start, lo, h, guard, dims, k, out_d, out_idx, out_kth, out_
                 for j in range(k):
                     out_idx[o, j] = order[bi[j]]
             if out_normals.shape[0]:
-                mx = my = mz = 0.0
+                # one pass over offsets from the query point: they are of the neighbourhood's
+                # size, so removing their mean afterwards costs rounding of that size only (as
+                # the two-pass form about the centroid would)
+                px, py, pz = S[i, 0], S[i, 1], S[i, 2]
+                mx = my = mz = sxx = syy = szz = sxy = syz = sxz = 0.0
                 for j in range(k):
                     t = bi[j]
-                    mx += S[t, 0]
-                    my += S[t, 1]
-                    mz += S[t, 2]
-                mx /= k
-                my /= k
-                mz /= k
-                sxx = syy = szz = sxy = syz = sxz = 0.0
-                for j in range(k):
-                    t = bi[j]
-                    x, y, z = S[t, 0] - mx, S[t, 1] - my, S[t, 2] - mz
+                    x, y, z = S[t, 0] - px, S[t, 1] - py, S[t, 2] - pz
+                    mx += x
+                    my += y
+                    mz += z
                     sxx += x * x
                     syy += y * y
                     szz += z * z
                     sxy += x * y
                     syz += y * z
                     sxz += x * z
-                sym3_smallest(sxx / k, syy / k, szz / k, sxy / k, syz / k, sxz / k, eig)
+                mx /= k
+                my /= k
+                mz /= k
+                sxx = sxx / k - mx * mx
+                syy = syy / k - my * my
+                szz = szz / k - mz * mz
+                sxy = sxy / k - mx * my
+                syz = syz / k - my * mz
+                sxz = sxz / k - mx * mz
+                sym3_smallest(sxx, syy, szz, sxy, syz, sxz, eig)
                 for j in range(3):
                     out_values[o, j] = eig[j]
                     out_normals[o, j] = eig[3 + j]
