@@ -4,20 +4,26 @@ Loaded through :func:`splinekit._kernels.load`, never by ``import splinekit``;
 :mod:`splinekit.pointcloud._pointtree` drives it and falls back to the Morton-ordered hierarchy
 of :mod:`splinekit.pointcloud._knn_kernels` where a grid does not fit.
 
-The grid has cubic cells of side ``h`` from the cloud's lower corner ``lo``, ``nx * ny * nz``
-of them, numbered ``cx + nx * (cy + ny * cz)`` (x fastest). A counting sort puts the points in
-cell order and ``start[c] .. start[c + 1]`` is the run of cell ``c``; so the three cells
-``cx - 1 .. cx + 1`` of one (y, z) row are one contiguous run, and the 27 cells around a
-point are nine runs read straight through (no tree to walk, no box tests). ``h`` is chosen
-(by the caller) so that those 27 cells hold the k nearest neighbours of nearly every point.
+The grid has cubic cells of side ``h`` from the cloud's lower corner ``lo``, ``dims`` of them
+along the axes. Only the cells that hold points matter, so cells are not stored densely:
+cell ``(cx, cy, cz)`` goes to slot ``(row(cy, cz) + cx) & mask`` of a table of ``mask + 1``
+slots (a power of two, about two per point), ``row`` a hash of the (y, z) row. Consecutive
+cells of a row land in consecutive slots, so after a counting sort of the points by slot
+(``start[s] .. start[s + 1]`` the run of slot ``s``) the three cells ``cx - 1 .. cx + 1`` of a
+row are one run read straight through (two where it wraps past the last slot), and the 27 cells
+around a point are nine runs. Rows that collide share slots: their points are extra candidates,
+measured like the others, never missed ones. ``h`` is chosen (by the caller) so that the 27
+cells hold the k nearest neighbours of nearly every point; a far outlier that inflates the
+bounding box costs nothing, as no cell is stored for empty space.
 
-A query scans the block of 27 cells into a max-heap of its ``k`` best (a replacement costs
-``log2 k`` moves, the candidates are not sorted), then checks the block was wide enough: the
+Queries go cell by cell: the candidates of a cell's 27 cells are gathered once for all its
+points (coordinates one row an axis, so distance loops vectorize), and each point selects its
+``k`` nearest among them (:func:`_select`). Then the block must have been wide enough: the
 k-th distance must not exceed the distance from the point to the block's boundary (a side on
-the border of the grid bounds nothing, no point lies beyond it). If it does, the shell of
-cells at distance 2 is scanned too (a 5 x 5 x 5 block); a query still not settled is flagged
-for the hierarchy. The normal is computed while the neighbourhood is in cache, and every
-result is written at the point's original index (no unsorting pass afterwards).
+the border of the grid bounds nothing, no point lies beyond it). If it does, the 5 x 5 x 5
+block is scanned; a query still not settled is flagged for the hierarchy. The normal is
+computed while the neighbourhood is in cache, and every result is written at the point's
+original index (no unsorting pass afterwards).
 """
 
 from __future__ import annotations
@@ -40,24 +46,67 @@ def _cell(x, lo, inv, n_cells):
 
 
 @njit(cache=True, inline="always")
-def _key(P, i, lo, inv, dims):
-    """Cell number of point ``P[i]``."""
-    nx, ny = dims[0], dims[1]
-    return _cell(P[i, 0], lo[0], inv, nx) + nx * (_cell(P[i, 1], lo[1], inv, ny) + ny * _cell(P[i, 2], lo[2], inv, dims[2]))
+def _row(cy, cz):
+    """Hash of the (y, z) row of cells (cell numbers below 2**21: no overflow)."""
+    return cy * 73856093 + cz * 19349663 * 1021
+
+
+@njit(cache=True, inline="always")
+def _slot(P, i, lo, inv, dims, mask):
+    """Table slot of the cell of point ``P[i]``."""
+    cx = _cell(P[i, 0], lo[0], inv, dims[0])
+    return (_row(_cell(P[i, 1], lo[1], inv, dims[1]), _cell(P[i, 2], lo[2], inv, dims[2])) + cx) & mask
+
+
+@njit(cache=True, inline="always")
+def _block(mask, cx, cy, cz, r, dims, iv):
+    """The table slots of the block of cells ``c - r .. c + r`` around cell ``(cx, cy, cz)``
+    as ``n`` disjoint ascending slot ranges ``iv[0, t] .. iv[1, t]`` (returns ``n``): one range
+    a row, split where it wraps past the last slot, overlapping ranges (rows that collide)
+    merged so that no point is read twice. ``iv (2, >= 2 (2r + 1)^2)`` int64."""
+    x0, x1 = max(cx - r, 0), min(cx + r, dims[0] - 1)
+    n = 0
+    for z in range(max(cz - r, 0), min(cz + r + 1, dims[2])):
+        for y in range(max(cy - r, 0), min(cy + r + 1, dims[1])):
+            first = (_row(y, z) + x0) & mask
+            stop = first + x1 - x0 + 1
+            if stop <= mask + 1:
+                iv[0, n], iv[1, n] = first, stop
+                n += 1
+            else:
+                iv[0, n], iv[1, n] = first, mask + 1
+                iv[0, n + 1], iv[1, n + 1] = 0, stop - mask - 1
+                n += 2
+    for a in range(1, n):  # insertion sort by start: at most 50 ranges
+        s0, s1 = iv[0, a], iv[1, a]
+        b = a
+        while b > 0 and iv[0, b - 1] > s0:
+            iv[0, b], iv[1, b] = iv[0, b - 1], iv[1, b - 1]
+            b -= 1
+        iv[0, b], iv[1, b] = s0, s1
+    merged = 0
+    for a in range(n):
+        if merged > 0 and iv[0, a] <= iv[1, merged - 1]:
+            iv[1, merged - 1] = max(iv[1, merged - 1], iv[1, a])
+        else:
+            iv[0, merged], iv[1, merged] = iv[0, a], iv[1, a]
+            merged += 1
+    return merged
 
 
 @njit(cache=True)
-def occupied_cells(P, lo, h, dims):
-    """Number of non-empty cells of the grid of side ``h`` (``dims``: cells per axis)."""
+def crowding(P, lo, h, dims, mask):
+    """Mean number of points in a point's own cell of the grid of side ``h`` (``dims``: cells
+    per axis): the sum of squared counts over ``n``, counted by slot (rows sharing a slot count
+    as one cell, as the search reads them)."""
     inv = 1.0 / h
-    seen = np.zeros(dims[0] * dims[1] * dims[2], dtype=np.uint8)
-    count = 0
+    count = np.zeros(mask + 1, dtype=np.int32)
+    total = 0
     for i in range(P.shape[0]):
-        key = _key(P, i, lo, inv, dims)
-        if seen[key] == 0:
-            seen[key] = 1
-            count += 1
-    return count
+        key = _slot(P, i, lo, inv, dims, mask)
+        total += 2 * count[key] + 1  # (c + 1)^2 - c^2
+        count[key] += 1
+    return total / max(P.shape[0], 1)
 
 
 @njit(cache=True)
@@ -74,27 +123,27 @@ def bounds(P):
 
 
 @njit(cache=True)
-def build(P, lo, h, dims):
-    """Counting sort of ``P (n, 3)`` by cell: ``(S (n, 3) the points in cell order, order (n,)
-    grid position -> original index, start (cells + 1,) the run of each cell, crowding)``, where
-    ``crowding`` is the mean number of points in a point's own cell (sum of squared counts / n).
-    Cell numbers are computed twice rather than stored (cheaper than another n-array)."""
+def build(P, lo, h, dims, mask):
+    """Counting sort of ``P (n, 3)`` by slot: ``(S (n, 3) the points in slot order, order (n,)
+    grid position -> original index, start (mask + 2,) the run of each slot, crowding)``, where
+    ``crowding`` is the mean number of points in a point's own slot (sum of squared counts / n).
+    Slots are computed twice rather than stored (cheaper than another n-array)."""
     n = P.shape[0]
     inv = 1.0 / h
-    cells = dims[0] * dims[1] * dims[2]
-    start = np.zeros(cells + 1, dtype=np.int64)
+    slots = mask + 1
+    start = np.zeros(slots + 1, dtype=np.int64)
     for i in range(n):
-        start[_key(P, i, lo, inv, dims)] += 1
+        start[_slot(P, i, lo, inv, dims, mask)] += 1
     crowding = 0.0
-    for c in range(cells):
+    for c in range(slots):
         crowding += float(start[c]) * start[c]
-    for c in range(1, cells):  # start[c] = end of cell c
+    for c in range(1, slots):  # start[c] = end of slot c
         start[c] += start[c - 1]
-    start[cells] = n
+    start[slots] = n
     order = np.empty(n, dtype=np.int64)
     S = np.empty((n, 3))
-    for i in range(n - 1, -1, -1):  # filled from each cell's end: start[c] ends at its beginning
-        key = _key(P, i, lo, inv, dims)
+    for i in range(n - 1, -1, -1):  # filled from each slot's end: start[c] ends at its beginning
+        key = _slot(P, i, lo, inv, dims, mask)
         pos = start[key] - 1
         start[key] = pos
         order[pos] = i
@@ -137,52 +186,42 @@ def _settled(S, i, lo, h, guard, cx, cy, cz, r, dims, worst):
 
 @njit(cache=True, inline="always")
 def _cell_of(S, i, lo, inv, dims):
+    """Cell ``(cx, cy, cz)`` of point ``S[i]``."""
     return _cell(S[i, 0], lo[0], inv, dims[0]), _cell(S[i, 1], lo[1], inv, dims[1]), _cell(S[i, 2], lo[2], inv, dims[2])
 
 
 @njit(cache=True)
-def _query_wide(S, start, lo, h, guard, dims, k, i, bd, bi):
+def _query_wide(S, start, lo, h, guard, dims, mask, k, i, bd, bi, iv):
     """The slow path of a query: the ``k`` nearest grid-sorted points of point ``i`` among the
     5 x 5 x 5 cells around it into ``bd, bi`` (ascending, ``i`` first); returns ``k``, or
     ``-1`` when that block does not settle the query (the caller hands it to the hierarchy)."""
-    nx, ny, nz = dims[0], dims[1], dims[2]
     cx, cy, cz = _cell_of(S, i, lo, 1.0 / h, dims)
     bd[0] = 0.0
     bi[0] = i
     count = 1
-    x0, x1 = max(cx - 2, 0), min(cx + 2, nx - 1)
-    for z in range(max(cz - 2, 0), min(cz + 3, nz)):
-        for y in range(max(cy - 2, 0), min(cy + 3, ny)):
-            row = nx * (y + ny * z)
-            count = _scan(S, i, start[row + x0], start[row + x1 + 1], bd, bi, count, k)
+    for t in range(_block(mask, cx, cy, cz, 2, dims, iv)):
+        count = _scan(S, i, start[iv[0, t]], start[iv[1, t]], bd, bi, count, k)
     if count == k and _settled(S, i, lo, h, guard, cx, cy, cz, 2, dims, bd[k - 1]):
         return count
     return -1
 
 
 @njit(cache=True, inline="always")
-def _gather(S, start, dims, cx, cy, cz, buf, ids):
-    """The points of the 27 cells around cell ``(cx, cy, cz)`` into ``buf (3, m)`` (coordinates,
-    one row an axis, so distance loops vectorize) and ``ids (m,)`` (grid-sorted indices), the
-    cell's own row first; grows the buffers when they are too small. Returns ``(m, buf, ids)``."""
-    nx, ny, nz = dims[0], dims[1], dims[2]
-    x0, x1 = max(cx - 1, 0), min(cx + 1, nx - 1)
+def _gather(S, start, dims, mask, cx, cy, cz, buf, ids, iv):
+    """The points of the 27 cells around cell ``(cx, cy, cz)`` (and of rows sharing their
+    slots) into ``buf (3, m)`` (coordinates, one row an axis, so distance loops vectorize) and
+    ``ids (m,)`` (grid-sorted indices); grows the buffers when they are too small. Returns
+    ``(m, buf, ids)``."""
+    runs = _block(mask, cx, cy, cz, 1, dims, iv)
     m = 0
-    for z in range(max(cz - 1, 0), min(cz + 2, nz)):
-        for y in range(max(cy - 1, 0), min(cy + 2, ny)):
-            row = nx * (y + ny * z)
-            m += start[row + x1 + 1] - start[row + x0]
+    for t in range(runs):
+        m += start[iv[1, t]] - start[iv[0, t]]
     if m > ids.shape[0]:
         buf = np.empty((3, 2 * m))
         ids = np.empty(2 * m, dtype=np.int64)
     m = 0
-    for t in range(9):
-        # t = 0 is the cell's own row; the other eight follow
-        y, z = cy + (t + 4) % 9 % 3 - 1, cz + (t + 4) % 9 // 3 - 1
-        if y < 0 or y >= ny or z < 0 or z >= nz:
-            continue
-        row = nx * (y + ny * z)
-        for j in range(start[row + x0], start[row + x1 + 1]):
+    for t in range(runs):
+        for j in range(start[iv[0, t]], start[iv[1, t]]):
             buf[0, m] = S[j, 0]
             buf[1, m] = S[j, 1]
             buf[2, m] = S[j, 2]
@@ -200,7 +239,8 @@ def _select(S, i, m, buf, ids, work, k, guess, bd, bi):
     vectorizes); a threshold, the previous query's k-th squared distance ``guess``, doubled
     until at least ``k`` candidates fall within it and narrowed while more than ``1.5 k`` do
     (counting passes that vectorize too); the candidates within it compacted without a branch;
-    only those (``k`` to ``1.5 k`` of about ``6 k``) go through the ordered insertion. ``work (3, >= m)`` is scratch."""
+    only those (``k`` to ``1.5 k`` of about ``6 k``) go through the ordered insertion.
+    ``work (3, >= m)`` is scratch."""
     px, py, pz = S[i, 0], S[i, 1], S[i, 2]
     d2 = work[0]
     for j in range(m):
@@ -236,18 +276,19 @@ def _select(S, i, m, buf, ids, work, k, guess, bd, bi):
 
 
 @njit(cache=True, inline="always")
-def _query(S, start, lo, h, guard, dims, k, i, cell, m, buf, ids, work, guess, bd, bi):
+def _query(S, start, lo, h, guard, dims, mask, k, i, cell, m, buf, ids, work, guess, bd, bi, iv):
     """The ``k`` nearest grid-sorted points of point ``i`` (in ``cell``, whose 27 cells are
     gathered in ``m, buf, ids``) into ``bd, bi``, ascending, ``i`` first; returns ``k``, or
     ``-1`` when even the wide block does not settle the query."""
     count = _select(S, i, m, buf, ids, work, k, guess, bd, bi)
     if count == k and _settled(S, i, lo, h, guard, cell[0], cell[1], cell[2], 1, dims, bd[k - 1]):
         return count
-    return _query_wide(S, start, lo, h, guard, dims, k, i, bd, bi)
+    return _query_wide(S, start, lo, h, guard, dims, mask, k, i, bd, bi, iv)
 
 
 @njit(cache=True, parallel=True)
-def search(S, order, start, lo, h, guard, dims, k, out_d, out_idx, out_kth, out_values, out_normals, unsettled):
+def search(S, order, start, lo, h, guard, dims, mask, k, out_d, out_idx, out_kth, out_values, out_normals,
+           unsettled):
     """The ``k`` nearest neighbours of every point, and their PCA normals, on the grid.
 
     Writes at each point's original row (``order[i]`` for grid-sorted point ``i``): the
@@ -266,6 +307,7 @@ def search(S, order, start, lo, h, guard, dims, k, out_d, out_idx, out_kth, out_
         bd = np.empty(k)
         bi = np.empty(k, dtype=np.int64)
         eig = np.empty(6)
+        iv = np.empty((2, 50), dtype=np.int64)  # slot ranges of a block, 5 x 5 rows at most
         cell = np.full(3, -1, dtype=np.int64)
         m = 0
         guess = 0.0
@@ -274,10 +316,10 @@ def search(S, order, start, lo, h, guard, dims, k, out_d, out_idx, out_kth, out_
             cx, cy, cz = _cell_of(S, i, lo, inv, dims)
             if cx != cell[0] or cy != cell[1] or cz != cell[2]:  # a new cell: gather its block once
                 cell[0], cell[1], cell[2] = cx, cy, cz
-                m, buf, ids = _gather(S, start, dims, cx, cy, cz, buf, ids)
+                m, buf, ids = _gather(S, start, dims, mask, cx, cy, cz, buf, ids, iv)
                 if m > work.shape[1]:
                     work = np.empty((3, ids.shape[0]))
-            count = _query(S, start, lo, h, guard, dims, k, i, cell, m, buf, ids, work, guess, bd, bi)
+            count = _query(S, start, lo, h, guard, dims, mask, k, i, cell, m, buf, ids, work, guess, bd, bi, iv)
             unsettled[i] = count < 0
             if count < 0:
                 continue

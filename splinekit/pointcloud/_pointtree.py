@@ -5,16 +5,17 @@ cKDTree query, then the closed-form eigen-analysis of :mod:`splinekit.pointcloud
 compiled kernels. Two searches, one answer:
 
 - a uniform cell grid (:mod:`splinekit.pointcloud._cellgrid_kernels`): each query reads the
-  27 cells around it straight through; the fast path for surfaces and volumes sampled at a
-  roughly even density, which is what normals are estimated on;
+  27 cells around it straight through; only occupied cells are stored (hashed), so empty space
+  between clusters or up to a far outlier costs nothing. The fast path, for any cloud whose
+  density varies slowly at the scale of a neighbourhood, which is what normals are estimated on;
 - a Morton-ordered bounding-volume hierarchy (:mod:`splinekit.pointcloud._knn_kernels`): adapts
   to any distribution. It serves the queries the grid could not settle within two rings of
-  cells (outliers, density jumps), and whole clouds a grid does not fit (tight clusters far
-  apart: one cell size cannot suit both the clusters and the space between them).
+  cells (outliers, a sparse haze around a dense surface), and whole clouds no grid fits (most
+  points in far fewer cells than they need: a blob a million times smaller than the cloud).
 
-The cell side is measured, not assumed: the share of non-empty cells at two or three trial
-sizes gives the local dimension of the cloud (about 2 for a surface, 3 for a volume), from
-which the side that puts about :data:`OCCUPANCY` ``* k`` points in a non-empty cell follows.
+The cell side is measured, not assumed: the mean number of points in a point's own cell at
+two to four trial sides gives the local dimension of the cloud (about 2 for a surface, 3 for
+a volume), from which the side that makes it :data:`OCCUPANCY` ``* k`` follows.
 
 Both return ``None`` when the numpy path should serve (compiled code off or not worth loading,
 see :func:`splinekit._kernels.load`). Results come back in the caller's point order.
@@ -31,17 +32,25 @@ from .. import _kernels
 KERNELS = "splinekit.pointcloud._cellgrid_kernels"
 """The grid kernels; the hierarchy's are its attribute ``hierarchy``."""
 
-OCCUPANCY = 0.4
-"""Target points per non-empty cell, as a fraction of ``k``: for a surface this makes the cell
-side about 1.2 times the typical k-th neighbour distance, so the 27 cells around a point hold
-its neighbourhood with room to spare (measured fastest on torus clouds of 100k-1M points)."""
+OCCUPANCY = 0.7
+"""Target number of points in a point's own cell, on average, as a fraction of ``k``: for an
+evenly sampled surface this makes the cell side about 1.35 times the typical k-th neighbour
+distance, so the 27 cells around a point hold its neighbourhood with room to spare. Measured
+on 300k torus points (k = 16, CPU time of the search, sides as multiples of the k-th
+distance): 1.25 to 1.5 within 2 % of each other; 1.1 is 1.15 times slower, 0.95 (many
+queries going on to the 5 x 5 x 5 block) 1.6 times, 1.75 (more candidates) 1.07 times.
+Averaged over points, not cells, so that a sparse haze of points alone in their cells does
+not drag the estimate for a dense surface."""
 
 CROWDING = 2.0
 """The grid does not fit when a point's own cell holds more than this times ``k`` points on
 average (a query would read far more candidates than the hierarchy visits)."""
 
-MAX_CELLS = 2
-"""Cells per point at most (the grid's start table is 8 bytes a cell)."""
+SLOTS = 2
+"""Table slots per point, rounded up to a power of two (the table is 8 bytes a slot)."""
+
+MAX_CELLS_PER_AXIS = 1 << 20
+"""Cells along an axis at most (keeps the row hash of the grid kernels within int64)."""
 
 
 def _kernels_for(n: int, k: int):
@@ -61,35 +70,30 @@ def _side_for(ext: np.ndarray, cells: float) -> float:
     return float(np.exp((np.log(spread).sum() - math.log(cells)) / len(spread)))
 
 
-def _smallest_side(ext: np.ndarray, n: int) -> float:
-    """Smallest cell side whose grid over extents ``ext`` has at most ``MAX_CELLS * n + 64`` cells."""
-    cap = MAX_CELLS * n + 64
-    h = _side_for(ext, cap)
-    while np.prod(_dims(ext, h).astype(float)) > cap:
-        h *= 1.05
-    return h
-
-
-def cell_side(kernels, P: np.ndarray, lo: np.ndarray, ext: np.ndarray, k: int) -> float | None:
+def cell_side(kernels, P: np.ndarray, lo: np.ndarray, ext: np.ndarray, k: int, mask: int) -> float | None:
     """Cell side for the grid search of ``P`` (length), or None when no grid fits (all points
     one point, or extents beyond the float range)."""
-    n = len(P)
     if not (np.isfinite(ext).all() and (ext > 0).any()):
         return None
-    target = max(1.0, OCCUPANCY * k)
-    floor = _smallest_side(ext, n)
+    # measured: the mean number of *other* points in a point's cell, which grows as h^dim
+    target = max(OCCUPANCY * k - 1.0, 0.5)
+    floor = float(ext.max()) / (MAX_CELLS_PER_AXIS - 2)
+
+    def others(h):
+        return max(kernels.crowding(P, lo, h, _dims(ext, h), mask) - 1.0, 1.0 / len(P))
+
     # first guess: the side at which the points would fill the bounding box at the target
-    h = max(_side_for(ext, n / target), floor)
-    m = n / kernels.occupied_cells(P, lo, h, _dims(ext, h))
+    h = max(_side_for(ext, len(P) / target), floor)
+    m = others(h)
     dim = 2.0  # a surface, until two measurements tell
-    for _ in range(2):
-        step = (target / m) ** (1 / dim)
+    for _ in range(8):  # 2-3 on an even cloud; more where clusters far apart need cells far smaller than the box
+        step = min(max((target / m) ** (1 / dim), 1 / 16), 16.0)
         if abs(math.log(step)) < 0.05:
             break
         h_new = max(h * step, floor)
         if h_new == h:
             break
-        m_new = n / kernels.occupied_cells(P, lo, h_new, _dims(ext, h_new))
+        m_new = others(h_new)
         if m_new != m:
             dim = min(max(math.log(m_new / m) / math.log(h_new / h), 1.0), 3.0)
         h, m = h_new, m_new
@@ -97,13 +101,15 @@ def cell_side(kernels, P: np.ndarray, lo: np.ndarray, ext: np.ndarray, k: int) -
 
 
 class _Grid:
-    """The points sorted by cell of a uniform grid (module notes of the grid kernels)."""
+    """The points sorted by cell of a uniform grid (module notes of the grid kernels), for
+    points ``P (n, 3)`` in the box ``lo, hi``; ``fits`` False when no grid suits them."""
 
-    def __init__(self, kernels, P: np.ndarray, k: int):
-        self.lo, hi = kernels.bounds(P)
+    def __init__(self, kernels, P: np.ndarray, k: int, lo: np.ndarray, hi: np.ndarray):
+        self.lo = lo
+        self.mask = (1 << max(4, int(np.ceil(np.log2(SLOTS * len(P)))))) - 1
         with np.errstate(over="ignore", invalid="ignore"):
             ext = hi - self.lo
-        h = cell_side(kernels, P, self.lo, ext, k)
+        h = cell_side(kernels, P, self.lo, ext, k, self.mask)
         self.fits = h is not None
         if not self.fits:
             return
@@ -111,19 +117,18 @@ class _Grid:
         self.dims = _dims(ext, h)
         # cell numbers and cell faces are rounded apart by a few ulps of the coordinates
         self.guard = 16 * np.finfo(float).eps * float(np.abs(self.lo).max() + ext.max() + h)
-        self.S, self.order, self.start, crowding = kernels.build(P, self.lo, h, self.dims)
+        self.S, self.order, self.start, crowding = kernels.build(P, self.lo, h, self.dims, self.mask)
         self.fits = crowding <= CROWDING * k
 
     def args(self, k: int):
-        return self.S, self.order, self.start, self.lo, self.h, self.guard, self.dims, k
+        return self.S, self.order, self.start, self.lo, self.h, self.guard, self.dims, self.mask, k
 
 
 class _SortedCloud:
     """Points ``(n, 3)`` sorted along a Morton curve (``order``: sorted -> original index) and
     the box heap over leaves of ``LEAF`` sorted points (module notes of the hierarchy kernels)."""
 
-    def __init__(self, tree, P: np.ndarray):
-        lo, hi = P.min(axis=0), P.max(axis=0)
+    def __init__(self, tree, P: np.ndarray, lo: np.ndarray, hi: np.ndarray):
         with np.errstate(over="ignore", divide="ignore"):
             ext = hi - lo
             inv = np.where((ext > 0) & np.isfinite(ext), float((1 << 21) - 1) / np.where(ext > 0, ext, 1.0), 0.0)
@@ -147,7 +152,8 @@ class _SortedCloud:
 def _search(kernels, P: np.ndarray, k: int, on_grid, on_tree) -> None:
     """Run ``on_grid(grid, unsettled)`` and then ``on_tree(tree, points)`` for the original
     indices the grid left unsettled (all of them when no grid fits)."""
-    grid = _Grid(kernels, P, k)
+    lo, hi = kernels.bounds(P)
+    grid = _Grid(kernels, P, k, lo, hi)
     if grid.fits:
         unsettled = np.empty(len(P), dtype=np.uint8)
         on_grid(grid, unsettled)
@@ -156,7 +162,7 @@ def _search(kernels, P: np.ndarray, k: int, on_grid, on_tree) -> None:
         points = grid.order[unsettled.view(bool)]
     else:
         points = np.arange(len(P))
-    on_tree(_SortedCloud(kernels.hierarchy, P), points)
+    on_tree(_SortedCloud(kernels.hierarchy, P, lo, hi), points)
 
 
 def compiled_knn(P: np.ndarray, k: int):
