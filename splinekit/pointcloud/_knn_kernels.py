@@ -4,7 +4,8 @@ Loaded through :func:`splinekit._kernels.load`, never by ``import splinekit``. T
 they must agree with is scipy's cKDTree query (:func:`splinekit.pointcloud._cloud.neighbours`)
 followed by :func:`splinekit.pointcloud._cloud.covariances` and
 :func:`~splinekit.pointcloud._cloud.smallest_eigenpairs`; :mod:`splinekit.pointcloud._pointtree`
-drives them.
+drives them. The faster cell grid of :mod:`splinekit.pointcloud._cellgrid_kernels` answers
+first; this hierarchy serves the queries the grid cannot settle and clouds no grid fits.
 
 The search structure is a bounding-volume hierarchy over the points sorted along a Morton
 curve: leaves of :data:`LEAF` consecutive sorted points, a complete binary tree stored as a heap
@@ -17,7 +18,8 @@ nodes (the cache-friendly order that makes this faster than cKDTree's own per-po
 
 The normal of a neighbourhood is computed in the same pass as its search, while its points
 are still in cache: covariance about the neighbourhood's centroid, then the closed-form
-eigen-analysis of :func:`sym3_smallest`.
+eigen-analysis of :func:`sym3_smallest`. Results are written at each point's original row
+(``order[row]``), for the rows asked (all of them, or those the grid left).
 """
 
 from __future__ import annotations
