@@ -21,17 +21,37 @@ VmHWM) against the size of the output, the ``(n, 3)`` float64 normals:
   it as a core dependency);
 - Open3D ``estimate_normals(KDTreeSearchParamKNN(16))``.
 
-Profile (300k points, k = 16, this 2-core machine under a load average of 7): the numpy
-path spent about 65 % of its time in the cKDTree query (6.4 s of 9.9 s), 16 % gathering the
-``(n, 16, 3)`` neighbourhoods and forming covariances, 2 % building the tree and 3 % in the
-closed-form eigen-solve (``numpy.linalg.eigh``: four times that). pykdtree's query was no faster
-than cKDTree's with ``workers=-1`` here (two cores: its OpenMP gain does not show), so it was
-not taken. What won is a compiled search (``splinekit/pointcloud/_knn_kernels.py``): a
-bounding-volume hierarchy over the points sorted along a Morton curve, queried in Morton
-order (consecutive queries touch the same nodes and memory), each query seeded with its 2k
-Morton neighbours, and the covariance and closed-form eigen-solve done in the same pass
-while the neighbourhood is in cache. In that kernel about 90 % of the time is the search;
-sorting (Morton codes, argsort) and the boxes take about 5 %.
+Each implementation's wall time and CPU time (all its threads) are printed: on this shared
+2-core machine the wall time swings with the other users' load (Open3D's OpenMP threads wait
+for each other at barriers and suffer most), the CPU time much less.
+
+Profile, first round (300k points, k = 16, this 2-core machine under a load average of 7): the
+numpy path spent about 65 % of its time in the cKDTree query (6.4 s of 9.9 s), 16 % gathering
+the ``(n, 16, 3)`` neighbourhoods and forming covariances, 2 % building the tree and 3 % in the
+closed-form eigen-solve (``numpy.linalg.eigh``: four times that). pykdtree's query was no
+faster than cKDTree's with ``workers=-1`` here (two cores: its OpenMP gain does not show), so
+it was not taken. A compiled bounding-volume hierarchy over the points in Morton order
+(``splinekit/pointcloud/_knn_kernels.py``), queried in Morton order with the covariance and
+eigen-solve in the same pass, then made the row: 0.38 s against Open3D's 0.68 s on an idle
+machine (1.8x, short of the 2x target), about 90 % of it the search: some 75 tree nodes, 11
+leaves, 90 distances and 34 ordered insertions a query.
+
+Profile, second round (this session; CPU time of one thread, load average about 4, 300k
+points; 100k in brackets): the hierarchy path 679 ms (210 ms); the grid path that replaced it
+(``splinekit/pointcloud/_cellgrid_kernels.py``) 284 ms (99 ms), 2.4 times less. Its stages:
+validation 0.4 ms, bounding box 0.9 ms, the cell side from two to four crowding trials 4.7 ms,
+the counting sort by cell 8.5 ms (2 ms), the search 192 ms (71 ms), covariance and eigen-solve
+65 ms (26 ms), the checks after 1.2 ms. Within the search (about 0.6 microseconds a query):
+gathering the 27 cells' ~110 candidates once per cell (4.5 points a cell) ~30 ms; squared
+distances and the threshold passes ~16 ms; compacting the ~1.5 k candidates under the
+threshold and dropping the farthest down to k ~90 ms (an ordered insertion of every
+candidate, the hierarchy's way, cost three times as much; a heap twice); settling checks and
+the wide 5 x 5 x 5 block (under 0.1 % of the queries on the torus) the rest. The fixed cost of
+a call (everything but the search and the normals) is about 15 ms at 300k, 4 ms at 100k. What
+limits it now: the selection of the k nearest among ~7 k candidates (a smaller cell side gives
+fewer candidates but sends more queries to the wide block: 1.6 times slower at a side equal to
+the k-th distance), then the closed-form eigen-solve (an arccos and two cosines a point,
+~110 ns). Two threads split the points evenly (tasks of 1024 grid-sorted points).
 
 Cloud: points uniform by area on a torus (R = 1, r = 0.35) with exact outward
 normals. Cases, all with k = 16 nearest neighbours:
@@ -49,9 +69,9 @@ normals. Cases, all with k = 16 nearest neighbours:
 
 trimesh has no point-cloud normal estimation (``trimesh.points`` offers a
 single best-fit plane), so it is listed as not run. Open3D uses all cores
-through OpenMP; splinekit's k-d tree queries use all cores (``workers=-1``),
-the rest is single-threaded numpy. The load average is printed: other
-processes on the machine skew the timings.
+through OpenMP; splinekit's compiled search and normals use all cores (numba
+threads), its numpy path's k-d tree queries too (``workers=-1``). The load
+average is printed: other processes on the machine skew the timings.
 """
 
 from __future__ import annotations

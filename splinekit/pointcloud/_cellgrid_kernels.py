@@ -47,8 +47,13 @@ def _cell(x, lo, inv, n_cells):
 
 @njit(cache=True, inline="always")
 def _row(cy, cz):
-    """Hash of the (y, z) row of cells (cell numbers below 2**21: no overflow)."""
-    return cy * 73856093 + cz * 19349663 * 1021
+    """Hash of the (y, z) row of cells: a splitmix-style mix, so that rows near each other
+    (which the surface passes through together) land far apart in the table; below 2**62."""
+    x = np.uint64(cy) * np.uint64(0x9E3779B97F4A7C15) + np.uint64(cz)
+    x ^= x >> np.uint64(30)
+    x *= np.uint64(0xBF58476D1CE4E5B9)
+    x ^= x >> np.uint64(31)
+    return np.int64(x >> np.uint64(2))
 
 
 @njit(cache=True, inline="always")

@@ -34,11 +34,11 @@ KERNELS = "splinekit.pointcloud._cellgrid_kernels"
 
 OCCUPANCY = 0.7
 """Target number of points in a point's own cell, on average, as a fraction of ``k``: for an
-evenly sampled surface this makes the cell side about 1.35 times the typical k-th neighbour
+evenly sampled surface this makes the cell side about 1.45 times the typical k-th neighbour
 distance, so the 27 cells around a point hold its neighbourhood with room to spare. Measured
-on 300k torus points (k = 16, CPU time of the search, sides as multiples of the k-th
-distance): 1.25 to 1.5 within 2 % of each other; 1.1 is 1.15 times slower, 0.95 (many
-queries going on to the 5 x 5 x 5 block) 1.6 times, 1.75 (more candidates) 1.07 times.
+on torus clouds of 100k and 300k points (k = 16, CPU time of search and normals, sides as
+multiples of the k-th distance): 1.25 to 1.45 within 1 % of each other; 1.1 (more queries
+going on to the 5 x 5 x 5 block) 1.13 times slower, 1.6 (more candidates) 1.02-1.05 times.
 Averaged over points, not cells, so that a sparse haze of points alone in their cells does
 not drag the estimate for a dense surface."""
 
