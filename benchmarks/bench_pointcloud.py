@@ -36,22 +36,26 @@ eigen-solve in the same pass, then made the row: 0.38 s against Open3D's 0.68 s 
 machine (1.8x, short of the 2x target), about 90 % of it the search: some 75 tree nodes, 11
 leaves, 90 distances and 34 ordered insertions a query.
 
-Profile, second round (this session; CPU time of one thread, load average about 4, 300k
-points; 100k in brackets): the hierarchy path 679 ms (210 ms); the grid path that replaced it
-(``splinekit/pointcloud/_cellgrid_kernels.py``) 284 ms (99 ms), 2.4 times less. Its stages:
-validation 0.4 ms, bounding box 0.9 ms, the cell side from two to four crowding trials 4.7 ms,
-the counting sort by cell 8.5 ms (2 ms), the search 192 ms (71 ms), covariance and eigen-solve
-65 ms (26 ms), the checks after 1.2 ms. Within the search (about 0.6 microseconds a query):
-gathering the 27 cells' ~110 candidates once per cell (4.5 points a cell) ~30 ms; squared
-distances and the threshold passes ~16 ms; compacting the ~1.5 k candidates under the
-threshold and dropping the farthest down to k ~90 ms (an ordered insertion of every
-candidate, the hierarchy's way, cost three times as much; a heap twice); settling checks and
-the wide 5 x 5 x 5 block (under 0.1 % of the queries on the torus) the rest. The fixed cost of
-a call (everything but the search and the normals) is about 15 ms at 300k, 4 ms at 100k. What
-limits it now: the selection of the k nearest among ~7 k candidates (a smaller cell side gives
-fewer candidates but sends more queries to the wide block: 1.6 times slower at a side equal to
-the k-th distance), then the closed-form eigen-solve (an arccos and two cosines a point,
-~110 ns). Two threads split the points evenly (tasks of 1024 grid-sorted points).
+Profile, second round (this session; CPU time of one thread, load average about 4-5, 300k
+points; 100k in brackets): the hierarchy path 671 ms (207 ms); the grid path that replaced it
+(``splinekit/pointcloud/_cellgrid_kernels.py``) 270 ms (80 ms), 2.5 times less. Its stages:
+validation 0.5 ms, bounding box 0.9 ms, the cell side from two to four crowding trials 3.7 ms
+(1.0 ms), the counting sort by cell 9.4 ms (2.2 ms), the search 184 ms (46 ms), covariance and
+eigen-solve 68 ms (24 ms), the checks after 1.2 ms. Within the search (about 0.6 microseconds
+a query): gathering the 27 cells' ~117 candidates once per cell (7.5 points a cell) ~30 ms;
+selecting the k nearest ~105 ms (squared distances and threshold passes, which vectorize,
+~16 ms; compacting the ~1.5 k candidates under the threshold and dropping the farthest down
+to k the rest: an ordered insertion of them cost 1.4 times as much, a binary heap over all
+candidates, the first try, 1.35 times as much for the whole kernel); the settling check, the
+wide 5 x 5 x 5 block (9 queries of 300k on the torus) and the loop the rest. The fixed cost
+of a call (everything but search and normals) is about 15 ms at 300k, 4 ms at 100k. The row
+hash matters: a linear one made the rows a surface passes through collide, and at 100k points
+half the candidates came from other rows (now 6-9 %). What limits it now: the selection of
+the k nearest among ~7 k candidates (smaller cells give fewer candidates but send more
+queries to the wide block: 1.13 times slower at a side of 1.1 k-th distances), then the
+closed-form eigen-solve (an arccos and two cosines a point, ~110 ns) and the covariance. Two
+threads split the points evenly (tasks of 1024 grid-sorted points); on this loaded machine the
+second thread rarely got a core of its own, so the two-thread figures above are CPU times.
 
 Cloud: points uniform by area on a torus (R = 1, r = 0.35) with exact outward
 normals. Cases, all with k = 16 nearest neighbours:
