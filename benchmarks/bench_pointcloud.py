@@ -55,7 +55,7 @@ the k nearest among ~7 k candidates (smaller cells give fewer candidates but sen
 queries to the wide block: 1.13 times slower at a side of 1.1 k-th distances), then the
 closed-form eigen-solve (an arccos and two cosines a point, ~110 ns) and the covariance. Two
 threads split the points evenly (tasks of 1024 grid-sorted points); on this loaded machine the
-second thread rarely got a core of its own, so the two-thread figures above are CPU times.
+second thread rarely got a core of its own (two threads: the same CPU time, no shorter wall).
 
 Cloud: points uniform by area on a torus (R = 1, r = 0.35) with exact outward
 normals. Cases, all with k = 16 nearest neighbours:

@@ -7,7 +7,7 @@ of :mod:`splinekit.pointcloud._knn_kernels` where a grid does not fit.
 The grid has cubic cells of side ``h`` from the cloud's lower corner ``lo``, ``dims`` of them
 along the axes. Only the cells that hold points matter, so cells are not stored densely:
 cell ``(cx, cy, cz)`` goes to slot ``(row(cy, cz) + cx) & mask`` of a table of ``mask + 1``
-slots (a power of two, about two per point), ``row`` a hash of the (y, z) row. Consecutive
+slots (a power of two, two to four per point), ``row`` a hash of the (y, z) row. Consecutive
 cells of a row land in consecutive slots, so after a counting sort of the points by slot
 (``start[s] .. start[s + 1]`` the run of slot ``s``) the three cells ``cx - 1 .. cx + 1`` of a
 row are one run read straight through (two where it wraps past the last slot), and the 27 cells
@@ -247,7 +247,8 @@ def _select(S, i, m, buf, ids, work, k, guess, bd, bi):
     (counting passes that vectorize too); the candidates within it compacted without a branch;
     of those (``k`` to ``1.5 k`` of about ``7 k``) the farthest dropped one by one. No ordering:
     ``bd, bi`` come out in no particular order after the point itself (an ordered insertion
-    cost three times as much; the caller that wants them ascending sorts the ``k``).
+    of the compacted candidates cost 1.4 times as much; the caller that wants them ascending
+    sorts the ``k``).
     ``work (3, >= m)`` is scratch."""
     px, py, pz = S[i, 0], S[i, 1], S[i, 2]
     d2 = work[0]
@@ -315,7 +316,8 @@ def search(S, order, start, lo, h, guard, dims, mask, k, out_d, out_idx, out_kth
 
     Writes at each point's original row (``order[i]`` for grid-sorted point ``i``): the
     distances ``out_d (n, k)`` ascending and original indices ``out_idx (n, k)`` of its
-    neighbours, the point itself first; the squared distance to the k-th ``out_kth (n,)``; the
+    neighbours, the point itself first (the others in no particular order unless ``out_d`` is
+    asked for too); the squared distance to the k-th ``out_kth (n,)``; the
     eigenvalues of their covariance ascending ``out_values (n, 3)`` (length^2) and the unit
     eigenvector of the smallest ``out_normals (n, 3)``. An output with no rows is skipped.
     ``unsettled (n,)`` (grid order) is set to 1 where the grid could not settle the query:
