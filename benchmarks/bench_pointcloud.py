@@ -21,17 +21,41 @@ VmHWM) against the size of the output, the ``(n, 3)`` float64 normals:
   it as a core dependency);
 - Open3D ``estimate_normals(KDTreeSearchParamKNN(16))``.
 
-Profile (300k points, k = 16, this 2-core machine under a load average of 7): the numpy
-path spent about 65 % of its time in the cKDTree query (6.4 s of 9.9 s), 16 % gathering the
-``(n, 16, 3)`` neighbourhoods and forming covariances, 2 % building the tree and 3 % in the
-closed-form eigen-solve (``numpy.linalg.eigh``: four times that). pykdtree's query was no faster
-than cKDTree's with ``workers=-1`` here (two cores: its OpenMP gain does not show), so it was
-not taken. What won is a compiled search (``splinekit/pointcloud/_knn_kernels.py``): a
-bounding-volume hierarchy over the points sorted along a Morton curve, queried in Morton
-order (consecutive queries touch the same nodes and memory), each query seeded with its 2k
-Morton neighbours, and the covariance and closed-form eigen-solve done in the same pass
-while the neighbourhood is in cache. In that kernel about 90 % of the time is the search;
-sorting (Morton codes, argsort) and the boxes take about 5 %.
+Each implementation's wall time and CPU time (all its threads) are printed: on this shared
+2-core machine the wall time swings with the other users' load (Open3D's OpenMP threads wait
+for each other at barriers and suffer most), the CPU time much less.
+
+Profile, first round (300k points, k = 16, this 2-core machine under a load average of 7): the
+numpy path spent about 65 % of its time in the cKDTree query (6.4 s of 9.9 s), 16 % gathering
+the ``(n, 16, 3)`` neighbourhoods and forming covariances, 2 % building the tree and 3 % in the
+closed-form eigen-solve (``numpy.linalg.eigh``: four times that). pykdtree's query was no
+faster than cKDTree's with ``workers=-1`` here (two cores: its OpenMP gain does not show), so
+it was not taken. A compiled bounding-volume hierarchy over the points in Morton order
+(``splinekit/pointcloud/_knn_kernels.py``), queried in Morton order with the covariance and
+eigen-solve in the same pass, then made the row: 0.38 s against Open3D's 0.68 s on an idle
+machine (1.8x, short of the 2x target), about 90 % of it the search: some 75 tree nodes, 11
+leaves, 90 distances and 34 ordered insertions a query.
+
+Profile, second round (this session; CPU time of one thread, load average about 4-5, 300k
+points; 100k in brackets): the hierarchy path 671 ms (207 ms); the grid path that replaced it
+(``splinekit/pointcloud/_cellgrid_kernels.py``) 270 ms (80 ms), 2.5 times less. Its stages:
+validation 0.5 ms, bounding box 0.9 ms, the cell side from two to four crowding trials 3.7 ms
+(1.0 ms), the counting sort by cell 9.4 ms (2.2 ms), the search 184 ms (46 ms), covariance and
+eigen-solve 68 ms (24 ms), the checks after 1.2 ms. Within the search (about 0.6 microseconds
+a query): gathering the 27 cells' ~117 candidates once per cell (7.5 points a cell) ~30 ms;
+selecting the k nearest ~105 ms (squared distances and threshold passes, which vectorize,
+~16 ms; compacting the ~1.5 k candidates under the threshold and dropping the farthest down
+to k the rest: an ordered insertion of them cost 1.4 times as much, a binary heap over all
+candidates, the first try, 1.35 times as much for the whole kernel); the settling check, the
+wide 5 x 5 x 5 block (9 queries of 300k on the torus) and the loop the rest. The fixed cost
+of a call (everything but search and normals) is about 15 ms at 300k, 4 ms at 100k. The row
+hash matters: a linear one made the rows a surface passes through collide, and at 100k points
+half the candidates came from other rows (now 6-9 %). What limits it now: the selection of
+the k nearest among ~7 k candidates (smaller cells give fewer candidates but send more
+queries to the wide block: 1.13 times slower at a side of 1.1 k-th distances), then the
+closed-form eigen-solve (an arccos and two cosines a point, ~110 ns) and the covariance. Two
+threads split the points evenly (tasks of 1024 grid-sorted points); on this loaded machine the
+second thread rarely got a core of its own (two threads: the same CPU time, no shorter wall).
 
 Cloud: points uniform by area on a torus (R = 1, r = 0.35) with exact outward
 normals. Cases, all with k = 16 nearest neighbours:
@@ -49,9 +73,9 @@ normals. Cases, all with k = 16 nearest neighbours:
 
 trimesh has no point-cloud normal estimation (``trimesh.points`` offers a
 single best-fit plane), so it is listed as not run. Open3D uses all cores
-through OpenMP; splinekit's k-d tree queries use all cores (``workers=-1``),
-the rest is single-threaded numpy. The load average is printed: other
-processes on the machine skew the timings.
+through OpenMP; splinekit's compiled search and normals use all cores (numba
+threads), its numpy path's k-d tree queries too (``workers=-1``). The load
+average is printed: other processes on the machine skew the timings.
 """
 
 from __future__ import annotations
@@ -179,31 +203,33 @@ def issue_row(quick: bool, o3d) -> None:
     rounds = 3 if quick else 5
     P, true = torus_cloud(n)
     impls, skipped = pca_impls(o3d)
-    first, best, out = {}, {}, {}
+    first, best, cpu, out = {}, {}, {}, {}
     for key, _, fn in impls:  # warm-up: loads kernels, thread pools, imports
         t = time.perf_counter()
         out[key] = fn(P)
         first[key] = time.perf_counter() - t
-        best[key] = np.inf
+        best[key] = cpu[key] = np.inf
     for _ in range(rounds):
         for key, _, fn in impls:
-            t = time.perf_counter()
+            c, t = time.process_time(), time.perf_counter()
             fn(P)
             best[key] = min(best[key], time.perf_counter() - t)
+            cpu[key] = min(cpu[key], time.process_time() - c)
     out_bytes = n * 3 * 8
     script = os.path.abspath(__file__)
     print(f"## issue-17 row: PCA normals, k = {K}, unoriented, {n} torus points "
           f"(best of {rounds} interleaved rounds; load average {os.getloadavg()[0]:.2f})\n")
-    print("| implementation | best s | peer / splinekit | max angle to the true normal | peak memory (output "
-          f"{mb(out_bytes)}) |")
-    print("|---|---:|---:|---:|---:|")
+    print("| implementation | best s | peer / splinekit | CPU s (all threads) | CPU peer / splinekit "
+          f"| max angle to the true normal | peak memory (output {mb(out_bytes)}) |")
+    print("|---|---:|---:|---:|---:|---:|---:|")
     ours = best["splinekit"]
     for key, label, _ in impls:
         peak = in_child(script, f"{key}:{n}", {"SPLINEKIT_NUMBA": "1" if key == "splinekit" else "0"})
         ratio = best[key] / ours
-        print(f"| {label} | {best[key]:.3f} | {ratio:.2f} | {max_line_angle(out[key], true):.2f} deg | {mb(peak)} |")
+        print(f"| {label} | {best[key]:.3f} | {ratio:.2f} | {cpu[key]:.3f} | {cpu[key] / cpu['splinekit']:.2f} "
+              f"| {max_line_angle(out[key], true):.2f} deg | {mb(peak)} |")
     for note in skipped:
-        print(f"| {note} | | | | |")
+        print(f"| {note} | | | | | | |")
     print(f"\nsplinekit's first call (kernels loaded from numba's cache, or compiled): {first['splinekit']:.3f} s")
     for key, target in ROW_TARGETS.items():
         if key in best:

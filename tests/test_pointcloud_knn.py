@@ -1,6 +1,8 @@
 """The compiled k-nearest-neighbour search and PCA normals (splinekit.pointcloud._pointtree)
 against independent references: brute-force distances (scipy's cdist over every pair), LAPACK's
-eigh of the brute-force neighbourhoods' covariances, and the numpy path (cKDTree) end to end."""
+eigh of the brute-force neighbourhoods' covariances, and the numpy path (cKDTree) end to end.
+Both compiled searches are checked: the cell grid (with its wide-block and hierarchy fallbacks)
+and the Morton hierarchy alone."""
 
 from __future__ import annotations
 
@@ -8,6 +10,7 @@ import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from scipy.spatial import cKDTree
 from scipy.spatial.distance import cdist
 
 from splinekit import _kernels
@@ -40,10 +43,17 @@ def cloud(kind, n, rng):
         return P
     if kind == "line-ish":  # far larger along x than across
         return rng.normal(size=(n, 3)) * [1e3, 1e-2, 1e-2] + 5e6
+    if kind == "mixed":  # a dense curved sheet in a sparse haze: the grid's cells suit only the sheet
+        m = n - n // 8
+        uv = rng.uniform(-1, 1, (m, 2))
+        sheet = np.column_stack([uv, 0.2 * np.sin(2 * uv[:, 0])])
+        return np.vstack([sheet, rng.uniform(-3, 3, (n - m, 3))])
     raise AssertionError(kind)
 
 
-KINDS = ["uniform", "clusters", "sheet", "line-ish"]
+KINDS = ["uniform", "clusters", "sheet", "line-ish", "mixed"]
+
+PATHS = {"grid": 1e300, "hierarchy": 0.0}  # _pointtree.CROWDING: the grid always fits / never does
 
 
 def brute_knn_distances(P, k):
@@ -51,20 +61,23 @@ def brute_knn_distances(P, k):
     return np.sort(D, axis=1)[:, :k], D
 
 
-@settings(max_examples=40, deadline=None)
-@given(kind=st.sampled_from(KINDS), n=st.integers(1, 300), k=st.integers(1, 24), seed=st.integers(0, 2**32 - 1))
-def test_knn_matches_brute_force(kind, n, k, seed):
+@settings(max_examples=60, deadline=None)
+@given(kind=st.sampled_from(KINDS), path=st.sampled_from([None, *PATHS]), n=st.integers(1, 300),
+       k=st.integers(1, 24), seed=st.integers(0, 2**32 - 1))
+def test_knn_matches_brute_force(kind, path, n, k, seed):
     kernels = _kernels.load(_pointtree.KERNELS)
     if kernels is None:
         pytest.skip("numba kernels unavailable")
     k = min(k, n)
     P = cloud(kind, n, np.random.default_rng(seed))
-    original = _pointtree._kernels_for
+    original = _pointtree._kernels_for, _pointtree.CROWDING
     _pointtree._kernels_for = lambda n, k: kernels
+    if path is not None:
+        _pointtree.CROWDING = PATHS[path]
     try:
         d, idx = _pointtree.compiled_knn(P, k)
     finally:
-        _pointtree._kernels_for = original
+        _pointtree._kernels_for, _pointtree.CROWDING = original
     ref, D = brute_knn_distances(P, k)
     scale = 1e-12 * (1 + np.abs(P).max())
     assert np.allclose(d, ref, rtol=1e-12, atol=scale)
@@ -74,8 +87,11 @@ def test_knn_matches_brute_force(kind, n, k, seed):
     assert all(len(set(row)) == k for row in idx.tolist())
 
 
-@pytest.mark.parametrize("kind", ["uniform", "sheet", "clusters"])
-def test_compiled_normals_match_lapack_on_brute_force_neighbourhoods(compiled, kind):
+@pytest.mark.parametrize("path", [None, *PATHS])
+@pytest.mark.parametrize("kind", ["uniform", "sheet", "clusters", "mixed"])
+def test_compiled_normals_match_lapack_on_brute_force_neighbourhoods(compiled, monkeypatch, kind, path):
+    if path is not None:
+        monkeypatch.setattr(_pointtree, "CROWDING", PATHS[path])
     rng = np.random.default_rng(11)
     P = cloud(kind, 400, rng)
     if kind == "sheet":  # a curved sheet without duplicates: every neighbourhood has a normal
@@ -180,3 +196,55 @@ def test_vectorized_eigen_solve_of_a_double_smallest_eigenvalue_stays_in_its_eig
     assert np.allclose(np.linalg.norm(v, axis=1), 1.0)
     assert np.abs(np.einsum("md,md->m", v[:-1], Q[:, :, 2])).max() < 1e-6
     assert np.allclose(values[:-1], [0.5, 0.5, 2.0], atol=1e-12)
+
+
+def grid_search(kernels, P, k):
+    """The grid pass alone: ``(grid, unsettled (n,) bool in original order, kth distance (n,))``."""
+    grid = _pointtree._Grid(kernels, P, k, *kernels.bounds(P))
+    n = len(P)
+    unsettled = np.zeros(n, dtype=np.uint8)
+    kth = np.full(n, np.nan)
+    none = np.empty((0, k)), np.empty((0, k), dtype=np.int64)
+    kernels.search(*grid.args(k), *none, kth, np.empty((0, 3)), np.empty((0, 3)), unsettled)
+    return grid, unsettled[np.argsort(grid.order)].astype(bool), np.sqrt(kth)
+
+
+def test_grid_settles_an_evenly_sampled_surface_itself(compiled):
+    # the fast path must serve the clouds normals are estimated on: a torus sampled evenly
+    P, _ = torus(20_000, seed=5)
+    grid, unsettled, kth = grid_search(compiled, P, 16)
+    assert grid.fits
+    assert unsettled.mean() < 0.01
+    ref, _ = cKDTree(P).query(P, 16)
+    assert np.allclose(kth[~unsettled], ref[~unsettled, -1], rtol=1e-12, atol=0)
+
+
+def test_grid_hands_what_it_cannot_settle_to_the_hierarchy(compiled):
+    # a dense sheet and a sparse haze: the haze's neighbourhoods reach past two rings of cells
+    P = cloud("mixed", 4000, np.random.default_rng(2))
+    grid, unsettled, _ = grid_search(compiled, P, 10)
+    assert grid.fits and 0 < unsettled.sum() < len(P) // 4
+    assert unsettled[-500:].mean() > 0.5  # mostly the haze
+    d, idx = _pointtree.compiled_knn(P, 10)
+    ref, _ = cKDTree(P).query(P, 10)
+    assert np.allclose(d, ref, rtol=1e-12, atol=1e-15)
+    assert np.array_equal(idx[:, 0], np.arange(len(P)))
+
+
+def test_a_grid_does_not_fit_a_blob_a_billion_times_smaller_than_the_cloud(compiled):
+    # cells are at least a millionth of the extent: the blob falls into a single cell
+    rng = np.random.default_rng(3)
+    P = np.vstack([rng.normal(scale=1e-9, size=(3000, 3)), [[1e3, 0, 0], [-1e3, 0, 0]]])
+    assert not _pointtree._Grid(compiled, P, 16, *compiled.bounds(P)).fits
+    d, idx = _pointtree.compiled_knn(P, 16)  # the hierarchy serves it
+    ref, _ = cKDTree(P).query(P, 16)
+    assert np.allclose(d, ref, rtol=1e-12, atol=0)
+
+
+def test_clusters_far_apart_are_served_by_the_grid(compiled):
+    # empty space between clusters costs no cells: the cell side suits the clusters
+    P = cloud("clusters", 3000, np.random.default_rng(3))
+    grid, unsettled, kth = grid_search(compiled, P, 16)
+    assert grid.fits and unsettled.mean() < 0.05
+    ref, _ = cKDTree(P).query(P, 16)
+    assert np.allclose(kth[~unsettled], ref[~unsettled, -1], rtol=1e-12, atol=0)

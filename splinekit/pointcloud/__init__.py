@@ -8,7 +8,8 @@ reconstruction as a B-spline height field (:func:`fit_height_field`) or an
 implicit surface (:func:`reconstruct_implicit`). Exact point-to-mesh distances:
 :func:`closest_points_on_mesh`. Every function takes and returns whole
 ``(n, 3)`` float64 arrays; neighbour searches use scipy's cKDTree, or for large
-clouds the compiled Morton-ordered hierarchy of :mod:`._knn_kernels` (the same answer).
+clouds the compiled cell grid of :mod:`._cellgrid_kernels` with the Morton-ordered
+hierarchy of :mod:`._knn_kernels` behind it (the same answer; see :mod:`._pointtree`).
 """
 
 from .analysis import PointCurvature, curvature, remove_outliers

@@ -31,9 +31,8 @@ def as_cloud(points, name: str = "points", dim: int | None = 3, min_count: int =
         raise ControlPointError(
             f"{name} is {'empty' if P.shape[0] == 0 else f'only {P.shape[0]} points'}: need at least {min_count}"
         )
-    bad = ~np.isfinite(P).all(axis=1)
-    if bad.any():
-        i = int(np.flatnonzero(bad)[0])
+    if not np.isfinite(P).all():  # one flat pass; the row is looked for only on failure
+        i = int(np.flatnonzero(~np.isfinite(P).all(axis=1))[0])
         raise ControlPointError(f"{name}[{i}] = {P[i].tolist()} is not finite")
     return np.ascontiguousarray(P)
 

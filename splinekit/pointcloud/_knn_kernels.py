@@ -4,7 +4,8 @@ Loaded through :func:`splinekit._kernels.load`, never by ``import splinekit``. T
 they must agree with is scipy's cKDTree query (:func:`splinekit.pointcloud._cloud.neighbours`)
 followed by :func:`splinekit.pointcloud._cloud.covariances` and
 :func:`~splinekit.pointcloud._cloud.smallest_eigenpairs`; :mod:`splinekit.pointcloud._pointtree`
-drives them.
+drives them. The faster cell grid of :mod:`splinekit.pointcloud._cellgrid_kernels` answers
+first; this hierarchy serves the queries the grid cannot settle and clouds no grid fits.
 
 The search structure is a bounding-volume hierarchy over the points sorted along a Morton
 curve: leaves of :data:`LEAF` consecutive sorted points, a complete binary tree stored as a heap
@@ -17,7 +18,8 @@ nodes (the cache-friendly order that makes this faster than cKDTree's own per-po
 
 The normal of a neighbourhood is computed in the same pass as its search, while its points
 are still in cache: covariance about the neighbourhood's centroid, then the closed-form
-eigen-analysis of :func:`sym3_smallest`.
+eigen-analysis of :func:`sym3_smallest`. Results are written at each point's original row
+(``order[row]``), for the rows asked (all of them, or those the grid left).
 """
 
 from __future__ import annotations
@@ -170,25 +172,28 @@ def _knn_one(S, lo, hi, L, k, i, bd, bi, stack):
 
 
 @njit(cache=True, parallel=True)
-def knn(S, lo, hi, L, k, out_d2, out_idx):
-    """``k`` nearest neighbours of every sorted point: squared distances ``out_d2 (n, k)``
-    ascending and sorted indices ``out_idx (n, k)``, the point itself first. A neighbour that
-    could not be found (only with distances overflowing to inf) is left as ``inf, -1``."""
-    n = S.shape[0]
+def knn(S, order, rows, L, lo, hi, k, out_d, out_idx):
+    """``k`` nearest neighbours of the sorted points ``rows``: distances ``out_d (n, k)``
+    ascending and original indices ``out_idx (n, k)``, the point itself first, written at the
+    point's original row ``order[row]`` (``order``: sorted -> original index). A neighbour that
+    could not be found (only with distances overflowing to inf) is left as ``inf`` (index 0)."""
+    m = rows.shape[0]
     chunk = 2048
-    for c in prange((n + chunk - 1) // chunk):
+    for c in prange((m + chunk - 1) // chunk):
         stack = np.empty(256, dtype=np.int64)
         bd = np.empty(k)
         bi = np.empty(k, dtype=np.int64)
-        for i in range(c * chunk, min(n, (c + 1) * chunk)):
+        for r in range(c * chunk, min(m, (c + 1) * chunk)):
+            i = rows[r]
             count = _knn_one(S, lo, hi, L, k, i, bd, bi, stack)
+            o = order[i]
             for j in range(k):
                 if j < count:
-                    out_d2[i, j] = bd[j]
-                    out_idx[i, j] = bi[j]
+                    out_d[o, j] = np.sqrt(bd[j])
+                    out_idx[o, j] = order[bi[j]]
                 else:
-                    out_d2[i, j] = np.inf
-                    out_idx[i, j] = -1
+                    out_d[o, j] = np.inf
+                    out_idx[o, j] = 0
 
 
 @njit(cache=True, inline="always")
@@ -265,33 +270,35 @@ def sym3_smallest(a, b, c, d, e, f, out):
 
 
 @njit(cache=True, parallel=True)
-def knn_normals(S, lo, hi, L, k, out_values, out_normals, out_kth, out_idx, want_idx):
-    """PCA normals of every sorted point over its ``k`` nearest neighbours.
+def knn_normals(S, order, rows, L, lo, hi, k, out_values, out_normals, out_kth, out_idx, want_idx):
+    """PCA normals of the sorted points ``rows`` over their ``k`` nearest neighbours.
 
-    Writes, per sorted point: the covariance eigenvalues ascending ``out_values (n, 3)``
-    (length^2), the unit eigenvector of the smallest ``out_normals (n, 3)``, the squared
-    distance to the k-th neighbour ``out_kth (n,)`` (inf when distances overflow) and, when
-    ``want_idx``, the sorted neighbour indices ``out_idx (n, k)``, the point itself first.
+    Writes, at the point's original row ``order[row]``: the covariance eigenvalues ascending
+    ``out_values (n, 3)`` (length^2), the unit eigenvector of the smallest ``out_normals (n, 3)``,
+    the squared distance to the k-th neighbour ``out_kth (n,)`` (inf when distances overflow)
+    and, when ``want_idx``, the original neighbour indices ``out_idx (n, k)``, the point itself first.
     """
-    n = S.shape[0]
+    m = rows.shape[0]
     chunk = 2048
-    for c in prange((n + chunk - 1) // chunk):
+    for c in prange((m + chunk - 1) // chunk):
         stack = np.empty(256, dtype=np.int64)
         bd = np.empty(k)
         bi = np.empty(k, dtype=np.int64)
         eig = np.empty(6)
-        for i in range(c * chunk, min(n, (c + 1) * chunk)):
+        for r in range(c * chunk, min(m, (c + 1) * chunk)):
+            i = rows[r]
+            o = order[i]
             count = _knn_one(S, lo, hi, L, k, i, bd, bi, stack)
             if count < k:
-                out_kth[i] = np.inf
+                out_kth[o] = np.inf
                 for j in range(3):
-                    out_values[i, j] = 0.0
-                    out_normals[i, j] = 0.0
+                    out_values[o, j] = 0.0
+                    out_normals[o, j] = 0.0
                 continue
-            out_kth[i] = bd[k - 1]
+            out_kth[o] = bd[k - 1]
             if want_idx:
                 for j in range(k):
-                    out_idx[i, j] = bi[j]
+                    out_idx[o, j] = order[bi[j]]
             mx = my = mz = 0.0
             for j in range(k):
                 t = bi[j]
@@ -313,5 +320,5 @@ def knn_normals(S, lo, hi, L, k, out_values, out_normals, out_kth, out_idx, want
                 sxz += x * z
             sym3_smallest(sxx / k, syy / k, szz / k, sxy / k, syz / k, sxz / k, eig)
             for j in range(3):
-                out_values[i, j] = eig[j]
-                out_normals[i, j] = eig[3 + j]
+                out_values[o, j] = eig[j]
+                out_normals[o, j] = eig[3 + j]
