@@ -26,25 +26,40 @@ those (they lie within ``D + s + eps + r`` of ``c``, ``s = sum_i h_i |g_c,i|``).
 a node of the hierarchy, and a triangle before its exact distance, when that test fails for
 everything in its bounding ball (:func:`_may_hold`).
 
-Each sample then measures exactly only the candidates whose half-plane bound beats its best so
-far: a triangle lies in its plane, on the far side of the line through its closest point ``q``
-to the centre across ``w``, the in-plane part of ``c - q`` (for ``q`` on an edge or a vertex;
-the plane alone for ``q`` inside the face), so the distance from ``x`` to that half-plane,
-``sqrt((n . (x - q))^2 + max(0, w . (x - q))^2)``, bounds ``d(x, t)`` from below. It is exact
-while ``x``'s closest point stays on the same edge, much tighter than the linear bound
-``d_t + g_t . (x - c)`` it contains, and costs two dot products (a branch-free loop over the
-candidates). A sliver triangle whose normal rounding could turn gets no plane (always measured).
+Candidates carry a bound instead of a closest point: a triangle lies in its plane
+``n . y = n . a``, inside its three edge lines ``u_k . y <= u_k . a_k`` (``u_k`` the unit
+in-plane normals pointing out) and inside its bounding disk (centroid ``m``, radius ``rho``),
+so with ``p = n . x - n . a`` and ``v`` the in-plane part of ``x - m``,
+``d(x, t) >= sqrt(p^2 + max(0, max_k (u_k . x - u_k . a_k), |v| - rho)^2)``: exact when ``x``
+faces the triangle or one of its edges, within the disk's slack beyond a vertex, and
+independent of any centre (20 coefficients per triangle, ``MeshDistance._bvh_prisms``; a
+sliver whose normal rounding could turn gets none and is always measured). It is convex in
+``x`` (the norm of nonnegative convex parts), so linearized at a point it bounds from below
+around it, which is how the blocks' lists shrink without exact distances:
 
-A block near the surface (``D <= FAR * r``) is split in eight; a part still near takes every
-triangle within ``D + 2 r`` of its centre (``d(x) <= D + r`` and ``d(x, t) >= d_t - r``) and the
-same per-sample scan. The bounds make the answer exact, not approximate: they only decide which
-triangles to measure.
+* a far top block of ``block^3`` samples (``block`` = 8) collects its list by the range query;
+  each of its eight halves (4^3) finds its own exact nearest triangle among that list (measuring
+  only the candidates whose bound beats the best so far), then keeps the candidates whose bound,
+  linearized at its centre, passes the block test for it; each 2^3 quarter does the same from
+  its parent's list; each sample scans its 2^3 block's list (about 44 candidates here, a
+  branch-free loop the compiler vectorizes) and measures exactly only those whose bound beats
+  the best of two seeds (the block centre's and the previous sample's triangle): about 3.5 a
+  sample, most of them ties (the triangles around the nearest vertex);
+* a block near the surface (``D <= FAR * r``) is split in eight, each part with its own centre
+  query; a 2^3 part still near takes every triangle within ``D + 2 r`` of its centre
+  (``d(x) <= D + r`` and ``d(x, t) >= d_t - r``). A far block's parts are far (``FAR`` = 2).
 
-Profile (82k triangles at 128^3, one thread, CPU time; the module notes of
-``benchmarks/bench_sdf_grid.py`` have the figures): about 10 % the blocks' centre queries, 55 %
-the range queries (about 550 exact distances per far block of 64 samples, of which about 275
-pass the test), 35 % the per-sample scans (about 200 half-plane bounds and 11 exact distances
-per sample, most of those ties: the triangles around the nearest vertex).
+The lists of a chunk of blocks are one per level (depth first, a parent's list outlives its
+children), rows padded off multiples of 4 kB: rows exactly a power of two apart shared cache
+sets, and the filter, which streams all 20 rows at once, ran five times slower. The bounds make
+the answer exact, not approximate: they only decide which triangles to measure.
+
+Profile (82k triangles at 128^3, one thread; counts per sample of 1,854,840): range queries
+2,721 at 8^3, 6,276 at 4^3 and 36,768 at 2^3 (12,166 of them near), 11.7 hierarchy nodes, 6.9
+exact distances; filters 42.8 candidates scanned, 0.7 exact distances, 6.7 kept; leaves 44
+bounds, 3.5 exact distances (1.2 ties). CPU time about half the range and centre queries (the
+2^3 blocks near the surface most of them), half the filters and the leaves (the module notes of
+``benchmarks/bench_sdf_grid.py`` have the timings).
 """
 
 from __future__ import annotations
