@@ -74,9 +74,8 @@ THIN = 1e-6
 no plane in the grid kernel's bounds (it is then always measured exactly)."""
 
 GRID_WORK_BYTES = 512
-"""Bytes per triangle of the grid kernel's work arrays, held once per thread: a candidate list
-per level (three levels for GRID_BLOCK = 8), each entry a triangle and its 20 bound
-coefficients, and one scratch value."""
+"""Bytes per triangle and thread of the grid kernel's work arrays: a candidate list per level
+(three for GRID_BLOCK = 8) of triangles with their 20 bound coefficients, and a scratch value."""
 
 # features of a closest point: 0 face interior, 1-3 vertex 0-2, 4 edge 01, 5 edge 12, 6 edge 20
 FACE, EDGE01, EDGE12, EDGE20 = 0, 4, 5, 6
@@ -345,11 +344,9 @@ class MeshDistance:
 
     @cached_property
     def _bvh_prisms(self):
-        """Per triangle in the hierarchy's order, ``(m, 16)``: its plane ``(n, n . a)`` and the
-        lines of its three edges in that plane ``(u_k, u_k . a_k)``, ``u_k`` the unit in-plane
-        normal pointing away from the triangle, for the bound ``sqrt((n . x - n . a)^2 + max(0,
-        max_k u_k . x - u_k . a_k)^2)`` of :mod:`._gridsdf_kernels` (the distance to the prism
-        over the triangle; all zero, so never a bound, for a triangle too thin for its normal)."""
+        """Per triangle in the hierarchy's order, ``(m, 20)``: plane ``(n, n . a)``, edge lines
+        ``(u_k, u_k . a_k)`` (unit in-plane normals pointing out) and bounding disk (centroid,
+        radius), for the bound of :mod:`._gridsdf_kernels` (none for a triangle too thin)."""
         tri = self.bvh.tri
         plane, ball = self._bvh_planes
         out = np.zeros((len(tri), 20))
