@@ -57,9 +57,9 @@ the answer exact, not approximate: they only decide which triangles to measure.
 Profile (82k triangles at 128^3, one thread; counts per sample of 1,854,840): range queries
 2,721 at 8^3, 6,276 at 4^3 and 36,768 at 2^3 (12,166 of them near), 11.7 hierarchy nodes, 6.9
 exact distances; filters 42.8 candidates scanned, 0.7 exact distances, 6.7 kept; leaves 44
-bounds, 3.5 exact distances (1.2 ties). CPU time about half the range and centre queries (the
-2^3 blocks near the surface most of them), half the filters and the leaves (the module notes of
-``benchmarks/bench_sdf_grid.py`` have the timings).
+bounds, 3.5 exact distances (1.2 ties). CPU time about half the range and centre queries (their
+nodes and exact distances spread over the three levels), half the filters and the leaves (the
+module notes of ``benchmarks/bench_sdf_grid.py`` have the timings).
 """
 
 from __future__ import annotations
@@ -306,7 +306,7 @@ def _leaves(i0, i1, j0, j1, k0, k1, n, ct, cv, lb, tc, t0, origin, spacing, ny, 
             cp):
     """Every sample of ``[i0, i1) x [j0, j1) x [k0, k1)`` from its block's ``n`` candidates:
     first bound from the block centre's nearest triangle ``tc`` and the previous sample's
-    ``t0``, then the half-plane bounds of all candidates at once (a branch-free loop the
+    ``t0``, then the bounds of all candidates at once (a branch-free loop the
     compiler vectorizes), exact distances only where a bound beats the best so far. Returns
     the last sample's triangle."""
     for i in range(i0, i1):
