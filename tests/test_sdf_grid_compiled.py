@@ -74,7 +74,8 @@ def test_the_far_blocks_are_taken_and_agree_with_per_point_queries(compiled):
     d, found = dist.signed(P)
     assert found.all()
     assert np.allclose(sdf.values.ravel(), d, atol=1e-12, rtol=0)
-    # a block of 4^3 has half-diagonal 1.5 voxel diagonals; beyond FAR = 2 of those it is far
+    # a 4^3 block (half of a top block of 8^3, which takes its own range query when its top
+    # block is near) has half-diagonal 1.5 voxel diagonals; beyond FAR = 2 of those it is far
     far = np.abs(d) > 3 * np.linalg.norm(sdf.spacing) + 1.5 * np.linalg.norm(sdf.spacing)
     assert far.mean() > 0.3
 
