@@ -5,6 +5,7 @@ Run from the repository root::
 
     python benchmarks/bench_sdf_grid.py           # 81,920 triangles at 128^3 (about 15 minutes loaded)
     python benchmarks/bench_sdf_grid.py --quick   # 5,120 triangles at 48^3 (a minute)
+    python benchmarks/bench_sdf_grid.py --threads # from_mesh on 1 and 2 threads against pysdf, CPU time
 
 Case: a lumpy sphere, closed and non-convex: an icosphere of level 6 (81,920
 triangles; level 4, 5,120 triangles, with ``--quick``) with its radius
@@ -233,13 +234,43 @@ def issue_row(quick):
     return mesh, sdf
 
 
+def threads_row(quick, rounds=3):
+    """from_mesh on one and two threads (``numba.set_num_threads``) and pysdf, interleaved: wall
+    and CPU seconds of each (the machine is shared: compare the CPU times of one round)."""
+    import numba
+    import pysdf
+
+    mesh, V, T, res = case(quick)
+    pts, _ = grid_points(mesh, res)
+    f = pysdf.SDF(V.astype(np.float32), T.astype(np.uint32))
+    p32 = pts.astype(np.float32)
+    print(f"| round | threads | from_mesh wall s | from_mesh CPU s | pysdf wall s | pysdf CPU s | "
+          f"pysdf CPU / from_mesh CPU | load |")
+    print("|---:|---:|---:|---:|---:|---:|---:|---:|")
+    for r in range(rounds):
+        for n in (1, 2):
+            numba.set_num_threads(n)
+            w, c = time.perf_counter(), time.process_time()
+            with_numba("1", lambda: from_mesh(mesh, res))
+            w, c = time.perf_counter() - w, time.process_time() - c
+            pw, pc = time.perf_counter(), time.process_time()
+            f(p32)
+            pw, pc = time.perf_counter() - pw, time.process_time() - pc
+            print(f"| {r} | {n} | {w:.3f} | {c:.3f} | {pw:.3f} | {pc:.3f} | {pc / c:.2f} | {os.getloadavg()[0]:.2f} |",
+                  flush=True)
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[1])
     ap.add_argument("--quick", action="store_true", help="small case")
+    ap.add_argument("--threads", action="store_true", help="one and two threads against pysdf, CPU time")
     ap.add_argument("--child", help=argparse.SUPPRESS)
     args = ap.parse_args()
     if args.child:
         child(args.child)
+        return
+    if args.threads:
+        threads_row(args.quick)
         return
     mesh, sdf = issue_row(args.quick)
     res = 48 if args.quick else 128
