@@ -242,3 +242,15 @@ def test_samples_on_vertices_edges_and_far_blocks_at_every_level(compiled):
     assert np.array_equal(d.ravel()[~on] < 0, inside[~on])
     # a top block's half-diagonal is 3.5 sqrt(3) steps; beyond FAR of those it is far
     assert (exact > 2 * 3.5 * np.sqrt(3) * 0.25 + 3.5 * np.sqrt(3) * 0.25).mean() > 0.2
+
+
+@pytest.mark.parametrize("block", [2, 4, 16])
+def test_the_answer_does_not_depend_on_the_block_size(compiled, block, monkeypatch):
+    # one level (2: the leaves take the range query's list), two, four: the same exact grid
+    mesh = lumpy_sphere(2)
+    dist = MeshDistance.of_mesh(mesh)
+    args = (np.full(3, -2.5), np.full(3, 0.13), (39, 40, 41))
+    ref = dist.grid_signed(*args)
+    monkeypatch.setattr(meshdistance, "GRID_BLOCK", block)
+    assert np.allclose(dist.grid_signed(*args), ref, atol=1e-12, rtol=0)
+    check_random_samples(mesh, from_mesh(mesh, 30), 600, seed=block)

@@ -67,7 +67,8 @@ GRID_KERNELS = "splinekit.pointcloud._gridsdf_kernels"
 
 GRID_BLOCK = 8
 """Samples along each side of the top blocks :meth:`MeshDistance.grid_signed` shares its work
-over; each is halved level by level down to blocks of 2^3 (module notes of its kernels)."""
+over, halved level by level down to 2^3 (module notes of its kernels); 82k triangles at 128^3,
+one thread: 3.2 CPU s with 8, 3.9-4.0 with 4, 3.2-3.3 with 16 (four levels, more memory)."""
 
 THIN = 1e-6
 """A triangle whose edge cross product is shorter than this times its two edges' lengths gets
