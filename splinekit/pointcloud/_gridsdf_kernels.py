@@ -362,8 +362,9 @@ def grid_signed(origin, spacing, shape, limit, block, lo, hi, tlo, thi, tri, L, 
     """Signed distances (negative inside) of the samples ``origin + (i, j, k) * spacing`` of a
     grid of ``shape`` into ``out`` (flat, C order); ``inf`` for samples whose squared distance
     exceeds ``limit``. Triangles ``tri (m, 3, 3)``, boxes and pseudo-normals (face ``fn (m, 3)``,
-    edge ``en (m, 3, 3)``, vertex per corner ``vn (m, 3, 3)``), unit plane normals ``plane (m, 3)``
-    and bounding balls ``ball (m, 4)`` in the hierarchy's order. Top blocks of ``block^3``
+    edge ``en (m, 3, 3)``, vertex per corner ``vn (m, 3, 3)``), unit plane normals ``plane (m, 3)``,
+    bounding balls ``ball (m, 4)`` and bound coefficients ``prism (m, NB)`` (module notes) in the
+    hierarchy's order. Top blocks of ``block^3``
     samples (``block`` a power of two, at least 2), halved level by level down to ``2^3``."""
     nx, ny, nz = shape[0], shape[1], shape[2]
     bx = (nx + block - 1) // block
