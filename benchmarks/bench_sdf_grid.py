@@ -5,6 +5,7 @@ Run from the repository root::
 
     python benchmarks/bench_sdf_grid.py           # 81,920 triangles at 128^3 (about 15 minutes loaded)
     python benchmarks/bench_sdf_grid.py --quick   # 5,120 triangles at 48^3 (a minute)
+    python benchmarks/bench_sdf_grid.py --threads # from_mesh on 1 and 2 threads against pysdf, CPU time
 
 Case: a lumpy sphere, closed and non-convex: an icosphere of level 6 (81,920
 triangles; level 4, 5,120 triangles, with ``--quick``) with its radius
@@ -30,30 +31,44 @@ the output, the float64 grid. Agreement with splinekit (max |difference|, differ
 is printed; on the full case Open3D's ray-parity sign is wrong at a few samples (the
 generalized winding number, by brute force, agrees with splinekit there).
 
-Profile of ``from_mesh`` at 128^3 (81,920 triangles): the kernel call (``MeshDistance.grid_signed``
-with its pseudo-normals and planes; the compiled kernel is ``splinekit/pointcloud/_gridsdf_kernels.py``)
-takes 4.47 of from_mesh's 4.59 CPU seconds, the component sign pass most of the rest. The kernel
-works by blocks of 4^3 samples: one exact query for the block centre, one range query for the
-triangles that convexity bounds leave possible, then a scan per sample. Measured on one thread
-(CPU seconds at load 13-15, so +-10 %): centre queries 0.3-0.4 s, range queries 1.9-2.4 s
-(about 2,000 hierarchy nodes, 1,000 triangle boxes and 550 exact distances per far block of 64
-samples, of which 275 pass the block test), per-sample scans 1.3-1.5 s (about 200 half-plane
-bounds and 11 exact distances per far sample), blocks near the surface (split in eight) 0.2 s:
-4.2-4.5 s in all. pysdf spends 4.0-4.3 CPU seconds on the same points (two threads). This
-session's changes (half-plane bounds per sample instead of the linear bound: 25 -> 11 exact
-distances per sample; a ball test before each exact distance in the range query: 1,626 -> 550
-per block; near blocks split in eight instead of a hierarchy walk per sample) took from_mesh on
-one thread (``NUMBA_NUM_THREADS=1``) from 5.5-5.8 to 4.7-5.0 CPU seconds, back to back (load 14):
-about 1.2x. pysdf measures about six triangles per sample, the faces around the nearest vertex,
-which is not the exact distance (its largest error here is about 1e-4, 0.01 % of the size). What limits an exact answer: far from a finely
-triangulated surface a few hundred triangles lie within the blocks' bound slack
-(``r^2 / 2 (D - r)``, the curvature of the upper bound) of the nearest one, and each must be
-bounded per sample to prove which is nearest; most of the exact distances left are ties (the
-six triangles around the nearest vertex). Three times pysdf needs about 0.75 microseconds of CPU
-per sample in all, below what the per-sample scan alone costs now (0.8-0.9 per far sample); the next step would be a
-hierarchy of candidate lists (8^3 -> 4^3 -> 2^3 blocks, each child filtering its parent's list
-by the half-plane bound linearized at its own centre, no exact distance) and candidates by
-feature (vertex, edge, face) so that ties are measured once.
+Profile of ``from_mesh`` at 128^3 (81,920 triangles): the kernel call (``MeshDistance.grid_signed``;
+the compiled kernel is ``splinekit/pointcloud/_gridsdf_kernels.py``, whose notes describe it) takes
+nearly all of it; the component sign pass about 0.13 CPU seconds, the hierarchy, pseudo-normals and
+bounds about 0.2. Earlier sessions: blocks of 4^3 samples, one range query per block, a half-plane
+bound per candidate and sample (4.2-4.5 CPU seconds on one thread: centre queries 0.3-0.4, range
+queries 1.9-2.4, per-sample scans 1.3-1.5, near blocks 0.2; about 200 bounds and 11 exact
+distances per far sample, most exact distances loose bounds rather than ties).
+
+This session (the docstring's "next step"): a hierarchy of candidate lists, 8^3 -> 4^3 -> 2^3,
+each child filtering its parent's list by a per-triangle bound (plane, edge lines and bounding
+disk: exact where the sample faces the triangle or an edge) linearized at its own centre, with
+no exact distance but the child centre's nearest triangle. Counts per sample (one thread,
+1,854,840 samples): range queries 2,721 at 8^3, 6,276 at 4^3, 36,768 at 2^3 (fresh queries of
+the 2^3 parts of 4^3 blocks near the surface; 12,166 of them near), together 11.7 hierarchy
+nodes and 6.9 exact distances; filters 42.8 bounds, 0.7 exact distances, 6.7 kept; leaves 44
+bounds and 3.5 exact distances (1.2 of them ties, 1.0 improvements; the old scan measured 11).
+One-thread CPU seconds, old and new kernels interleaved in fresh processes (load 4.6-5.2):
+from_mesh 4.40, 4.44, 4.55, 4.48 (old) against 3.32, 3.31, 3.40, 3.22 (new): 1.35x. By stage
+(the kernel alone, stages switched off one at a time, load about 4): 2.9-3.0 in all, of which
+1.5-1.6 the centre and range queries and 1.4-1.5 the filters and the leaves. Per operation
+(microbenchmark): a bound 1.7 ns in the vectorized loop; the range queries about 33 us each
+(470 nodes and 280 exact distances), 0.8 us per sample in all.
+
+What limits 3x pysdf (about 0.75 us of CPU per sample in all): the range queries alone cost
+0.8 us per sample, spread over the levels: at 8^3 5.4 M hierarchy nodes and 4.7 M exact
+distances (2,721 queries), at 4^3 5.9 M and 3.9 M (6,276), at 2^3 10.3 M and 4.1 M (36,768 fresh
+queries of the 2^3 parts of near 4^3 blocks, 8 samples each). The filters and the leaves cost
+as much again (80 M bounds and margins, 82 M leaf bounds, 11 M exact
+distances with the seeds). Tried and dropped here: one ball query (``D + 2 r``) for a near 4^3
+block handed down to its parts (estimated hundreds to a thousand candidates each; measured 5.7
+s against 2.9-3.0 just before, no win, though the noise below is as large), the parent's nearest
+triangle as the child's upper bound instead of its exact nearest (the lists doubled). The
+next step would be fewer and cheaper range queries: the far 2^3 parts of a near 4^3 block
+filtering one list of their parent (a near list bounded by the farthest part's need, not the
+ball of ``D + 2 r``), and a range query that tests each hierarchy node by the per-triangle
+bound's kind of margin rather than the bounding-ball test of ``_may_hold``.
+Machine noise: on this shared machine the same build measured 3.0 and 5.5 CPU seconds twenty
+minutes apart (load 4-5); compare only interleaved runs.
 
 The grid is then meshed both ways: marching tetrahedra straight from the samples
 (``SampledSDF.to_mesh()``, including the deviation measurement) and the base class's meshing
@@ -219,13 +234,43 @@ def issue_row(quick):
     return mesh, sdf
 
 
+def threads_row(quick, rounds=3):
+    """from_mesh on one and two threads (``numba.set_num_threads``) and pysdf, interleaved: wall
+    and CPU seconds of each (the machine is shared: compare the CPU times of one round)."""
+    import numba
+    import pysdf
+
+    mesh, V, T, res = case(quick)
+    pts, _ = grid_points(mesh, res)
+    f = pysdf.SDF(V.astype(np.float32), T.astype(np.uint32))
+    p32 = pts.astype(np.float32)
+    print(f"| round | threads | from_mesh wall s | from_mesh CPU s | pysdf wall s | pysdf CPU s | "
+          f"pysdf CPU / from_mesh CPU | load |")
+    print("|---:|---:|---:|---:|---:|---:|---:|---:|")
+    for r in range(rounds):
+        for n in (1, 2):
+            numba.set_num_threads(n)
+            w, c = time.perf_counter(), time.process_time()
+            with_numba("1", lambda: from_mesh(mesh, res))
+            w, c = time.perf_counter() - w, time.process_time() - c
+            pw, pc = time.perf_counter(), time.process_time()
+            f(p32)
+            pw, pc = time.perf_counter() - pw, time.process_time() - pc
+            print(f"| {r} | {n} | {w:.3f} | {c:.3f} | {pw:.3f} | {pc:.3f} | {pc / c:.2f} | {os.getloadavg()[0]:.2f} |",
+                  flush=True)
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[1])
     ap.add_argument("--quick", action="store_true", help="small case")
+    ap.add_argument("--threads", action="store_true", help="one and two threads against pysdf, CPU time")
     ap.add_argument("--child", help=argparse.SUPPRESS)
     args = ap.parse_args()
     if args.child:
         child(args.child)
+        return
+    if args.threads:
+        threads_row(args.quick)
         return
     mesh, sdf = issue_row(args.quick)
     res = 48 if args.quick else 128

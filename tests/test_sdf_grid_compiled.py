@@ -74,7 +74,8 @@ def test_the_far_blocks_are_taken_and_agree_with_per_point_queries(compiled):
     d, found = dist.signed(P)
     assert found.all()
     assert np.allclose(sdf.values.ravel(), d, atol=1e-12, rtol=0)
-    # a block of 4^3 has half-diagonal 1.5 voxel diagonals; beyond FAR = 2 of those it is far
+    # a 4^3 block (half of a top block of 8^3, which takes its own range query when its top
+    # block is near) has half-diagonal 1.5 voxel diagonals; beyond FAR = 2 of those it is far
     far = np.abs(d) > 3 * np.linalg.norm(sdf.spacing) + 1.5 * np.linalg.norm(sdf.spacing)
     assert far.mean() > 0.3
 
@@ -177,3 +178,79 @@ def test_the_kernels_work_arrays_are_checked_against_the_memory_budget(compiled)
         dist.grid_signed(np.full(3, -2.0), np.full(3, 0.2), (20, 20, 20))
     with limits.budget(1 << 30):
         assert np.isfinite(dist.grid_signed(np.full(3, -2.0), np.full(3, 0.2), (20, 20, 20))).all()
+
+
+def prism_bound(prism, P):
+    """The grid kernel's lower bound of the distance from points ``P`` (n, 3) to each triangle
+    (rows of ``prism``, unit-box coordinates), in numpy: plane part and in-plane part (edge lines,
+    bounding disk), each lowered by the kernel's margin."""
+    from splinekit.pointcloud._gridsdf_kernels import TOL
+
+    n, off = prism[:, :3], prism[:, 3]
+    p = P @ n.T - off
+    edges = np.stack([P @ prism[:, 4 + 4 * k : 7 + 4 * k].T - prism[:, 7 + 4 * k] for k in range(3)])
+    v = P[:, None, :] - prism[None, :, 16:19] - p[..., None] * n[None]
+    with np.errstate(invalid="ignore"):  # inf - inf of a triangle without a disk
+        disk = np.linalg.norm(v, axis=2) - prism[:, 19]
+    lateral = np.maximum(np.nanmax(np.concatenate([edges, disk[None]]), axis=0) - TOL, 0.0)
+    return np.hypot(np.maximum(np.abs(p) - TOL, 0.0), lateral)
+
+
+@settings(max_examples=30, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), thin=st.sampled_from([1.0, 1e-3, 1e-7]),
+       spread=st.sampled_from([1e-3, 0.1, 1.0, 10.0]))
+def test_the_kernels_triangle_bound_never_exceeds_the_distance(seed, thin, spread):
+    # the bound only decides which triangles are measured: above the distance it would skip the
+    # nearest one. Random triangles (some slivers, down to 1e-10 wide, which get no bound), points
+    # near their vertices and edges, and far away, against the brute-force distance
+    rng = np.random.default_rng(seed)
+    V = rng.normal(size=(30, 3))
+    T = rng.integers(0, 30, (10, 3))
+    T[:, 1] = (T[:, 0] + 1 + T[:, 1] % 29) % 30
+    V[T[:5, 2]] = V[T[:5, 0]] + thin * (V[T[:5, 1]] - V[T[:5, 0]]) + thin * 1e-3 * rng.normal(size=(5, 3))
+    T = T[(T[:, 0] != T[:, 2]) & (T[:, 1] != T[:, 2])]
+    md = MeshDistance(V, T)
+    corners = md.bvh.tri.reshape(-1, 3)
+    P = np.concatenate([
+        corners + 1e-9 * rng.normal(size=corners.shape),
+        0.5 * (corners + np.roll(corners, 1, axis=0)) + 1e-6 * rng.normal(size=corners.shape),
+        rng.normal(size=(200, 3)) * spread,
+    ])
+    bound = prism_bound(md._bvh_prisms, P)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        exact = np.stack([brute_distance(P, md.bvh.tri.reshape(-1, 3), np.arange(3 * len(T)).reshape(-1, 3)[[t]])
+                          for t in range(len(T))], axis=1)
+    assert (bound <= exact * (1 + 1e-12) + 1e-15).all()
+
+
+def test_samples_on_vertices_edges_and_far_blocks_at_every_level(compiled):
+    # the octahedron |x| + |y| + |z| = 2 on a grid of step 0.25 from -7 to 7: samples lie on its
+    # vertices, on its edges and on its faces, and the far corners are farther than a top block
+    # (8^3) needs to take its candidates by the range query and hand them down two levels
+    V = 2.0 * np.array([[1, 0, 0], [-1, 0, 0], [0, 1, 0], [0, -1, 0], [0, 0, 1], [0, 0, -1]], dtype=float)
+    T = np.array([[0, 2, 4], [2, 1, 4], [1, 3, 4], [3, 0, 4], [2, 0, 5], [1, 2, 5], [3, 1, 5], [0, 3, 5]])
+    dist = MeshDistance(V, T)
+    shape = (57, 57, 57)
+    d = dist.grid_signed(np.full(3, -7.0), np.full(3, 0.25), shape)
+    axis = -7.0 + 0.25 * np.arange(57)
+    P = np.stack(np.meshgrid(axis, axis, axis, indexing="ij"), axis=-1).reshape(-1, 3)
+    exact = np.concatenate([brute_distance(P[s : s + 20000], V, T) for s in range(0, len(P), 20000)])
+    assert np.allclose(np.abs(d.ravel()), exact, atol=1e-12, rtol=0)
+    on = exact == 0.0
+    assert on.sum() > 100  # vertices, edges and faces all carry samples
+    inside = np.abs(P).sum(axis=1) < 2.0
+    assert np.array_equal(d.ravel()[~on] < 0, inside[~on])
+    # a top block's half-diagonal is 3.5 sqrt(3) steps; beyond FAR of those it is far
+    assert (exact > 2 * 3.5 * np.sqrt(3) * 0.25 + 3.5 * np.sqrt(3) * 0.25).mean() > 0.2
+
+
+@pytest.mark.parametrize("block", [2, 4, 16])
+def test_the_answer_does_not_depend_on_the_block_size(compiled, block, monkeypatch):
+    # one level (2: the leaves take the range query's list), two, four: the same exact grid
+    mesh = lumpy_sphere(2)
+    dist = MeshDistance.of_mesh(mesh)
+    args = (np.full(3, -2.5), np.full(3, 0.13), (39, 40, 41))
+    ref = dist.grid_signed(*args)
+    monkeypatch.setattr(meshdistance, "GRID_BLOCK", block)
+    assert np.allclose(dist.grid_signed(*args), ref, atol=1e-12, rtol=0)
+    check_random_samples(mesh, from_mesh(mesh, 30), 600, seed=block)

@@ -65,17 +65,18 @@ KERNELS = "splinekit.pointcloud._meshdistance_kernels"
 
 GRID_KERNELS = "splinekit.pointcloud._gridsdf_kernels"
 
-GRID_BLOCK = 4
-"""Samples along each side of the blocks :meth:`MeshDistance.grid_signed` shares its work over
-(module notes of its kernels: 4 measured fastest on 82k triangles at 128^3, ahead of 2 and 8)."""
+GRID_BLOCK = 8
+"""Samples along each side of the top blocks :meth:`MeshDistance.grid_signed` shares its work
+over, halved level by level down to 2^3 (module notes of its kernels); 82k triangles at 128^3,
+one thread: 3.2 CPU s with 8, 3.9-4.0 with 4, 3.2-3.3 with 16 (four levels, more memory)."""
 
 THIN = 1e-6
 """A triangle whose edge cross product is shorter than this times its two edges' lengths gets
 no plane in the grid kernel's bounds (it is then always measured exactly)."""
 
-GRID_WORK_BYTES = 176
-"""Bytes per triangle of the grid kernel's work arrays (a block's candidates: triangle, distance,
-closest point, plane, in-plane direction, sorted copies), held once per thread."""
+GRID_WORK_BYTES = 512
+"""Bytes per triangle and thread of the grid kernel's work arrays: a candidate list per level
+(three for GRID_BLOCK = 8) of triangles with their 20 bound coefficients, and a scratch value."""
 
 # features of a closest point: 0 face interior, 1-3 vertex 0-2, 4 edge 01, 5 edge 12, 6 edge 20
 FACE, EDGE01, EDGE12, EDGE20 = 0, 4, 5, 6
@@ -342,6 +343,29 @@ class MeshDistance:
         ball = np.column_stack([cen, rad * (1.0 + 1e-12) + 1e-15])  # rounding may only widen it
         return np.ascontiguousarray(plane), np.ascontiguousarray(ball)
 
+    @cached_property
+    def _bvh_prisms(self):
+        """Per triangle in the hierarchy's order, ``(m, 20)``: plane ``(n, n . a)``, edge lines
+        ``(u_k, u_k . a_k)`` (unit in-plane normals pointing out) and bounding disk (centroid,
+        radius), for the bound of :mod:`._gridsdf_kernels` (none for a triangle too thin)."""
+        tri = self.bvh.tri
+        plane, ball = self._bvh_planes
+        out = np.zeros((len(tri), 20))
+        out[:, :3] = plane
+        out[:, 3] = np.einsum("ij,ij->i", plane, tri[:, 0])
+        for k in range(3):
+            a, b = tri[:, k], tri[:, (k + 1) % 3]
+            u = np.cross(b - a, plane)
+            ln = np.linalg.norm(u, axis=1)
+            u /= np.where(ln > 0, ln, 1.0)[:, None]
+            out[:, 4 + 4 * k : 7 + 4 * k] = u
+            out[:, 7 + 4 * k] = np.einsum("ij,ij->i", u, a)
+        out[:, 16:] = ball  # its bounding disk: centroid and radius
+        thin = ~plane.any(axis=1)
+        out[thin] = 0.0
+        out[thin, 19] = np.inf  # no disk either
+        return out
+
     # -- queries ---------------------------------------------------------------------------
     def query(self, points):
         """``(distances (m,), closest points (m, 3), triangle (m,))`` of ``points`` ``(m, 3)``.
@@ -405,7 +429,7 @@ class MeshDistance:
         out = np.empty(total)
         plane, ball = self._bvh_planes
         kernels.grid_signed(o, h, np.array(shape, dtype=np.int64), limit, GRID_BLOCK, b.lo, b.hi, b.tlo, b.thi,
-                            b.tri, b.n_leaves, b.m, fn, en, vn, plane, ball, out)
+                            b.tri, b.n_leaves, b.m, fn, en, vn, plane, ball, self._bvh_prisms, out)
         return (out * self._scale).reshape(shape)
 
     def _nearest(self, P, max_distance, kernels=None):
