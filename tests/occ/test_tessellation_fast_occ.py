@@ -125,3 +125,45 @@ def test_build123d_parts_closed_within_tolerance(name, fast, rel):
     assert 0 < mesh.volume and abs(mesh.volume - volume) <= area * mesh.tolerance
     if fast:  # every guarantee, against the faces' own evaluators and normals
         _check(solid, mesh, volume, area)
+
+
+def _stepped_block_with_hole():
+    """A block 20 x 20 x 20 whose top half is two boxes fused without merging their faces, with
+    a through hole of radius 4 on the seam between them: the hole's top circle is cut into two
+    arcs where the top faces meet, its bottom circle only at the seam, so the cylinder's two
+    circles are sampled at different angles (the strip must merge two unrelated chains)."""
+    bd = pytest.importorskip("build123d")
+    from OCP.BRepAlgoAPI import BRepAlgoAPI_Cut, BRepAlgoAPI_Fuse
+
+    from splinekit.interop.occ_brep import brep_from_shape
+
+    base = bd.Box(20, 20, 10, align=(bd.Align.CENTER, bd.Align.CENTER, bd.Align.MAX))
+    left = bd.Box(10, 20, 10, align=(bd.Align.MAX, bd.Align.CENTER, bd.Align.MIN))
+    right = bd.Box(10, 20, 10, align=(bd.Align.MIN, bd.Align.CENTER, bd.Align.MIN))
+    top = BRepAlgoAPI_Fuse(left.wrapped, right.wrapped)
+    top.Build()
+    block = BRepAlgoAPI_Fuse(top.Shape(), base.wrapped)
+    block.Build()
+    cut = BRepAlgoAPI_Cut(block.Shape(), bd.Cylinder(4, 20).wrapped)
+    cut.Build()
+    got = brep_from_shape(cut.Shape())
+    return got[0] if isinstance(got, list) else got
+
+
+@pytest.mark.parametrize("rel", [1e-1, 1e-2, 1e-3, 1e-4])
+def test_fast_path_merges_circles_cut_differently(rel):
+    solid = _stepped_block_with_hole()
+    mesh = sk.tessellate(solid, rel, relative=True)
+    assert solid.faces[0]._cache["tessellate"].memo.get("fast") is not None
+    # the hole's wall: its bottom and top rows of vertices are at different angles
+    hole = [i for i, f in enumerate(solid.faces) if np.ptp(f.surface.control_points[..., 2]) > 15
+            and np.ptp(f.surface.control_points[..., 0]) < 9]  # fmt: skip
+    assert len(hole) == 1
+    uv = mesh.corner_uv[mesh.face_patch == hole[0]].reshape(-1, 2)
+    v0, v1 = uv[:, 1].min(), uv[:, 1].max()
+    rows = [np.unique(np.round(uv[np.isclose(uv[:, 1], v), 0], 9)) for v in (v0, v1)]
+    assert len(np.intersect1d(*rows)) < min(len(r) for r in rows) - 2
+    volume = 20**3 - math.pi * 16 * 20
+    area = 6 * 400 + 2 * math.pi * 4 * 20 - 2 * math.pi * 16
+    _check(solid, mesh, volume, area)
+    assert mesh.euler_characteristic == 0
