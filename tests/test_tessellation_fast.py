@@ -232,7 +232,10 @@ def test_strip_merge_triangulates_the_strip(data):
     for q in range(2):
         a, w = data.draw(st.floats(-5, 5)), data.draw(st.floats(0.5, 3))
         for _side in range(2):
-            inner = sorted(set(data.draw(st.lists(st.floats(0.01, 0.99), max_size=8))))
+            # distinct points a chain's samples apart at least (floats a few ulps apart would
+            # collapse into one point once scaled: no edge is sampled that finely)
+            inner = sorted(data.draw(st.lists(st.integers(1, 999), max_size=8, unique=True)))
+            inner = [k / 1000 for k in inner]
             u = a + w * np.array([0.0, *inner, 1.0])
             chains.append((q, len(uv) if not uv else sum(len(c) for c in uv), u))
             uv.append(u)
