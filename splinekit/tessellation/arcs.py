@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["Circle", "CircleMap", "fit_circle", "is_segment"]
+__all__ = ["Circle", "CircleMap", "circle_param", "fit_circle", "is_segment"]
 
 REL = 1e-10
 """Relative agreement (of the radius, or of the model size) required to call samples a circle
@@ -155,6 +155,16 @@ class CircleMap:
         s = 0.5 * (np.tan((theta - self.start[k] - self.half[k]) / 2.0) / self.t_half[k] + 1.0)
         x = self.lam[k] * s / ((1.0 - s) + self.lam[k] * s)
         return self.lo[k] + x * (self.hi[k] - self.lo[k])
+
+
+def circle_param(cmap, theta):
+    """Parameters of the :class:`CircleMap` ``cmap`` at angles ``theta`` (in its circle's frame,
+    any branch): the angle is taken into ``[0, sweep]`` (an arc's far side is split halfway)."""
+    sweep = float(cmap.circle.sweep)
+    th = np.mod(theta, 2.0 * np.pi)
+    if sweep < 2.0 * np.pi - 1e-12:
+        th = np.where(th > 0.5 * (sweep + 2.0 * np.pi), th - 2.0 * np.pi, th)
+    return cmap.param(th)
 
 
 class CircleMaps:
