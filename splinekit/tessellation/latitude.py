@@ -29,6 +29,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from .. import _kernels
 from ..mesh.topology import ranges
 from .edges import MAX_SEGMENTS
 from .revolution import Revolutions
@@ -41,6 +42,10 @@ MARGIN = 0.8
 BARY = np.array([[0.5, 0.5, 0.0], [0.0, 0.5, 0.5], [0.5, 0.0, 0.5], [1 / 3, 1 / 3, 1 / 3]])
 """Where a triangle is measured: its edges' midpoints and its centre (barycentric)."""
 BOTTOM, RIGHT, TOP, LEFT = range(4)
+KERNELS = "splinekit.tessellation._latitude_kernels"
+FIXED_WORK = 1000
+"""Work of one call of :func:`mesh_rows` on the numpy path apart from its points (point-equivalents,
+see :mod:`splinekit._kernels`: about its cost in microseconds), counted towards loading the kernel."""
 
 
 class LatitudePlan:
@@ -234,6 +239,17 @@ def mesh_rows(plan, lp, n, m, V_base, n_vid):
     S = len(nm)
     inner = n - 1
     abase = len(plan.corners) + np.cumsum(inner) - inner
+    K = _kernels.load(KERNELS, work=FIXED_WORK + 4 * int(m.sum()), min_work=0)
+    if K is not None:
+        maps = tuple((c.akey, c.tkey, c.table, c.first, c.last, c.sweep, c.full, c.t0, c.t1) for c in (revs.umaps, revs.vmaps))
+        out = RowMesh()
+        (out.T, out.corner_uv, out.face, out.strip_dev, out.V, out.N, out.UV, out.VP, out.fix_vid, out.fix_uv, out.fix_N,
+         out.fix_face) = K.rows(nm, m, lp.phi, lp.psi, lp.lo, lp.hi, lp.pole, lp.uses, lp.flip, lp.face, plan.use_group,
+                                plan.use_flip, plan.arc_of, plan.end_vid, n, abase, V_base, n_vid, *maps, revs.O, revs.a,
+                                revs.e1, revs.e2, revs.rho_c, revs.z_c, revs.p, revs.g1, revs.g2)  # fmt: skip
+        out.max_dev = float(out.strip_dev.max()) if out.strip_dev.size else 0.0
+        out.strip_rows = np.column_stack([np.repeat(np.arange(S), nm + 1), np.arange(m.size) - np.repeat(np.cumsum(nm + 1) - nm - 1, nm + 1)])
+        return out
     rs = np.repeat(np.arange(S), nm + 1)
     first = np.cumsum(nm + 1) - nm - 1
     k = np.arange(rs.size) - first[rs]
