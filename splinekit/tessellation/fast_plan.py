@@ -35,6 +35,11 @@ SAMPLES = 129
 """Samples per edge used to recognise its shape (at least 8 per conic piece for 16 pieces)."""
 
 PLANE, CYLINDER, REVOLUTION = 0, 1, 2
+MERIDIAN, PARALLEL = 2.0, 1.0
+"""Factors on the radius of the arcs of faces of revolution (their sagitta aimed at ``1 / factor`` of
+the tolerance): a meridian sets the rows' spacing, which must leave room for the rows' own steps
+(:mod:`.latitude`); a parallel is raised per call to what its row needs. 2.0 measured fewest
+triangles on the filleted box and cylinder (1.6: +5%, 2.4: +1-5% at 1e-3 and 1e-4)."""
 
 
 def planar_triangles(uv, ring_ends):
@@ -284,11 +289,12 @@ def _derive(plan):
     plan.arc_factor = np.ones(len(plan.arcs))
     plan.zb_use = None
     lat = plan.lat
-    if lat is not None:  # faces of revolution: their arcs at half the sagitta (see .latitude), Möbius margin
+    if lat is not None:  # faces of revolution: the factors above, with the maps' Möbius margin
         ku, kv = lat.revs.kappa_u, lat.revs.kappa_v
-        for arcs, kappa in ((lat.bot_arc, ku), (lat.top_arc, ku), (lat.mer_arc[:, 0], kv), (lat.mer_arc[:, 1], kv)):
+        for arcs, kappa, half in ((lat.bot_arc, ku, PARALLEL), (lat.top_arc, ku, PARALLEL), (lat.mer_arc[:, 0], kv, MERIDIAN),
+                                  (lat.mer_arc[:, 1], kv, MERIDIAN)):  # fmt: skip
             on = arcs >= 0
-            np.maximum.at(plan.arc_factor, arcs[on], 2.0 * np.sqrt(1.0 + (1.02 * kappa[on]) ** 2))
+            np.maximum.at(plan.arc_factor, arcs[on], half * np.sqrt(1.0 + (1.02 * kappa[on]) ** 2))
     if slots:
         plan.maps = CircleMaps([plan.cyl[f].cmap for f in slots])
         on = plan.au_slot >= 0

@@ -37,7 +37,7 @@ from .welding import components
 
 __all__ = ["LatitudePlan", "latitude_plan", "row_counts", "mesh_rows"]
 
-MARGIN = 0.8
+MARGIN = 0.9
 """Share ``c`` of the tolerance the closed-form row counts aim at (the rest: higher-order terms)."""
 BARY = np.array([[0.5, 0.5, 0.0], [0.0, 0.5, 0.5], [0.5, 0.0, 0.5], [1 / 3, 1 / 3, 1 / 3]])
 """Where a triangle is measured: its edges' midpoints and its centre (barycentric)."""
@@ -292,7 +292,7 @@ def mesh_rows(plan, lp, n, m, V_base, n_vid):
     Tz = np.where(Tz >= 0, bp[np.maximum(Tz, 0)], tp[np.maximum(-1 - Tz, 0)])
     tris, strip_of = [Tz], [zs[zq]]
     # fans: a base row's segments and a pole corner at the parametric middle of each
-    extra_uv, extra_vid, extra_slot = [], [], []
+    extra_uv, extra_vid, extra_slot, extra_psi = [], [], [], []
     n_pts = pr.size
     for top in (True, False):
         fs = st[m[st + 1] == 0] if top else st[m[st] == 0]
@@ -308,17 +308,28 @@ def mesh_rows(plan, lp, n, m, V_base, n_vid):
         extra_uv.append(np.column_stack([0.5 * (u[a] + u[a + 1]), pole_v]))
         extra_vid.append(plan.end_vid[plan.use_group[pole_use], 0])
         extra_slot.append(slot)
+        extra_psi.append(lp.psi[slot, 1 if top else 0])
         tris.append(np.column_stack([a, a + 1, pid]) if top else np.column_stack([pid, a + 1, a]))
         strip_of.append(sq)
-    euv = np.concatenate(extra_uv)
+    # triangles strip after strip and the pole corners in that order too, as the compiled kernel
+    # makes them: every call on a face set gives the same mesh whichever path it takes
+    e_strip = np.concatenate(strip_of[1:])
+    perm = np.argsort(e_strip, kind="stable")
+    inv = np.empty_like(perm)
+    inv[perm] = np.arange(perm.size)
+    euv, e_vid, e_slot, e_psi = (np.concatenate(x)[perm] for x in (extra_uv, extra_vid, extra_slot, extra_psi))
     P_uv = np.concatenate([np.column_stack([u, v]), euv])
-    P_vid = np.concatenate([vid] + extra_vid)
-    P_slot = np.concatenate([ps] + extra_slot)
-    P_X = np.concatenate([X, V_base[np.concatenate(extra_vid)]])
-    P_psi = np.concatenate([psi, revs.vmaps.angle(np.concatenate(extra_slot), euv[:, 1])])
-    P_phi = np.concatenate([phi, revs.umaps.angle(np.concatenate(extra_slot), euv[:, 0])])
+    P_vid = np.concatenate([vid, e_vid])
+    P_slot = np.concatenate([ps, e_slot])
+    P_X = np.concatenate([X, V_base[e_vid]])
+    P_psi = np.concatenate([psi, e_psi])
+    P_phi = np.concatenate([phi, revs.umaps.angle(e_slot, euv[:, 0])])
     T = np.concatenate(tris)
+    if perm.size:
+        T = np.where(T >= pr.size, pr.size + inv[np.maximum(T - pr.size, 0)], T)
     strip = np.concatenate(strip_of)
+    order = np.argsort(strip, kind="stable")
+    T, strip = T[order], strip[order]
     out = RowMesh()
     # the deviation in closed form, the result's yardstick: the surface at the barycentric (u, v)
     # of every triangle's edge midpoints and centre against the flat point
