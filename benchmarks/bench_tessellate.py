@@ -715,7 +715,7 @@ def brep_main(args):
 
 
 def small_main(args):
-    """The small B-rep parts of part 2 (the fast path's planes and cylinders), each row timed
+    """The small B-rep parts of part 2 (the fast path's planes, cylinders and latitude strips), each row timed
     back to back in one process (OCC's deflection matched as in part 2): ``--calls`` calls of
     splinekit then ``--calls`` of OCC, and the same number alternating one call of each; the
     best CPU time of each, so that both see the same machine load."""
@@ -730,7 +730,7 @@ def small_main(args):
     from splinekit.interop.occ_brep import brep_to_shape
 
     names = ("cylinder 1 x 3", "box 20 x 30 x 10", "box 20 with hole r 4", "plate 40 x 30 x 5, 3 holes",
-             "build123d box - cylinder", "build123d chamfered block 20, 3")  # fmt: skip
+             "build123d filleted box 20, r 3", "build123d box - cylinder", "build123d chamfered block 20, 3")  # fmt: skip
     print("| part | tol / size | splinekit triangles | OCC triangles | splinekit | OCC | time ratio | "
           "splinekit, alternating | OCC, alternating | time ratio, alternating |")
     print("|---|---|---|---|---|---|---|---|---|---|")

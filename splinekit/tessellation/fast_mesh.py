@@ -1,5 +1,6 @@
 """The fast B-rep tessellation path: planes and right circular cylinders bounded by lines and
-circles, meshed from a :class:`.fast_plan.FastPlan` with the tolerance-dependent work only.
+circles (and faces of revolution: :mod:`.latitude`), meshed from a :class:`.fast_plan.FastPlan`
+with the tolerance-dependent work only.
 
 Per call: every circle's segment count in closed form (the sagitta and the angle criterion, the
 sagitta scaled by ``sqrt(1 + kappa^2)`` where a cylinder uses the circle: its rational

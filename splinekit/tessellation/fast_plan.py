@@ -9,7 +9,10 @@ no interior points and no measuring rounds:
 * a circle needs ``ceil(sweep / step)`` segments, with the step given in closed form by the
   sagitta ``r (1 - cos(step / 2)) <= tol`` and the angle criterion;
 * a right circular cylinder is straight along its rulings: a strip of triangles between its two
-  circles is exact along them and errs across them exactly as its circles do.
+  circles is exact along them and errs across them exactly as its circles do;
+* a face of revolution with a circular profile (a sphere or torus piece, :mod:`.revolution`)
+  bounded by two parallels (or a pole) and two meridians is meshed in latitude strips on the
+  same circle samples (:mod:`.latitude`), its deviation measured in closed form.
 
 :func:`build_plan` recognises such a face set once (faces are immutable: the plan is kept with
 the tessellator's per-face-set preparation) and returns None for any other: those go through
@@ -126,8 +129,8 @@ class FastPlan:
 
 def build_plan(prep):
     """The :class:`FastPlan` of the face set ``prep`` (:class:`.trimmed._Prepared`), or None if
-    any face is not a plane or a right circular cylinder of the shapes above, or any edge is
-    neither a straight segment nor a circle arc."""
+    any face is not a plane, a right circular cylinder or a face of revolution of the shapes
+    above, or any edge is neither a straight segment, a circle arc nor a pole."""
     faces, uses, groups, size = prep.faces, prep.uses, prep.groups, prep.size
     if not uses:
         return None

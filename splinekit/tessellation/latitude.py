@@ -17,9 +17,9 @@ angular step ``d`` errs at a connecting edge's midpoint by about
 ``S_phipsi = rho' t``, ``|S_psipsi| = p``, ``r`` and ``t`` orthogonal)
 ``rho^2 d^4 + 2 h^2 (2 rho'^2 + |rho rho''|) d^2 + h^4 p^2 <= (8 c tol)^2``: a quadratic in
 ``d^2`` whose root gives the largest step of the strip's rows (the term in ``rho'`` is the
-tangential one the parametric yardstick counts near a pole). The meridians' and parallels' arcs
-of such faces are counted at half the sagitta (:func:`.fast_plan._derive`), so that the rows'
-quadratic has room, and the deviation is then measured exactly (the surface in closed form at
+tangential one the parametric yardstick counts near a pole). The meridians of such faces are
+counted at half the sagitta (:data:`.fast_plan.MERIDIAN`), so that the rows' quadratic has room,
+the parallels as the rows next to them need (:func:`row_counts`), and the deviation is then measured exactly (the surface in closed form at
 the barycentric ``(u, v)`` of every triangle's edge midpoints and centre, the result's
 yardstick); a strip over the tolerance refines its rows (and the arcs of its boundary rows) and
 the call is meshed again, a few rounds at most, else the caller falls back to the general path.
@@ -52,8 +52,9 @@ class LatitudePlan:
     """Per face of revolution ``s`` (S of them, numbered among the face set's such faces):
     ``face (S,)``, ``uses (S, 4)`` (bottom, right, top, left), ``pole (S, 2)`` (bottom, top is a
     pole), ``lo, hi (S, 2)`` its ``(u, v)`` rectangle, ``phi, psi (S, 2)`` the angles of its
-    ends, ``flip (S,)`` a reversed face; ``revs`` the :class:`.revolution.Revolutions`;
-    ``ties (A,)`` the arcs whose counts must be equal (a label per arc)."""
+    ends, ``flip (S,)`` a reversed face; ``revs`` the :class:`.revolution.Revolutions`; the arcs
+    of its meridians ``mer_arc (S, 2)`` (right, left), bottom and top ``bot_arc, top_arc (S,)``
+    (-1: a pole); ``ties (A,)`` the arcs whose counts must be equal (a label per arc)."""
 
     __slots__ = ("face", "uses", "pole", "lo", "hi", "phi", "psi", "flip", "revs", "ties", "mer_arc", "bot_arc",
                  "top_arc")  # fmt: skip
@@ -65,11 +66,11 @@ def side_labels(uv0, uv1, arc, pole):
     3 left (``u = u_lo``, ``v`` decreasing), -1 none; and the rectangle ``(lo, hi)``."""
     lo, hi = np.minimum(uv0, uv1).min(axis=0), np.maximum(uv0, uv1).max(axis=0)
     eps = 1e-9 * (hi - lo)
-    at = lambda x, c, d: (np.abs(uv0[:, d] - c[d]) <= eps[d]) & (np.abs(uv1[:, d] - c[d]) <= eps[d])  # noqa: E731
-    bottom = (arc | pole) & at(None, lo, 1) & (uv1[:, 0] > uv0[:, 0])
-    right = arc & at(None, hi, 0) & (uv1[:, 1] > uv0[:, 1])
-    top = (arc | pole) & at(None, hi, 1) & (uv1[:, 0] < uv0[:, 0])
-    left = arc & at(None, lo, 0) & (uv1[:, 1] < uv0[:, 1])
+    at = lambda c, d: (np.abs(uv0[:, d] - c[d]) <= eps[d]) & (np.abs(uv1[:, d] - c[d]) <= eps[d])  # noqa: E731
+    bottom = (arc | pole) & at(lo, 1) & (uv1[:, 0] > uv0[:, 0])
+    right = arc & at(hi, 0) & (uv1[:, 1] > uv0[:, 1])
+    top = (arc | pole) & at(hi, 1) & (uv1[:, 0] < uv0[:, 0])
+    left = arc & at(lo, 0) & (uv1[:, 1] < uv0[:, 1])
     return np.select([bottom, right, top, left], [BOTTOM, RIGHT, TOP, LEFT], -1), lo, hi
 
 
@@ -155,6 +156,9 @@ def row_counts(lp, n, tol, angle_tol, margin):
     :data:`.edges.MAX_SEGMENTS`."""
     c = MARGIN * margin
     sweep = lp.phi[:, 1] - lp.phi[:, 0]
+    n = n.copy()
+    np.maximum.at(n, lp.mer_arc[lp.pole.all(axis=1), 0], 2)  # pole to pole: at least one row between
+    n = tie(lp, n)
     for _ in range(8):
         nm, rs, k, st, step, ok = _strip_steps(lp, n, tol, angle_tol, c)
         n = n.copy()
