@@ -147,17 +147,36 @@ start, load average 4-6 later; best CPU times):
   go cell by cell like a Bézier patch set (the 12 x 12 bicubic net, 81 cells, stays a tensor
   grid: 17 ms against 24 by cells at 1e-3). Sphere 1e-1: 3.1 -> 0.44-0.48 ms; torus 3.5 ->
   0.41 ms; at 1e-4 the sphere 12.5 -> 4.8 ms, the torus 14.1 -> 7.1 ms.
-* Filleted box (26 trimmed faces) at 1e-4, 12,716 triangles, one Triangle round (the interior
-  grids need no refinement): Triangle ~16%, the scattered surface evaluations (the measured
-  counts of the interior grids, the grid points, the measurement at edge midpoints and triangle
-  centres, the normals' partials) ~35-40%, the grid points' clearance test (a k-d tree) ~10%,
-  the labelling's components ~5%; the rest is ~1,800 numpy reductions and copies. The
-  evaluations now run compiled once the kernels are loaded (``_batch_kernels``: the query's
-  cell located and its point and partials combined one query at a time, 3.8x numpy's sparse
-  product at 20k queries, 10x at 20): 41-44 -> 32-35 ms at load 4-5. 10x OCC at 1e-4 (OCC ~180 ms)
-  needs ~18 ms: what is left is spread over Triangle, the clearance test and the numpy glue of
-  the measurement round (no stage above a fifth); a compiled clearance test on the tensor grid
-  (rasterize the trims) and a compiled measurement round are the next steps.
+* Filleted box (26 trimmed faces: 6 planes, 12 quarter-cylinder fillets, 8 sphere octants, each
+  with a pole) was the one part under 10x: it mixed the fast path's planes and cylinders with
+  sphere corners, so it went the general path whole (~6.5 ms fixed cost; 1.1x / 1.1x / 1.8x /
+  5.5x / 15x at 1e-1 ... 1e-5). The fast path now also takes faces of revolution with a circular
+  profile (sphere and torus pieces, ``splinekit.tessellation.revolution``: recognised with exact
+  angle maps of both circle families and checked against the surface on a grid) whose (u, v)
+  loop is a rectangle of parallels (or a pole) and meridians: latitude strips
+  (``splinekit.tessellation.latitude``): rows at iso-v at uniform profile angle on the meridian
+  edges' own samples (the two meridians' counts tied), each row a parallel at uniform angle, the
+  bottom and top rows the parallel edges' samples (shared with the fillets and planes, so the mesh
+  is watertight by construction), rows zipped like the cylinder strips, a fan at a pole with the
+  pole corner at the parametric middle of its base. Counts in closed form: the meridians at half
+  the sagitta, each strip's angular step from a quadratic in step^2 (normal curvature of both
+  families plus the tangential ``S_phipsi`` term the parametric yardstick counts near a pole); the
+  deviation is measured in closed form at every triangle's edge midpoints and centre (the result's
+  yardstick) and a strip over the tolerance refines its face (never needed on the parts tried).
+  Exact normals (the pole's is the limit along the profile). Compiled kernel
+  (``_latitude_kernels``) beside the numpy path, the same mesh from both. ``--brep --quick`` (load
+  average 2.7-2.8, other sessions running), filleted box 1e-1 ... 1e-5: 0.5 / 0.5 / 1.3 / 9.7 /
+  81 ms against OCC's 7.0 / 7.5 / 22.9 / 264 / 4,377 ms: 13.7x / 15.9x / 17.8x / 27x / 54x, with
+  0.51 / 0.51 / 0.50 / 0.43 / 0.40 of OCC's triangles (dev / tol 0.04 / 0.38 / 0.94 / 0.97 /
+  0.97). Where a call's ~0.5 ms goes at 1e-1 (kernels loaded, load 3, so about twice the idle
+  figures): arc counts 10 us, row counts 220 us (numpy, ~40 calls), planes and cylinders 120 us
+  (the compiled passes as before), latitude strips 260 us (the kernel 230 us: ~1,000 closed-form
+  evaluations of the deviation, each two angle maps and four sines and cosines), the vertex
+  fix-up, concatenation and ``Tessellation._build`` ~150 us. First call on a face set: 44-116 ms
+  at 1e-1 ... 1e-4 (564 ms at 1e-5): the general path still validates it at the requested
+  tolerance (12 ms at 1e-3, 275 ms at 1e-5), then the plan (~30 ms: ~28k Python-level calls,
+  mostly recognising 20 faces' circle maps one face at a time; 70 ms before the circle maps'
+  kappa went closed form and their pieces were sliced from the control points).
 
 This session's runs (load average 3.8-4.6 on 2 cores; CPU times, best of N; ``--patches --tols
 1e-1,1e-2,1e-3`` and ``--brep --quick``; time ratio = OCC's time / splinekit's at the same
