@@ -19,7 +19,7 @@ from ._fast_kernels import _angle, _param
 BARY = np.array([[0.5, 0.5, 0.0], [0.0, 0.5, 0.5], [0.5, 0.0, 0.5], [1.0 / 3.0, 1.0 / 3.0, 1.0 / 3.0]])
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, inline="always")
 def _profile(s, psi, rho_c, z_c, p, g1, g2):
     c, sn = math.cos(psi), math.sin(psi)
     rho = rho_c[s] + p[s] * (c * g1[s, 0] + sn * g2[s, 0])
@@ -29,7 +29,7 @@ def _profile(s, psi, rho_c, z_c, p, g1, g2):
     return rho, z, drho, dz
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, inline="always")
 def _point(s, phi, psi, O, ax, e1, e2, rho_c, z_c, p, g1, g2, out):
     rho, z, _, _ = _profile(s, psi, rho_c, z_c, p, g1, g2)
     c, sn = math.cos(phi), math.sin(phi)
@@ -37,7 +37,41 @@ def _point(s, phi, psi, O, ax, e1, e2, rho_c, z_c, p, g1, g2, out):
         out[d] = O[s, d] + z * ax[s, d] + rho * (c * e1[s, d] + sn * e2[s, d])
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, inline="always")
+def _piece(br, lo, hi, t):
+    """Piece of ``t`` among the breaks ``br[lo:hi]`` and its local parameter in ``[0, 1]``."""
+    a, b = lo, hi - 2
+    while a < b:  # first piece whose end is >= t
+        m = (a + b) // 2
+        if br[m + 1] < t:
+            a = m + 1
+        else:
+            b = m
+    return a - lo, (t - br[a]) / (br[a + 1] - br[a])
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _surface(s, u, v, nets, out):
+    """The point of face ``s``'s surface at ``(u, v)`` from its rational Bézier cells (see
+    :func:`.latitude.bezier_nets`) into ``out`` ``(3,)``."""
+    ub, uoff, vb, voff, first, cells = nets
+    i, x = _piece(ub, uoff[s], uoff[s + 1], u)
+    j, y = _piece(vb, voff[s], voff[s + 1], v)
+    net = cells[first[s] + i * (voff[s + 1] - voff[s] - 1) + j]
+    bu = ((1.0 - x) * (1.0 - x), 2.0 * x * (1.0 - x), x * x)
+    bv = ((1.0 - y) * (1.0 - y), 2.0 * y * (1.0 - y), y * y)
+    h0 = h1 = h2 = h3 = 0.0
+    for a in range(3):
+        for b in range(3):
+            w = bu[a] * bv[b]
+            h0 += w * net[a, b, 0]
+            h1 += w * net[a, b, 1]
+            h2 += w * net[a, b, 2]
+            h3 += w * net[a, b, 3]
+    out[0], out[1], out[2] = h0 / h3, h1 / h3, h2 / h3
+
+
+@njit(cache=True, nogil=True, inline="always")
 def _vid(use, k, n, abase, use_group, use_flip, arc_of, end_vid):
     g = use_group[use]
     a = arc_of[g]
@@ -52,10 +86,12 @@ def _vid(use, k, n, abase, use_group, use_flip, arc_of, end_vid):
 
 @njit(cache=True, nogil=True)
 def rows(nm, m, phi_r, psi_r, lo, hi, pole, uses, flip, face_of, use_group, use_flip, arc_of, end_vid, n, abase,
-         V_base, n_vid, umaps, vmaps, O, ax, e1, e2, rho_c, z_c, p, g1, g2):  # fmt: skip
+         V_base, n_vid, umaps, vmaps, O, ax, e1, e2, rho_c, z_c, p, g1, g2, nets):  # fmt: skip
     """See :func:`.latitude.mesh_rows`: ``(T (t, 3) vertex ids, corner_uv (t, 3, 2), face (t,),
     strip_dev (rows,), V, N, UV, VP (new vertices), fix_vid, fix_uv, fix_N, fix_face)``.
-    ``umaps``, ``vmaps``: ``(akey, tkey, table, first, last, sweep, full, t0, t1)`` of the maps."""
+    ``umaps``, ``vmaps``: ``(akey, tkey, table, first, last, sweep, full, t0, t1)`` of the maps;
+    ``nets``: the surfaces' Bézier cells (:func:`.latitude.bezier_nets`), which the deviation is
+    measured on (the same surfaces as the closed form, to rounding, without its sines and cosines)."""
     ua, ut, utab, uf, ul, usw, ufull, ut0, ut1 = umaps
     va, vt, vtab, vf, vl, vsw, vfull, vt0, vt1 = vmaps
     S = nm.size
@@ -184,8 +220,7 @@ def rows(nm, m, phi_r, psi_r, lo, hi, pole, uses, flip, face_of, use_group, use_
         for b in range(4):
             u = BARY[b, 0] * pu[T[t, 0], 0] + BARY[b, 1] * pu[T[t, 1], 0] + BARY[b, 2] * pu[T[t, 2], 0]
             v = BARY[b, 0] * pu[T[t, 0], 1] + BARY[b, 1] * pu[T[t, 1], 1] + BARY[b, 2] * pu[T[t, 2], 1]
-            _point(s, _angle(s, u, ut, utab, uf, ul, ut0, ut1), _angle(s, v, vt, vtab, vf, vl, vt0, vt1),
-                   O, ax, e1, e2, rho_c, z_c, p, g1, g2, ex)  # fmt: skip
+            _surface(s, u, v, nets, ex)
             d2 = 0.0
             for d in range(3):
                 x = ex[d] - (BARY[b, 0] * pX[T[t, 0], d] + BARY[b, 1] * pX[T[t, 1], d] + BARY[b, 2] * pX[T[t, 2], d])

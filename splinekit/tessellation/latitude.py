@@ -54,10 +54,11 @@ class LatitudePlan:
     pole), ``lo, hi (S, 2)`` its ``(u, v)`` rectangle, ``phi, psi (S, 2)`` the angles of its
     ends, ``flip (S,)`` a reversed face; ``revs`` the :class:`.revolution.Revolutions`; the arcs
     of its meridians ``mer_arc (S, 2)`` (right, left), bottom and top ``bot_arc, top_arc (S,)``
-    (-1: a pole); ``ties (A,)`` the arcs whose counts must be equal (a label per arc)."""
+    (-1: a pole); ``ties (A,)`` the arcs whose counts must be equal (a label per arc); ``nets``
+    the surfaces' rational Bézier cells for the compiled kernel (:func:`bezier_nets`)."""
 
     __slots__ = ("face", "uses", "pole", "lo", "hi", "phi", "psi", "flip", "revs", "ties", "mer_arc", "bot_arc",
-                 "top_arc")  # fmt: skip
+                 "top_arc", "nets")  # fmt: skip
 
 
 def side_labels(uv0, uv1, arc, pole):
@@ -110,7 +111,26 @@ def latitude_plan(plan, loop, rev, pole_group, uv0, uv1, size):
     lp.bot_arc, lp.top_arc = arc[lp.uses[:, BOTTOM]], arc[lp.uses[:, TOP]]
     A = len(plan.arcs)
     lp.ties = components(A, lp.mer_arc[:, 0], lp.mer_arc[:, 1]) if A else np.zeros(0, dtype=np.int64)
+    lp.nets = bezier_nets([plan.faces[f].surface for f in faces])
     return lp
+
+
+def bezier_nets(surfaces):
+    """The biquadratic rational Bézier cells of ``surfaces`` for the compiled kernel's deviation
+    (the surfaces' own form, no sines or cosines): ``(ubreaks, uoff, vbreaks, voff, first,
+    nets)``: surface ``s``'s breaks are ``ubreaks[uoff[s]:uoff[s + 1]]`` (likewise in ``v``), its
+    cell ``(i, j)`` is ``nets[first[s] + i * (v pieces) + j]`` ``(3, 3, 4)``, homogeneous."""
+    ub, vb, nets = [], [], []
+    for S in surfaces:
+        ub.append(np.unique(np.asarray(S.knots_u, dtype=np.float64)))
+        vb.append(np.unique(np.asarray(S.knots_v, dtype=np.float64)))
+        for row in S.to_bezier():
+            for b in row:
+                w = np.asarray(b.weights, dtype=np.float64)[..., None]
+                nets.append(np.concatenate([np.asarray(b.control_points) * w, w], axis=2))
+    off = lambda parts: np.concatenate([[0], np.cumsum([len(x) for x in parts])]).astype(np.int64)  # noqa: E731
+    cells = np.array([(len(u) - 1) * (len(v) - 1) for u, v in zip(ub, vb)], dtype=np.int64)
+    return np.concatenate(ub), off(ub), np.concatenate(vb), off(vb), np.cumsum(cells) - cells, np.array(nets)
 
 
 def tie(lp, n):
@@ -250,7 +270,7 @@ def mesh_rows(plan, lp, n, m, V_base, n_vid):
         (out.T, out.corner_uv, out.face, out.strip_dev, out.V, out.N, out.UV, out.VP, out.fix_vid, out.fix_uv, out.fix_N,
          out.fix_face) = K.rows(nm, m, lp.phi, lp.psi, lp.lo, lp.hi, lp.pole, lp.uses, lp.flip, lp.face, plan.use_group,
                                 plan.use_flip, plan.arc_of, plan.end_vid, n, abase, V_base, n_vid, *maps, revs.O, revs.a,
-                                revs.e1, revs.e2, revs.rho_c, revs.z_c, revs.p, revs.g1, revs.g2)  # fmt: skip
+                                revs.e1, revs.e2, revs.rho_c, revs.z_c, revs.p, revs.g1, revs.g2, lp.nets)  # fmt: skip
         out.max_dev = float(out.strip_dev.max()) if out.strip_dev.size else 0.0
         out.strip_rows = np.column_stack([np.repeat(np.arange(S), nm + 1), np.arange(m.size) - np.repeat(np.cumsum(nm + 1) - nm - 1, nm + 1)])
         return out
