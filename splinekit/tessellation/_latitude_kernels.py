@@ -85,6 +85,42 @@ def _vid(use, k, n, abase, use_group, use_flip, arc_of, end_vid):
 
 
 @njit(cache=True, nogil=True)
+def row_need(nm, psi_r, phi_r, rho_c, z_c, p, g1, g2, kappa_u, c, tol, angle_tol):
+    """See :func:`.latitude._row_need` (the same operations; ``angle_tol <= 0``: none):
+    ``(need (rows,) float, ok (S,) bool)``."""
+    S = nm.size
+    need = np.empty(int(nm.sum()) + S)
+    ok = np.ones(S, np.bool_)
+    r0 = 0
+    for s in range(S):
+        m = nm[s]
+        h = (psi_r[s, 1] - psi_r[s, 0]) / m
+        rho2 = np.empty(m + 1)
+        mix = np.empty(m + 1)
+        step = np.full(m + 1, np.inf)
+        for k in range(m + 1):
+            rho, _, drho, _ = _profile(s, psi_r[s, 0] + k * h, rho_c, z_c, p, g1, g2)
+            rho2[k] = rho * rho * (1.0 + (1.02 * kappa_u[s]) ** 2)
+            mix[k] = 2.0 * drho * drho + abs(rho * (rho_c[s] - rho))
+        C = (h * h * p[s]) ** 2 - (8.0 * c[s] * tol) ** 2
+        ok[s] = C < 0
+        for k in range(m):
+            st = 0.0
+            if ok[s]:
+                R2 = max(rho2[k], rho2[k + 1])
+                B = 2.0 * (h * h) * max(mix[k], mix[k + 1])
+                st = math.sqrt(-2.0 * C / (B + math.sqrt(max(B * B - 4.0 * R2 * C, 0.0)) + 1e-300))
+            if angle_tol > 0:
+                st = min(st, angle_tol)
+            step[k] = min(step[k], st)
+            step[k + 1] = min(step[k + 1], st)
+        for k in range(m + 1):
+            need[r0 + k] = math.ceil((phi_r[s, 1] - phi_r[s, 0]) / max(step[k], 1e-300) * (1.0 + 1e-9))
+        r0 += m + 1
+    return need, ok
+
+
+@njit(cache=True, nogil=True)
 def rows(nm, m, phi_r, psi_r, lo, hi, pole, uses, flip, face_of, use_group, use_flip, arc_of, end_vid, n, abase,
          V_base, n_vid, umaps, vmaps, O, ax, e1, e2, rho_c, z_c, p, g1, g2, nets):  # fmt: skip
     """See :func:`.latitude.mesh_rows`: ``(T (t, 3) vertex ids, corner_uv (t, 3, 2), face (t,),

@@ -140,33 +140,39 @@ def tie(lp, n):
     return top[lp.ties]
 
 
-def _strip_steps(lp, n, tol, angle_tol, c):
-    """Per face the meridian count ``nm (S,)`` and per row its face ``rs`` and index ``k``; per
-    strip (numbered like the row below it: ``st``) the largest angular step its rows may have
-    (the quadratic of the module docstring at the strip's worst row, aiming at ``c (S,) * tol``)
-    and whether its rows' spacing leaves room at all (``ok``)."""
-    nm = n[lp.mer_arc[:, 0]]
+def _row_need(lp, nm, tol, angle_tol, c):
+    """Per row (face after face, ``nm + 1`` rows each) the segments it needs (the quadratic of the
+    module docstring at the worst row of each strip next to it, aiming at ``c (S,) * tol``; not
+    rounded up yet) and per face whether its rows' spacing leaves room at all (``(need, ok)``)."""
+    K = _kernels.get(KERNELS)
+    revs = lp.revs
+    if K is not None:
+        return K.row_need(nm, lp.psi, lp.phi, revs.rho_c, revs.z_c, revs.p, revs.g1, revs.g2, revs.kappa_u, c, tol,
+                          -1.0 if angle_tol is None else angle_tol)  # fmt: skip
     S = len(nm)
     rs = np.repeat(np.arange(S), nm + 1)
     k = np.arange(rs.size) - np.repeat(np.cumsum(nm + 1) - nm - 1, nm + 1)
     h = (lp.psi[:, 1] - lp.psi[:, 0]) / nm
     psi = lp.psi[rs, 0] + k * h[rs]
-    rho, _, drho, _, ddrho, _ = lp.revs.profile(rs, psi)
-    ku = lp.revs.kappa_u[rs]
-    rho2 = rho * rho * (1.0 + (1.02 * ku) ** 2)  # the u map's parametric midpoints stray along the parallel
+    rho, _, drho, _, ddrho, _ = revs.profile(rs, psi)
+    rho2 = rho * rho * (1.0 + (1.02 * revs.kappa_u[rs]) ** 2)  # the u map's parametric midpoints stray along the parallel
     mix = 2.0 * drho * drho + np.abs(rho * ddrho)
     # per strip (a row and the next one of the same face): the worst of its two rows
     st = np.setdiff1d(np.arange(rs.size), np.cumsum(nm + 1) - 1, assume_unique=True)
     f = rs[st]
     R2 = np.maximum(rho2[st], rho2[st + 1])
-    B = 2.0 * h[f] ** 2 * np.maximum(mix[st], mix[st + 1])
-    C = (h[f] ** 2 * lp.revs.p[f]) ** 2 - (8.0 * c[f] * tol) ** 2
+    B = 2.0 * (h[f] * h[f]) * np.maximum(mix[st], mix[st + 1])
+    C = (h * h * revs.p) ** 2 - (8.0 * c * tol) ** 2
     ok = C < 0
-    A = np.where(ok, -2.0 * C / (B + np.sqrt(np.maximum(B * B - 4.0 * R2 * C, 0.0)) + 1e-300), 0.0)
+    Cf = C[f]
+    A = np.where(ok[f], -2.0 * Cf / (B + np.sqrt(np.maximum(B * B - 4.0 * R2 * Cf, 0.0)) + 1e-300), 0.0)
     step = np.sqrt(A)
     if angle_tol is not None:
         step = np.minimum(step, angle_tol)
-    return nm, rs, k, st, step, ok
+    row_step = np.full(rs.size, np.inf)
+    np.minimum.at(row_step, st, step)
+    np.minimum.at(row_step, st + 1, step)
+    return np.ceil((lp.phi[rs, 1] - lp.phi[rs, 0]) / np.maximum(row_step, 1e-300) * (1.0 + 1e-9)), ok
 
 
 def row_counts(lp, n, tol, angle_tol, margin):
@@ -175,25 +181,21 @@ def row_counts(lp, n, tol, angle_tol, margin):
     ``(rows,)`` (0 at a pole); ``margin (S,)`` scales :data:`MARGIN` per face. None past
     :data:`.edges.MAX_SEGMENTS`."""
     c = MARGIN * margin
-    sweep = lp.phi[:, 1] - lp.phi[:, 0]
     n = n.copy()
     np.maximum.at(n, lp.mer_arc[lp.pole.all(axis=1), 0], 2)  # pole to pole: at least one row between
     n = tie(lp, n)
     for _ in range(8):
-        nm, rs, k, st, step, ok = _strip_steps(lp, n, tol, angle_tol, c)
+        nm = n[lp.mer_arc[:, 0]]
+        need, ok = _row_need(lp, nm, tol, angle_tol, c)
         n = n.copy()
         if not ok.all():  # rows at most sqrt(0.7) of the spacing whose sagitta alone is the aim
-            f = np.unique(rs[st[~ok]])
+            f = np.flatnonzero(~ok)
             h_max = np.sqrt(0.7 * 8.0 * c[f] * tol / lp.revs.p[f])
             np.maximum.at(n, lp.mer_arc[f, 0], np.ceil((lp.psi[f, 1] - lp.psi[f, 0]) / h_max).astype(np.int64))
             n = tie(lp, n)
             if n.max() > MAX_SEGMENTS:
                 return None
             continue
-        row_step = np.full(rs.size, np.inf)
-        np.minimum.at(row_step, st, step)
-        np.minimum.at(row_step, st + 1, step)
-        need = np.ceil(sweep[rs] / np.maximum(row_step, 1e-300) * (1.0 + 1e-9))
         if need.max(initial=0) > MAX_SEGMENTS:
             return None
         need = np.maximum(need, 1).astype(np.int64)
