@@ -161,22 +161,31 @@ start, load average 4-6 later; best CPU times):
   pole corner at the parametric middle of its base. Counts in closed form: the meridians at half
   the sagitta, each strip's angular step from a quadratic in step^2 (normal curvature of both
   families plus the tangential ``S_phipsi`` term the parametric yardstick counts near a pole); the
-  deviation is measured in closed form at every triangle's edge midpoints and centre (the result's
-  yardstick) and a strip over the tolerance refines its face (never needed on the parts tried).
-  Exact normals (the pole's is the limit along the profile). Compiled kernel
-  (``_latitude_kernels``) beside the numpy path, the same mesh from both. ``--brep --quick`` (load
-  average 2.7-2.8, other sessions running), filleted box 1e-1 ... 1e-5: 0.5 / 0.5 / 1.3 / 9.7 /
-  81 ms against OCC's 7.0 / 7.5 / 22.9 / 264 / 4,377 ms: 13.7x / 15.9x / 17.8x / 27x / 54x, with
-  0.51 / 0.51 / 0.50 / 0.43 / 0.40 of OCC's triangles (dev / tol 0.04 / 0.38 / 0.94 / 0.97 /
-  0.97). Where a call's ~0.5 ms goes at 1e-1 (kernels loaded, load 3, so about twice the idle
-  figures): arc counts 10 us, row counts 220 us (numpy, ~40 calls), planes and cylinders 120 us
-  (the compiled passes as before), latitude strips 260 us (the kernel 230 us: ~1,000 closed-form
-  evaluations of the deviation, each two angle maps and four sines and cosines), the vertex
-  fix-up, concatenation and ``Tessellation._build`` ~150 us. First call on a face set: 44-116 ms
-  at 1e-1 ... 1e-4 (564 ms at 1e-5): the general path still validates it at the requested
-  tolerance (12 ms at 1e-3, 275 ms at 1e-5), then the plan (~30 ms: ~28k Python-level calls,
-  mostly recognising 20 faces' circle maps one face at a time; 70 ms before the circle maps'
-  kappa went closed form and their pieces were sliced from the control points).
+  deviation is measured at every triangle's edge midpoints and centre (the result's yardstick)
+  and a face with a strip over the tolerance aims lower and is meshed again (never needed on the
+  parts tried: radii 0.5-9 on the box, 1e-1 ... 1e-5).
+  Exact normals (the pole's is the limit along the profile). Compiled kernels
+  (``_latitude_kernels``: the rows' counts, and the strips, fans, deviation and normals in one
+  pass) beside the numpy path, the same mesh from both. The deviation in the kernel is taken on
+  the surfaces' rational Bézier cells rather than the closed form's angle maps (no sines and
+  cosines), and its helpers are inlined: numba's reference counting of the array arguments of
+  each small helper call cost about three quarters of the kernel (1e-1: 275 -> 48 us, 1e-4:
+  20 -> 2.6 ms per call). ``--brep --quick`` (load average 4.5-5.1, other sessions running),
+  filleted box 1e-1 ... 1e-5: 0.3 / 0.3 / 0.4 / 2.1 / 18.8 ms against OCC's 6.6 / 6.1 / 16.9 /
+  166 / 3,542 ms: 25x / 24x / 39x / 77x / 188x, with 0.51 / 0.51 / 0.50 / 0.43 / 0.40 of OCC's
+  triangles (dev / tol 0.04 / 0.38 / 0.94 / 0.97 / 0.97); the first run of this session, before
+  the kernel work: 13.7x / 15.9x / 17.8x / 27x / 54x. Where a call's 272 us go at 1e-1 (best
+  CPU time of 400-call blocks, load 4): ``tessellate``'s front 44 us, arc counts 8 us, the rows'
+  counts 33 us, the planes and cylinders (the compiled passes as before) 67 us, the latitude
+  strips 63 us, the vertex fix-up, concatenation and ``Tessellation._build`` ~57 us. First call on a face set: 49 ms at
+  1e-1 ... 1e-3, 78 ms at 1e-4, 369 ms at 1e-5 (this run): the general path still validates the
+  face set at the requested tolerance (~12 ms at 1e-3, ~275 ms at 1e-5), then the plan (~30 ms:
+  ~28k Python-level calls, mostly recognising 20 faces' circle maps one face at a time; 70 ms
+  before the circle maps' kappa went closed form and their pieces were sliced from the control
+  points), so the first call is slower than before (8-20 ms, when the general path's mesh was
+  the result). Not cut further: validating at a coarser tolerance would make it ~20 ms at every
+  tolerance, but the general path can then refuse (or accept) loops that it would accept (or
+  refuse) at the requested tolerance.
 
 This session's runs (load average 3.8-4.6 on 2 cores; CPU times, best of N; ``--patches --tols
 1e-1,1e-2,1e-3`` and ``--brep --quick``; time ratio = OCC's time / splinekit's at the same

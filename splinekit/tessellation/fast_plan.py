@@ -294,8 +294,8 @@ def _derive(plan):
     lat = plan.lat
     if lat is not None:  # faces of revolution: the factors above, with the maps' Möbius margin
         ku, kv = lat.revs.kappa_u, lat.revs.kappa_v
-        for arcs, kappa, half in ((lat.bot_arc, ku, PARALLEL), (lat.top_arc, ku, PARALLEL), (lat.mer_arc[:, 0], kv, MERIDIAN),
-                                  (lat.mer_arc[:, 1], kv, MERIDIAN)):  # fmt: skip
+        for arcs, kappa, half in ((lat.bot_arc, ku, PARALLEL), (lat.top_arc, ku, PARALLEL),
+                                  (lat.mer_arc[:, 0], kv, MERIDIAN), (lat.mer_arc[:, 1], kv, MERIDIAN)):  # fmt: skip
             on = arcs >= 0
             np.maximum.at(plan.arc_factor, arcs[on], half * np.sqrt(1.0 + (1.02 * kappa[on]) ** 2))
     if slots:

@@ -19,10 +19,15 @@ angular step ``d`` errs at a connecting edge's midpoint by about
 ``d^2`` whose root gives the largest step of the strip's rows (the term in ``rho'`` is the
 tangential one the parametric yardstick counts near a pole). The meridians of such faces are
 counted at half the sagitta (:data:`.fast_plan.MERIDIAN`), so that the rows' quadratic has room,
-the parallels as the rows next to them need (:func:`row_counts`), and the deviation is then measured exactly (the surface in closed form at
-the barycentric ``(u, v)`` of every triangle's edge midpoints and centre, the result's
-yardstick); a strip over the tolerance refines its rows (and the arcs of its boundary rows) and
-the call is meshed again, a few rounds at most, else the caller falls back to the general path.
+the parallels as the rows next to them need (:func:`row_counts`). The deviation is then measured
+with the result's yardstick, the surface at the barycentric ``(u, v)`` of every triangle's edge
+midpoints and centre against the flat point (in closed form on the numpy path, on the surfaces'
+own rational Bézier cells in the compiled kernel :mod:`._latitude_kernels`: the same points to
+rounding); a face with a strip over the tolerance aims lower and the call is meshed again, a few
+rounds at most, else the caller falls back to the general path.
+
+Everything here runs on arrays over all faces at once (numpy), or in one compiled pass each for
+the counts and the strips once the kernels are loaded.
 """
 
 from __future__ import annotations
@@ -267,14 +272,16 @@ def mesh_rows(plan, lp, n, m, V_base, n_vid):
     abase = len(plan.corners) + np.cumsum(inner) - inner
     K = _kernels.load(KERNELS, work=FIXED_WORK + 4 * int(m.sum()), min_work=0)
     if K is not None:
-        maps = tuple((c.akey, c.tkey, c.table, c.first, c.last, c.sweep, c.full, c.t0, c.t1) for c in (revs.umaps, revs.vmaps))
+        maps = tuple((c.akey, c.tkey, c.table, c.first, c.last, c.sweep, c.full, c.t0, c.t1)
+                     for c in (revs.umaps, revs.vmaps))  # fmt: skip
         out = RowMesh()
         (out.T, out.corner_uv, out.face, out.strip_dev, out.V, out.N, out.UV, out.VP, out.fix_vid, out.fix_uv, out.fix_N,
          out.fix_face) = K.rows(nm, m, lp.phi, lp.psi, lp.lo, lp.hi, lp.pole, lp.uses, lp.flip, lp.face, plan.use_group,
                                 plan.use_flip, plan.arc_of, plan.end_vid, n, abase, V_base, n_vid, *maps, revs.O, revs.a,
                                 revs.e1, revs.e2, revs.rho_c, revs.z_c, revs.p, revs.g1, revs.g2, lp.nets)  # fmt: skip
         out.max_dev = float(out.strip_dev.max()) if out.strip_dev.size else 0.0
-        out.strip_rows = np.column_stack([np.repeat(np.arange(S), nm + 1), np.arange(m.size) - np.repeat(np.cumsum(nm + 1) - nm - 1, nm + 1)])
+        rs = np.repeat(np.arange(S), nm + 1)
+        out.strip_rows = np.column_stack([rs, np.arange(m.size) - (np.cumsum(nm + 1) - nm - 1)[rs]])
         return out
     rs = np.repeat(np.arange(S), nm + 1)
     first = np.cumsum(nm + 1) - nm - 1

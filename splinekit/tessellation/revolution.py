@@ -48,7 +48,8 @@ class Revolution:
             else:
                 rho = np.linalg.norm(d - z[:, None] * self.a, axis=1) - self.rho_c
                 dz = z - self.z_c
-                out[:, 1] = circle_param(self.vmap, np.arctan2(rho * self.g2[0] + dz * self.g2[1], rho * self.g1[0] + dz * self.g1[1]))
+                psi = np.arctan2(rho * self.g2[0] + dz * self.g2[1], rho * self.g1[0] + dz * self.g1[1])
+                out[:, 1] = circle_param(self.vmap, psi)
             out[0], out[-1] = uv0, uv1
         return out
 

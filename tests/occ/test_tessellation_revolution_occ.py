@@ -35,7 +35,8 @@ bd = pytest.importorskip("build123d")
 def rounded_box(a, r):
     """Closed-form ``(volume, area)`` of a cube of side ``a`` with every edge rounded by ``r``."""
     L = a - 2.0 * r
-    return L**3 + 6 * L * L * r + 3 * math.pi * L * r * r + 4 / 3 * math.pi * r**3, 6 * L * L + 6 * math.pi * L * r + 4 * math.pi * r * r
+    volume = L**3 + 6 * L * L * r + 3 * math.pi * L * r * r + 4 / 3 * math.pi * r**3
+    return volume, 6 * L * L + 6 * math.pi * L * r + 4 * math.pi * r * r
 
 
 def _gprop(shape):
