@@ -127,8 +127,18 @@ def bezier_nets(surfaces):
     cell ``(i, j)`` is ``nets[first[s] + i * (v pieces) + j]`` ``(3, 3, 4)``, homogeneous."""
     ub, vb, nets = [], [], []
     for S in surfaces:
-        ub.append(np.unique(np.asarray(S.knots_u, dtype=np.float64)))
-        vb.append(np.unique(np.asarray(S.knots_v, dtype=np.float64)))
+        (bu, mu), (bv, mv) = (np.unique(np.asarray(k, dtype=np.float64), return_counts=True) for k in (S.knots_u, S.knots_v))
+        ub.append(bu)
+        vb.append(bv)
+        if all(m[0] == 3 and m[-1] == 3 and (m[1:-1] == 2).all() for m in (mu, mv)):
+            # joints of multiplicity 2 (as OCC writes spheres and tori): the cells' nets are the
+            # surface's control points, three by three
+            w = np.asarray(S.weights, dtype=np.float64)[..., None]
+            H = np.concatenate([np.asarray(S.control_points) * w, w], axis=2)
+            i = 2 * np.arange(len(bu) - 1)[:, None, None, None] + np.arange(3)[:, None]
+            j = 2 * np.arange(len(bv) - 1)[None, :, None, None] + np.arange(3)
+            nets.extend(H[i, j].reshape(-1, 3, 3, 4))
+            continue
         for row in S.to_bezier():
             for b in row:
                 w = np.asarray(b.weights, dtype=np.float64)[..., None]
