@@ -174,7 +174,11 @@ start, load average 4-6 later; best CPU times):
   filleted box 1e-1 ... 1e-5: 0.3 / 0.3 / 0.4 / 2.1 / 18.8 ms against OCC's 6.6 / 6.1 / 16.9 /
   166 / 3,542 ms: 25x / 24x / 39x / 77x / 188x, with 0.51 / 0.51 / 0.50 / 0.43 / 0.40 of OCC's
   triangles (dev / tol 0.04 / 0.38 / 0.94 / 0.97 / 0.97); the first run of this session, before
-  the kernel work: 13.7x / 15.9x / 17.8x / 27x / 54x. Where a call's 272 us go at 1e-1 (best
+  the kernel work: 13.7x / 15.9x / 17.8x / 27x / 54x. ``--small`` (load 2.2-3.8), best CPU
+  time of 200 calls in blocks: 250 / 254 / 437 / 2,083 / 17,997 us against OCC's 6.0 / 6.5 /
+  15.8 / 172 / 3,160 ms: 24x / 26x / 36x / 83x / 176x; alternating one call of each, 8.7x / 8.6x
+  / 17x / 60x / 181x (the cold caches after an OCC call, as on the other small parts: cylinder
+  5-7x, box with a hole 7-8x at 1e-1 ... 1e-3). Where a call's 272 us go at 1e-1 (best
   CPU time of 400-call blocks, load 4): ``tessellate``'s front 44 us, arc counts 8 us, the rows'
   counts 33 us, the planes and cylinders (the compiled passes as before) 67 us, the latitude
   strips 63 us, the vertex fix-up, concatenation and ``Tessellation._build`` ~57 us. First call on a face set: 49 ms at
