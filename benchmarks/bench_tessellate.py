@@ -147,17 +147,49 @@ start, load average 4-6 later; best CPU times):
   go cell by cell like a Bézier patch set (the 12 x 12 bicubic net, 81 cells, stays a tensor
   grid: 17 ms against 24 by cells at 1e-3). Sphere 1e-1: 3.1 -> 0.44-0.48 ms; torus 3.5 ->
   0.41 ms; at 1e-4 the sphere 12.5 -> 4.8 ms, the torus 14.1 -> 7.1 ms.
-* Filleted box (26 trimmed faces) at 1e-4, 12,716 triangles, one Triangle round (the interior
-  grids need no refinement): Triangle ~16%, the scattered surface evaluations (the measured
-  counts of the interior grids, the grid points, the measurement at edge midpoints and triangle
-  centres, the normals' partials) ~35-40%, the grid points' clearance test (a k-d tree) ~10%,
-  the labelling's components ~5%; the rest is ~1,800 numpy reductions and copies. The
-  evaluations now run compiled once the kernels are loaded (``_batch_kernels``: the query's
-  cell located and its point and partials combined one query at a time, 3.8x numpy's sparse
-  product at 20k queries, 10x at 20): 41-44 -> 32-35 ms at load 4-5. 10x OCC at 1e-4 (OCC ~180 ms)
-  needs ~18 ms: what is left is spread over Triangle, the clearance test and the numpy glue of
-  the measurement round (no stage above a fifth); a compiled clearance test on the tensor grid
-  (rasterize the trims) and a compiled measurement round are the next steps.
+* Filleted box (26 trimmed faces: 6 planes, 12 quarter-cylinder fillets, 8 sphere octants, each
+  with a pole) was the one part under 10x: it mixed the fast path's planes and cylinders with
+  sphere corners, so it went the general path whole (~6.5 ms fixed cost; 1.1x / 1.1x / 1.8x /
+  5.5x / 15x at 1e-1 ... 1e-5). The fast path now also takes faces of revolution with a circular
+  profile (sphere and torus pieces, ``splinekit.tessellation.revolution``: recognised with exact
+  angle maps of both circle families and checked against the surface on a grid) whose (u, v)
+  loop is a rectangle of parallels (or a pole) and meridians: latitude strips
+  (``splinekit.tessellation.latitude``): rows at iso-v at uniform profile angle on the meridian
+  edges' own samples (the two meridians' counts tied), each row a parallel at uniform angle, the
+  bottom and top rows the parallel edges' samples (shared with the fillets and planes, so the mesh
+  is watertight by construction), rows zipped like the cylinder strips, a fan at a pole with the
+  pole corner at the parametric middle of its base. Counts in closed form: the meridians at half
+  the sagitta, each strip's angular step from a quadratic in step^2 (normal curvature of both
+  families plus the tangential ``S_phipsi`` term the parametric yardstick counts near a pole); the
+  deviation is measured at every triangle's edge midpoints and centre (the result's yardstick)
+  and a face with a strip over the tolerance aims lower and is meshed again (never needed on the
+  parts tried: radii 0.5-9 on the box, 1e-1 ... 1e-5).
+  Exact normals (the pole's is the limit along the profile). Compiled kernels
+  (``_latitude_kernels``: the rows' counts, and the strips, fans, deviation and normals in one
+  pass) beside the numpy path, the same mesh from both. The deviation in the kernel is taken on
+  the surfaces' rational Bézier cells rather than the closed form's angle maps (no sines and
+  cosines), and its helpers are inlined: numba's reference counting of the array arguments of
+  each small helper call cost about three quarters of the kernel (1e-1: 275 -> 48 us, 1e-4:
+  20 -> 2.6 ms per call). ``--brep --quick`` (load average 4.5-5.1, other sessions running),
+  filleted box 1e-1 ... 1e-5: 0.3 / 0.3 / 0.4 / 2.1 / 18.8 ms against OCC's 6.6 / 6.1 / 16.9 /
+  166 / 3,542 ms: 25x / 24x / 39x / 77x / 188x, with 0.51 / 0.51 / 0.50 / 0.43 / 0.40 of OCC's
+  triangles (dev / tol 0.04 / 0.38 / 0.94 / 0.97 / 0.97); the first run of this session, before
+  the kernel work: 13.7x / 15.9x / 17.8x / 27x / 54x. ``--small`` (load 2.2-3.8), best CPU
+  time of 200 calls in blocks: 250 / 254 / 437 / 2,083 / 17,997 us against OCC's 6.0 / 6.5 /
+  15.8 / 172 / 3,160 ms: 24x / 26x / 36x / 83x / 176x; alternating one call of each, 8.7x / 8.6x
+  / 17x / 60x / 181x (the cold caches after an OCC call, as on the other small parts: cylinder
+  5-7x, box with a hole 7-8x at 1e-1 ... 1e-3). Where a call's 272 us go at 1e-1 (best
+  CPU time of 400-call blocks, load 4): ``tessellate``'s front 44 us, arc counts 8 us, the rows'
+  counts 33 us, the planes and cylinders (the compiled passes as before) 67 us, the latitude
+  strips 63 us, the vertex fix-up, concatenation and ``Tessellation._build`` ~57 us. First call on a face set: 49 ms at
+  1e-1 ... 1e-3, 78 ms at 1e-4, 369 ms at 1e-5 (this run): the general path still validates the
+  face set at the requested tolerance (~12 ms at 1e-3, ~275 ms at 1e-5), then the plan (~30 ms:
+  ~28k Python-level calls, mostly recognising 20 faces' circle maps one face at a time; 70 ms
+  before the circle maps' kappa went closed form and their pieces were sliced from the control
+  points), so the first call is slower than before (8-20 ms, when the general path's mesh was
+  the result). Not cut further: validating at a coarser tolerance would make it ~20 ms at every
+  tolerance, but the general path can then refuse (or accept) loops that it would accept (or
+  refuse) at the requested tolerance.
 
 This session's runs (load average 3.8-4.6 on 2 cores; CPU times, best of N; ``--patches --tols
 1e-1,1e-2,1e-3`` and ``--brep --quick``; time ratio = OCC's time / splinekit's at the same
@@ -715,7 +747,7 @@ def brep_main(args):
 
 
 def small_main(args):
-    """The small B-rep parts of part 2 (the fast path's planes and cylinders), each row timed
+    """The small B-rep parts of part 2 (the fast path's planes, cylinders and latitude strips), each row timed
     back to back in one process (OCC's deflection matched as in part 2): ``--calls`` calls of
     splinekit then ``--calls`` of OCC, and the same number alternating one call of each; the
     best CPU time of each, so that both see the same machine load."""
@@ -730,7 +762,7 @@ def small_main(args):
     from splinekit.interop.occ_brep import brep_to_shape
 
     names = ("cylinder 1 x 3", "box 20 x 30 x 10", "box 20 with hole r 4", "plate 40 x 30 x 5, 3 holes",
-             "build123d box - cylinder", "build123d chamfered block 20, 3")  # fmt: skip
+             "build123d filleted box 20, r 3", "build123d box - cylinder", "build123d chamfered block 20, 3")  # fmt: skip
     print("| part | tol / size | splinekit triangles | OCC triangles | splinekit | OCC | time ratio | "
           "splinekit, alternating | OCC, alternating | time ratio, alternating |")
     print("|---|---|---|---|---|---|---|---|---|---|")

@@ -19,7 +19,7 @@ from numba import njit
 TWO_PI = 2.0 * math.pi
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, inline="always")
 def _search(keys, key, lo, hi):
     """First index in ``keys[lo:hi + 1]`` whose key is >= ``key`` (``hi`` if none): the piece."""
     a, b = lo, hi
@@ -32,7 +32,7 @@ def _search(keys, key, lo, hi):
     return a
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, inline="always")
 def _param(q, theta, akey, table, first, last, sweep, full):
     th = theta - TWO_PI * math.floor(theta / TWO_PI)
     if not full and th > 0.5 * (sweep[q] + TWO_PI):
@@ -43,7 +43,7 @@ def _param(q, theta, akey, table, first, last, sweep, full):
     return lo + span * (lam * s / ((1.0 - s) + lam * s))
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, inline="always")
 def _angle(q, t, tkey, table, first, last, t0, t1):
     k = _search(tkey, 2.0 * q + (t - t0[q]) / (t1[q] - t0[q]), first[q], last[q])
     lo, span, mid, lam, tq = table[k, 0], table[k, 1], table[k, 2], table[k, 3], table[k, 4]

@@ -1,5 +1,6 @@
 """The fast B-rep tessellation path: planes and right circular cylinders bounded by lines and
-circles, meshed from a :class:`.fast_plan.FastPlan` with the tolerance-dependent work only.
+circles (and faces of revolution: :mod:`.latitude`), meshed from a :class:`.fast_plan.FastPlan`
+with the tolerance-dependent work only.
 
 Per call: every circle's segment count in closed form (the sagitta and the angle criterion, the
 sagitta scaled by ``sqrt(1 + kappa^2)`` where a cylinder uses the circle: its rational
@@ -32,6 +33,8 @@ import numpy as np
 from .. import _kernels, limits
 from ..mesh.topology import ranges
 from .edges import MAX_SEGMENTS
+from .fast_plan import REVOLUTION
+from .latitude import mesh_rows, row_counts, tie
 from .result import Tessellation
 from .surfaces import BYTES_PER_TRIANGLE
 
@@ -54,6 +57,8 @@ def _arc_counts(plan, tol, angle_tol):
     if angle_tol is not None:
         step = np.minimum(step, angle_tol)
     n = np.maximum(np.ceil(plan.arc_sweep / step * (1.0 + 1e-9)), plan.arc_min).astype(np.int64)
+    if plan.lat is not None:
+        n = tie(plan.lat, n)
     return None if n.size and n.max() > MAX_SEGMENTS else n
 
 
@@ -117,11 +122,65 @@ def _mesh(plan, tol, angle_tol):
     n = _arc_counts(plan, tol, angle_tol)
     if n is None:
         return None
+    if plan.lat is not None:
+        return _mixed(plan, n, tol, angle_tol)
+    parts = _base(plan, n, tol, angle_tol)
+    return None if parts is None else Tessellation._build(*parts, tol)
+
+
+ROUNDS = 4
+"""Largest number of meshings of a face set with faces of revolution (the first one's closed-form
+counts nearly always hold; a strip over the tolerance refines its face and meshes again)."""
+
+
+def _mixed(plan, n, tol, angle_tol):
+    """:func:`_mesh` of a face set with faces of revolution (:mod:`.latitude`): the planes and
+    cylinders as usual, the faces of revolution in latitude strips on the same arc samples."""
+    lat = plan.lat
+    margin = np.ones(len(lat.face))
+    base = None
+    for _ in range(ROUNDS):
+        counted = row_counts(lat, n, tol, angle_tol, margin)
+        if counted is None:
+            return None
+        n_new, m = counted
+        if base is None or not np.array_equal(n_new, n):
+            n = n_new
+            base = _base(plan, n, tol, angle_tol)
+            if base is None:
+                return None
+        V, T, N, UV, VP, tface, CUV, max_dev = base
+        limits.check(int(m.sum() + m.size) * 4 * BYTES_PER_TRIANGLE, "tessellation of faces of revolution")
+        rows = mesh_rows(plan, lat, n, m, V, len(V))
+        if rows.max_dev <= tol:
+            break
+        # the faces with a strip over the tolerance aim lower next round
+        bad = np.zeros(len(margin))
+        np.maximum.at(bad, rows.strip_rows[:, 0], rows.strip_dev)
+        over = bad > tol
+        margin[over] *= np.maximum(0.5, 0.95 * tol / bad[over])
+    else:
+        return None
+    # the shared vertices whose representative lies on a face of revolution: its (u, v) and normal
+    fv = rows.fix_vid
+    sel = plan.kind[VP[fv]] == REVOLUTION
+    UV, N, VP = UV.copy(), N.copy(), VP.copy()
+    UV[fv[sel]], N[fv[sel]], VP[fv[sel]] = rows.fix_uv[sel], rows.fix_N[sel], rows.fix_face[sel]
+    return Tessellation._build(np.concatenate([V, rows.V]), np.concatenate([T, rows.T]), np.concatenate([N, rows.N]),
+                               np.concatenate([UV, rows.UV]), np.concatenate([VP, rows.VP]),
+                               np.concatenate([tface, rows.face]), np.concatenate([CUV, rows.corner_uv]),
+                               max(max_dev, rows.max_dev), tol)  # fmt: skip
+
+
+def _base(plan, n, tol, angle_tol):
+    """The planes and cylinders of the plan with arc counts ``n``: ``(V, T, N, UV, VP, face,
+    corner_uv, max_dev)`` as :meth:`.result.Tessellation._build` takes them (every corner and
+    arc sample a vertex), or None where the general path must do it."""
     n_pts = plan.n_line_uses + int(n[plan.au_arc].sum())
     limits.check(n_pts * 4 * BYTES_PER_TRIANGLE, "tessellation of trimmed faces (planes and cylinders)")
     K = _kernels.load(KERNELS, work=FIXED_WORK + 2 * n_pts, min_work=0)
     if K is not None:
-        return _mesh_compiled(K, plan, n, tol, angle_tol)
+        return _base_compiled(K, plan, n, tol, angle_tol)
     au = plan.au
     U = len(plan.use_group)
     cnt = np.ones(U, dtype=np.int64)
@@ -221,7 +280,7 @@ def _mesh(plan, tol, angle_tol):
         ax = plan.slot_axis[q]
         d -= np.einsum("ij,ij->i", d, ax)[:, None] * ax
         N[sel] = d * (plan.slot_sign[q] / np.linalg.norm(d, axis=1))[:, None]
-    return Tessellation._build(V, pvid[T], N, puv[rep], VP, tface, puv[T], max_dev, tol)
+    return V, pvid[T], N, puv[rep], VP, tface, puv[T], max_dev
 
 
 def _ear_clip(plan, puv, ustart, cnt):
@@ -239,8 +298,8 @@ def _ear_clip(plan, puv, ustart, cnt):
     return (np.concatenate(cp).reshape(-1, 3) if cp else np.zeros((0, 3), dtype=np.int64)), wanted
 
 
-def _mesh_compiled(K, plan, n, tol, angle_tol):
-    """:func:`_mesh` on the compiled kernels (:mod:`._fast_kernels`)."""
+def _base_compiled(K, plan, n, tol, angle_tol):
+    """:func:`_base` on the compiled kernels (:mod:`._fast_kernels`)."""
     maps, angle, zips = plan.kernel_args
     cnt, ustart, vid, X, uv, face, n_vid = K.points(
         n, len(plan.corners), plan.use_face, plan.use_arc, plan.use_flip, plan.start_vid, plan.start_X, plan.use_uv0,
@@ -253,4 +312,4 @@ def _mesh_compiled(K, plan, n, tol, angle_tol):
         plan.normal, plan.reversed, plan.slot_of_face, plan.plane_offset)  # fmt: skip
     if not ok:
         return None
-    return Tessellation._build(V, T, N, UV, VP, tf, CUV, max_dev, tol)
+    return V, T, N, UV, VP, tf, CUV, max_dev

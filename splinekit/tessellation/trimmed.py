@@ -2,12 +2,14 @@
 
 Faces bounded by their natural domain that share no edge with another face (a whole sphere or
 torus: only seams and poles) are meshed by the patch path (:mod:`.natural`). Face sets made only
-of planes and right circular cylinders bounded by straight segments and circle arcs (boxes,
-plates with holes, chamfered blocks, cylinders: most machined parts) take a fast path
-(:mod:`.fast_plan`, :mod:`.fast_mesh`): a tolerance-independent plan, built once per face set
-after the general path below has checked it on the first call, and per call only the circles'
-counts in closed form, ear clipping of the planes' boundary polygons and strips on the
-cylinders, with the same guarantees and the same ``max_deviation`` yardstick. Every other face
+of planes, right circular cylinders and sphere or torus pieces bounded by parallels, meridians
+and poles, with straight segments and circle arcs for edges (boxes, plates with holes, chamfered
+blocks, cylinders, filleted boxes and cylinders: most machined parts) take a fast path
+(:mod:`.fast_plan`, :mod:`.fast_mesh`, :mod:`.latitude`): a tolerance-independent plan, built once
+per face set after the general path below has checked it on the first call, and per call only
+the circles' counts in closed form, ear clipping of the planes' boundary polygons, strips on the
+cylinders and latitude strips on the spheres and tori, with the same guarantees and the same
+``max_deviation`` yardstick. Every other face
 set, and any call the fast path cannot keep a guarantee on, takes the general path whole.
 
 Design of the general path (whole-array work; Python loops run over faces, edges and refinement

@@ -109,10 +109,10 @@ def _b123d(name):
 
 @pytest.mark.parametrize("rel", [1e-1, 1e-3, 1e-4])
 @pytest.mark.parametrize(("name", "fast"), [("box - cylinder", True), ("chamfered block", True), ("z-filleted box", True),
-                                            ("filleted box", False)])  # fmt: skip
+                                            ("filleted box", True)])  # fmt: skip
 def test_build123d_parts_closed_within_tolerance(name, fast, rel):
-    # the filleted box mixes planes with cylinder fillets and sphere corners: the general path
-    # meshes it whole; the others take the fast path
+    # the filleted box mixes planes with cylinder fillets and sphere corners (faces of
+    # revolution: latitude strips); the others are planes and cylinders
     solid, part = _b123d(name)
     mesh = sk.tessellate(solid, rel, relative=True)
     assert (solid.faces[0]._cache["tessellate"].memo.get("fast") is not None) == fast
