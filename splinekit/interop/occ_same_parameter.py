@@ -117,18 +117,19 @@ def _samples(use, per_span: int = 17) -> np.ndarray:
 
 
 def _reparametrized(surface, use, dev: float, apart: float):
-    """``(pcurve, deviation left)``: the use's pcurve on its 3-D curve's parameter, with 16 to 1024
-    pieces (four times more until the deviation left is within twice ``apart``, the distance
-    between the two point sets, which no parameter can undo); None when no increasing map is
-    found or the best one does not halve ``dev``."""
+    """``(pcurve, deviation left)``: the use's pcurve on its 3-D curve's parameter, with 16 to 256
+    pieces (four times more while that halves the deviation left and it exceeds twice ``apart``,
+    the distance between the two point sets, which no parameter can undo); None when no
+    increasing map is found or the best one does not halve ``dev``."""
     best = None
-    for pieces in (16, 64, 256, 1024):
+    for pieces in (16, 64, 256):
         pc = _onto_curve_parameter(surface, use, pieces)
         if pc is None:
             break
         got = _deviation(surface, pc, use.curve, _samples(Edge(pc, use.curve)))
-        if best is None or got < best[1]:
-            best = (pc, got)
+        if best is not None and got > 0.5 * best[1]:  # no longer the map's resolution that limits it
+            break
+        best = (pc, got)
         if got <= 2.0 * apart:
             break
     return best if best is not None and best[1] < 0.5 * dev else None
