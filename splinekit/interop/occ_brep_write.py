@@ -231,9 +231,12 @@ def brep_to_shape(obj, *, tolerance: float = OCC_CONFUSION):
         if not degenerate and any(r[3].curve is None for r in rows):
             # a use without a 3-D curve follows the edge only through its own surface and pcurve:
             # the tolerance must cover how far the uses lie from each other (or from the 3-D curve)
-            # at the same parameter, or OCC finds a pcurve off the curve it builds from another
-            tol_e = max(tol_e, _MARGIN * _spread([(faces[i], pc) for i, pcs in per_face.items() for pc, _ in pcs],
-                                                 curve3d, dom))
+            # at the same parameter, or OCC finds a pcurve off the curve it builds from another.
+            # Only as far as the uses' own tolerances allow (each within its tolerance of the edge):
+            # trims further apart are a bad solid, which OCC is left to refuse
+            spread = _spread([(faces[i], pc) for i, pcs in per_face.items() for pc, _ in pcs], curve3d, dom)
+            if spread <= 2.0 * tol_e:
+                tol_e = max(tol_e, _MARGIN * spread)
         if curve3d is not None and not degenerate:
             builder.MakeEdge(E, geom_to_occ(curve3d), tol_e)
         else:

@@ -145,8 +145,8 @@ def same_parameter(surface, loops) -> list:
     Where the two are the same point set within much less than the deviation (only their
     parameters disagree), the pcurve is put onto the 3-D curve's parameter without changing its
     trace (:func:`compose_piecewise_linear`) and the tolerance covers what is left; should that
-    fail, the 3-D curve is dropped instead (the surface at the pcurve is then the edge's geometry)
-    and the tolerance covers the distance between the two."""
+    fail, the tolerance covers the whole deviation. The 3-D curve is never dropped: a use without
+    one would leave the edge to another face's pcurve, which need not share this one's parameter."""
     uses = [use for lp in loops for use in lp if use.curve is not None and not use.degenerate]
     if not uses:
         return loops
@@ -168,6 +168,6 @@ def same_parameter(surface, loops) -> list:
         if moved is not None:
             pc, left = moved
             fixed[id(use)] = Edge(pc, use.curve, key=use.key, tolerance=max(use.tolerance, MARGIN * left))
-        else:
-            fixed[id(use)] = Edge(use.pcurve, None, key=use.key, tolerance=max(use.tolerance, MARGIN * apart))
+        else:  # the curve is kept (a use without one leaves the edge to the other face's pcurve)
+            fixed[id(use)] = Edge(use.pcurve, use.curve, key=use.key, tolerance=MARGIN * dev)
     return [[fixed.get(id(use), use) for use in lp] for lp in loops]
