@@ -10,7 +10,8 @@ parametrization that is not the angle, so the pcurves would no longer map onto i
 read with FORWARD orientation so its pcurves keep the material on their left; the face's own
 orientation becomes ``reversed``. Every edge use keeps its pcurve, its 3-D curve on the same
 parameter range and a ``key``: the edge's index in one ``TopTools_IndexedMapOfShape`` of the
-whole shape, so the two faces of an edge share it.
+whole shape, so the two faces of an edge share it; a pcurve that follows its 3-D curve at another
+parameter is put onto the curve's parameter (:mod:`.occ_same_parameter`).
 """
 
 from __future__ import annotations

@@ -2,17 +2,18 @@
 follows the edge's 3-D curve at the same parameter, within a tolerance that covers what is left.
 
 STEP files from other systems often give an edge pcurves that trace the 3-D curve's points but
-not at its parameter (a CATIA ventilator edge: the surface at the pcurve runs 6.5e-4 ahead of the
-3-D curve at the same parameter while staying 1.5e-5 from it; an Alias edge 1.3e-3). OCC reads
-such an edge with a tolerance that covers the lag, and a later STEP reader (OCC's own included)
-re-approximates the pcurve onto the 3-D curve's parameter when that gives a smaller deviation than
-the lag, which moves the trim: a file we write would not read back as what we read.
+not at its parameter (a CATIA ventilator edge: the surface at the pcurve runs 6.5e-4 mm off the
+3-D curve at the same parameter while staying 1.5e-5 mm from it; an Alias edge 1.3e-3 mm), beyond
+the tolerance OCC gives the edge (its check looks at a few samples only). Such a use must keep its
+3-D curve: a use without one leaves the edge, once written, to the curve OCC builds from another
+face's pcurve, which need not share this one's parameter (the re-read ventilator was refused so:
+an InvalidCurveOnSurface that OCC reports as an "unorientable" face).
 
 :func:`same_parameter` therefore puts such a pcurve on the 3-D curve's parameter without changing
 its trace: the new pcurve is the old one composed with a piecewise-linear parameter map
 (:func:`compose_piecewise_linear`: knots moved, control points kept), so the face's trimming
-loop, area and volume stay the same to rounding. The map's breakpoints come from projecting the
-3-D curve's points onto the surface at the pcurve.
+loop, area and volume stay the same to rounding; the tolerance covers the deviation left. The
+map's breakpoints come from projecting the 3-D curve's points onto the surface at the pcurve.
 """
 
 from __future__ import annotations
