@@ -10,7 +10,8 @@ parametrization that is not the angle, so the pcurves would no longer map onto i
 read with FORWARD orientation so its pcurves keep the material on their left; the face's own
 orientation becomes ``reversed``. Every edge use keeps its pcurve, its 3-D curve on the same
 parameter range and a ``key``: the edge's index in one ``TopTools_IndexedMapOfShape`` of the
-whole shape, so the two faces of an edge share it.
+whole shape, so the two faces of an edge share it; a pcurve that follows its 3-D curve at another
+parameter is put onto the curve's parameter (:mod:`.occ_same_parameter`).
 """
 
 from __future__ import annotations
@@ -18,13 +19,13 @@ from __future__ import annotations
 import numpy as np
 
 from ..brep import Edge, Shell, Solid, TrimmedFace
-from ..closest import project
 from ..curves import BSplineCurve, NurbsCurve
 from ..errors import BackendError, ParameterError
 from .occ_backend import _ocp, _occ_call, require_ocp
 from .occ_geometry import _curve2d_from_occ, _curve3d_from_occ, _edge_to_curve, _from_geom, _same_domain
 from .occ_native_faces import native_faces, native_surface, native_use
 from .occ_nurbs import _nurbs_converted
+from .occ_same_parameter import same_parameter
 from .occ_shapes import _children, _sub_shapes
 
 __all__ = ["brep_from_shape"]
@@ -100,7 +101,7 @@ class _Reader:
             if plan.kind == "plane" and not (hi - lo > 1e-12 * max(1.0, float(np.abs(P).max()))).all():
                 raise BackendError(f"face {index}: its edges bound no area (their (u, v) box is {lo.tolist()} to {hi.tolist()})")
             surface = native_surface(plan, (lo, hi))
-        loops = _same_parameter(surface, loops)
+        loops = same_parameter(surface, loops)
         return TrimmedFace(surface, loops, reversed=reversed_, tolerance=tol_face, name=name)
 
     def _native_use(self, edge, fwd, plan):
@@ -245,43 +246,6 @@ def _isoline_pcurve(edge, fwd, cedge, cfwd, pcurve):
         if dev < best_dev:
             best, best_dev = cand, dev
     return best
-
-
-def _same_parameter(surface, loops) -> list:
-    """``loops`` (lists of Edges on ``surface``) with each use's tolerance covering how far its 3-D
-    curve is from the surface at its pcurve at the same parameter (the data model's SameParameter).
-
-    OCC measures that deviation on its own samples and the NURBS conversion re-approximates
-    curves, so the figure read from OCC can fall short of the one the curves really have.
-    Where the two curves are the same point set within a much smaller distance (only their
-    parameters disagree), the 3-D curve is dropped instead (the surface at the pcurve is then the
-    edge's geometry, as for a use without a 3-D curve) and the tolerance covers that distance.
-    The surface is evaluated once for the samples of every use of the face."""
-    uses = [use for lp in loops for use in lp if use.curve is not None and not use.degenerate]
-    if not uses:
-        return loops
-    samples = []
-    for use in uses:
-        a, b = use.domain
-        br = np.union1d(use.pcurve.bezier_breakpoints(), use.curve.bezier_breakpoints())
-        br = np.union1d(br[(br > a) & (br < b)], [a, b])
-        samples.append((br[:-1, None] + (br[1:] - br[:-1])[:, None] * np.linspace(0.0, 1.0, 17)[None]).ravel())
-    uv = np.concatenate([use.pcurve.evaluate(t) for use, t in zip(uses, samples)])
-    (u0, u1), (v0, v1) = surface.domain
-    on_surface = np.split(surface.evaluate(np.clip(uv[:, 0], u0, u1), np.clip(uv[:, 1], v0, v1)),
-                          np.cumsum([len(t) for t in samples])[:-1])
-    fixed = {}
-    for use, t, on in zip(uses, samples, on_surface):
-        dev = float(np.linalg.norm(on - use.curve.evaluate(t), axis=1).max())
-        if dev <= use.tolerance:
-            continue
-        apart = float(project(use.curve, on).distances.max())
-        margin = 1.1  # the check samples the same parameters; the margin covers rounding only
-        if apart < 0.5 * dev:
-            fixed[id(use)] = Edge(use.pcurve, None, key=use.key, tolerance=max(use.tolerance, margin * apart))
-        else:
-            fixed[id(use)] = Edge(use.pcurve, use.curve, key=use.key, tolerance=margin * dev)
-    return [[fixed.get(id(use), use) for use in lp] for lp in loops]
 
 
 def _native_surface(face) -> bool:

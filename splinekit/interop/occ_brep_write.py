@@ -32,9 +32,7 @@ def _use_points(face, use) -> np.ndarray:
     t = a + (b - a) * np.array([0.0, 0.25, 0.5, 0.75, 1.0])
     if use.curve is not None:
         return use.curve.evaluate(t)
-    uv = use.pcurve.evaluate(t)
-    (u0, u1), (v0, v1) = face.surface.domain  # a file's pcurves may overshoot by a rounding
-    return face.surface.evaluate(np.clip(uv[:, 0], u0, u1), np.clip(uv[:, 1], v0, v1))
+    return _on_surface(face, use.pcurve.evaluate(t))
 
 
 class _UnionFind:
@@ -95,6 +93,34 @@ def _in_ref_parameter(use, same: bool, ref_domain):
     pc = pc.reparametrize(*ref_domain)
     cv = None if cv is None else cv.reparametrize(*ref_domain)
     return pc, cv, True
+
+
+_MARGIN = 1.1
+"""A measured deviation becomes a tolerance times this (the check samples OCC takes lie between ours)."""
+
+
+def _spread(uses, curve, domain) -> float:
+    """Largest distance, at the same parameter, between the surface-at-pcurve images of ``uses``
+    (``(face, pcurve)`` pairs on ``domain``, in one direction) and ``curve`` (3-D, or None: then
+    between the images themselves, pairwise), on 17 samples per Bézier span of any of them."""
+    a, b = domain
+    br = np.unique(np.concatenate([pc.bezier_breakpoints() for _, pc in uses]
+                                  + ([curve.bezier_breakpoints()] if curve is not None else [])))
+    br = np.union1d(br[(br > a) & (br < b)], [a, b])
+    t = (br[:-1, None] + (br[1:] - br[:-1])[:, None] * np.linspace(0.0, 1.0, 17)[None]).ravel()
+    images = [_on_surface(face, pc.evaluate(t)) for face, pc in uses]
+    if curve is not None:
+        ref = curve.evaluate(t)
+        return max(float(np.linalg.norm(P - ref, axis=1).max()) for P in images)
+    return max((float(np.linalg.norm(P - Q, axis=1).max()) for k, P in enumerate(images) for Q in images[k + 1:]),
+               default=0.0)
+
+
+def _on_surface(face, uv) -> np.ndarray:
+    """``face.surface`` at the ``(n, 2)`` parameters ``uv`` (a file's pcurves may overshoot the
+    domain by a rounding: clamped)."""
+    (u0, u1), (v0, v1) = face.surface.domain
+    return face.surface.evaluate(np.clip(uv[:, 0], u0, u1), np.clip(uv[:, 1], v0, v1))
 
 
 def _faces_of(obj):
@@ -202,6 +228,15 @@ def brep_to_shape(obj, *, tolerance: float = OCC_CONFUSION):
                 curve3d = cv
             per_face.setdefault(r[0], []).append((pc, same[id(r)]))
         degenerate = any(r[3].degenerate for r in rows)
+        if not degenerate and any(r[3].curve is None for r in rows):
+            # a use without a 3-D curve follows the edge only through its own surface and pcurve:
+            # the tolerance must cover how far the uses lie from each other (or from the 3-D curve)
+            # at the same parameter, or OCC finds a pcurve off the curve it builds from another.
+            # Only as far as the uses' own tolerances allow (each within its tolerance of the edge):
+            # trims further apart are a bad solid, which OCC is left to refuse
+            spread = _spread([(faces[i], pc) for i, pcs in per_face.items() for pc, _ in pcs], curve3d, dom)
+            if spread <= 2.0 * tol_e:
+                tol_e = max(tol_e, _MARGIN * spread)
         if curve3d is not None and not degenerate:
             builder.MakeEdge(E, geom_to_occ(curve3d), tol_e)
         else:

@@ -84,14 +84,28 @@ def _check_valid(shape, what: str) -> None:
     if analyzer.IsValid():
         return
     problems = []
+    subs = {kind: _sub_shapes(shape, kind) for kind in _CHECK_ORDER}
     for kind in _CHECK_ORDER:
-        for index, sub in enumerate(_sub_shapes(shape, kind)):
+        for index, sub in enumerate(subs[kind]):
             result = analyzer.Result(sub)
             if result is None:
                 continue
             bad = sorted({st.name for st in result.Status() if st.name != "BRepCheck_NoError"})
-            if bad:
-                problems.append(f"{kind.lower()} {index}: {', '.join(bad)}")
+            if not bad:
+                continue
+            problems.append(f"{kind.lower()} {index}: {', '.join(bad)}")
+            if kind != "FACE":
+                continue
+            # OCC marks a face "unorientable" when one of its edges fails on it (a pcurve too far
+            # from the 3-D curve): name those edges too
+            for edge in _sub_shapes(sub, "EDGE"):
+                on = analyzer.Result(edge)
+                if on is None or not on.IsStatusOnShape(sub):
+                    continue
+                bad = sorted({st.name for st in on.StatusOnShape(sub) if st.name != "BRepCheck_NoError"})
+                if bad:
+                    where = next((i for i, e in enumerate(subs["EDGE"]) if e.IsSame(edge)), "?")
+                    problems.append(f"edge {where} on face {index}: {', '.join(bad)}")
     detail = "; ".join(problems[:5]) or "no sub-shape status was reported"
     raise BackendError(f"OpenCascade rejects the {what} (BRepCheck_Analyzer): {detail}")
 

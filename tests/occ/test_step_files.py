@@ -28,8 +28,25 @@ FAST = ["sw2013_two_spheres.stp", "ug19_io1_analytic.stp", "euclid_screw.step", 
 # drifting files get 1e-4 (ventilator, Pro/E against volume_best, Onshape's revolutions) and 1e-5
 VOLUME_RTOL = {"catiav5r18_ventilator.stp": 1e-4, "proe2001_k1_extrusion.stp": 1e-4,
                "onshape_abc_0_13.step": 1e-4, "ideas_io1_allbspline.stp": 1e-5}
-# re-reading our own export of these three does not give the same counts or a valid solid yet (see README)
-REIMPORT_KNOWN = {"cadds_s1_revolution_11solids.stp", "inventor2013_part_11752.stp", "onshape_abc_0_13.step"}
+# re-reading our own export of these two does not give the same counts (measured; not fixable here):
+# - cadds: faces 70, 71 and their copies 93, 94 each hold a degenerate edge of zero length in (u, v)
+#   as in 3-D (a point at (0.2681, 0)). STEP has no degenerate edges: OCC's writer leaves them out
+#   and its reader adds one only where a loop has a gap in (u, v) at a pole, which these do not
+#   have, so the re-read has 440 edges instead of 444 (faces, vertices, area and volume kept).
+# - onshape: OCC's STEP reader splits face 11 of our file (a closed surface of revolution with a
+#   seam, a circle across the seam and two circular holes, 790.19 mm2) into three faces, one per
+#   wire: 101 faces instead of 99 and a volume 28 % off. The face is written valid (OCC's check of
+#   the shape we write passes); the split happens in the reader's shape healing.
+REIMPORT_KNOWN = {"cadds_s1_revolution_11solids.stp", "onshape_abc_0_13.step"}
+# relative area and volume change over import -> export -> import (OCC's GProp, eps 1e-9, on the same
+# objects): 1e-9 by default. On files with loose edges OCC's STEP reader moves geometry of the file we
+# write: it re-approximates a pcurve where that gives a smaller deviation from the 3-D curve than the
+# pcurve has (ShapeFix_Edge::FixSameParameter; the file carries no tolerances), and closes gaps wider
+# than the file's precision (the ventilator's plane face 10: 0.014-0.028 mm gaps). Measured: alias
+# 1.2e-8 / 8.3e-8, NX 1.1e-9 / 3.7e-8, SolidWorks 2012 1.9e-9 / 9.9e-10, Inventor 5.1e-8 / 6.6e-7,
+# ventilator 6.5e-6 / 4.8e-6 (area / volume); the bounds below are about three times those.
+ROUNDTRIP_RTOL = {"alias_k1_allbspline.stp": 3e-7, "nx9_piattello.stp": 1e-7, "sw2012_multibody_4solids.step": 6e-9,
+                  "inventor2013_part_11752.stp": 2e-6, "catiav5r18_ventilator.stp": 2e-5}
 
 
 def _reference():
@@ -73,6 +90,15 @@ def _volume(shape):
     return total
 
 
+def _area(shape):
+    from OCP.BRepGProp import BRepGProp
+    from OCP.GProp import GProp_GProps
+
+    props = GProp_GProps()
+    BRepGProp.SurfaceProperties_s(shape, props, 1e-9)
+    return props.Mass()
+
+
 @pytest.mark.parametrize("name", _params())
 def test_foreign_step_file_imports_as_valid_solids(name, tmp_path, request):
     if name not in FAST and "slow" not in (request.config.getoption("markexpr") or ""):
@@ -91,12 +117,16 @@ def test_foreign_step_file_imports_as_valid_solids(name, tmp_path, request):
     assert sum(len(s.faces) for s in solids) == reference["faces"]
     key = "volume_best" if "volume_best" in reference else "volume"
     assert _volume(ours) == pytest.approx(reference[key], rel=VOLUME_RTOL.get(name, 1e-6))
-    # export -> re-import keeps the counts
+    # export -> re-import keeps the counts, the area and the volume
     if name in REIMPORT_KNOWN:
         return
     export_step(tmp_path / "again.step", solids)
     again = import_step(tmp_path / "again.step")
-    assert _counts(brep_list_to_shape([it.geometry for it in again])) == counts
+    reread = brep_list_to_shape([it.geometry for it in again])
+    assert _counts(reread) == counts
+    rtol = ROUNDTRIP_RTOL.get(name, 1e-9)
+    assert _volume(reread) == pytest.approx(_volume(ours), rel=rtol)
+    assert _area(reread) == pytest.approx(_area(ours), rel=rtol)
     # names come back, except those STEP cannot carry intact (long non-ASCII names are not written;
     # unnamed products get OCC's default name, their shape type)
     kept = [it.name for it in items if it.name and it.name.isascii()]
