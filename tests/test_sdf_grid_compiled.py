@@ -184,7 +184,7 @@ def prism_bound(prism, P):
     """The grid kernel's lower bound of the distance from points ``P`` (n, 3) to each triangle
     (rows of ``prism``, unit-box coordinates), in numpy: plane part and in-plane part (edge lines,
     bounding disk), each lowered by the kernel's margin."""
-    from splinekit.pointcloud._gridsdf_kernels import TOL
+    from splinekit.pointcloud._gridsdf_bounds import TOL
 
     n, off = prism[:, :3], prism[:, 3]
     p = P @ n.T - off
