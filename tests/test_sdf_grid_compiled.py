@@ -254,3 +254,32 @@ def test_the_answer_does_not_depend_on_the_block_size(compiled, block, monkeypat
     monkeypatch.setattr(meshdistance, "GRID_BLOCK", block)
     assert np.allclose(dist.grid_signed(*args), ref, atol=1e-12, rtol=0)
     check_random_samples(mesh, from_mesh(mesh, 30), 600, seed=block)
+
+
+@settings(max_examples=10, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), block=st.sampled_from([2, 4, 8, 16, 32]),
+       open_ratio=st.sampled_from([0.25, 1.0, 4.0]), level=st.sampled_from([1, 2]))
+def test_spiky_meshes_any_block_and_node_size_against_brute_force(seed, block, open_ratio, level):
+    # star-shaped meshes with a random radius per vertex (spikes and pits next to each other): the
+    # nearest triangle jumps between distant parts of the surface, so the blocks' lists (hierarchy
+    # nodes kept or opened, near and far blocks at every level) are tested where they are tight
+    rng = np.random.default_rng(seed)
+    m = primitives.icosphere(level)
+    V = np.asarray(m.vertices) * rng.uniform(0.3, 1.6, (len(m.vertices), 1))
+    T = np.asarray(triangulate(m)[0])
+    step = float(rng.uniform(0.04, 0.12))
+    shape = tuple(int(n) for n in rng.integers(16, 28, 3))
+    origin = -0.5 * step * (np.array(shape) - 1) + rng.uniform(-0.2, 0.2, 3)
+    dist = MeshDistance(V, T)
+    with forced(), pytest.MonkeyPatch.context() as mp:
+        mp.setattr(meshdistance, "GRID_BLOCK", block)
+        mp.setattr(meshdistance, "GRID_OPEN", open_ratio)
+        d = dist.grid_signed(origin, np.full(3, step), shape).ravel()
+    axes = [origin[k] + step * np.arange(shape[k]) for k in range(3)]
+    P = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, 3)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        exact = np.concatenate([brute_distance(P[s : s + 4000], V, T) for s in range(0, len(P), 4000)])
+    assert np.allclose(np.abs(d), exact, atol=1e-12, rtol=0)
+    clear = exact > 1e-9
+    w = np.concatenate([winding_number(P[s : s + 4000], V, T) for s in range(0, len(P), 4000)])
+    assert np.array_equal((d < 0)[clear], (w > 0.5)[clear])

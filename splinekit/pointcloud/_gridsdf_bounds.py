@@ -53,29 +53,6 @@ NB = 20
 
 
 @njit(cache=True, inline="always")
-def keep(cv, e, prism, t):
-    """Candidate column ``e`` of ``cv`` (NB, n): the bound coefficients ``prism[t]`` of triangle ``t``."""
-    for a in range(NB):
-        cv[a, e] = prism[t, a]
-
-
-@njit(cache=True, inline="always")
-def bound_parts(cv, e, px, py, pz):
-    """The parts of candidate ``e``'s lower bound at ``p`` (module notes), shared by
-    :func:`margin` and :func:`bound2`: the signed distance ``hh`` to the triangle's plane, the
-    signed distances ``s0, s1, s2`` past its edge lines, and ``v``, the offset of ``p``'s foot on
-    the plane from the bounding disk's centre."""
-    hh = px * cv[0, e] + py * cv[1, e] + pz * cv[2, e] - cv[3, e]
-    s0 = px * cv[4, e] + py * cv[5, e] + pz * cv[6, e] - cv[7, e]
-    s1 = px * cv[8, e] + py * cv[9, e] + pz * cv[10, e] - cv[11, e]
-    s2 = px * cv[12, e] + py * cv[13, e] + pz * cv[14, e] - cv[15, e]
-    vx = px - cv[16, e] - hh * cv[0, e]
-    vy = py - cv[17, e] - hh * cv[1, e]
-    vz = pz - cv[18, e] - hh * cv[2, e]
-    return hh, s0, s1, s2, vx, vy, vz
-
-
-@njit(cache=True, inline="always")
 def margin(cv, e, px, py, pz, hx, hy, hz, gx, gy, gz, top):
     """The block test of candidate ``e`` for a block (centre ``p``, half extents ``h``, upper
     bound's gradient ``g``, ``top`` = ``D + eps`` plus margin): positive when its bound,
@@ -122,8 +99,15 @@ def margin(cv, e, px, py, pz, hx, hy, hz, gx, gy, gz, top):
 def bound2(cv, e, px, py, pz):
     """Squared lower bound of the distance from ``p`` to candidate ``e``'s triangle (module
     notes): plane part squared plus in-plane part squared, each lowered by :data:`TOL`;
-    branch-free."""
-    hh, s0, s1, s2, vx, vy, vz = bound_parts(cv, e, px, py, pz)
+    branch-free, every coefficient read once (as in :func:`margin`)."""
+    n0, n1, n2 = cv[0, e], cv[1, e], cv[2, e]
+    hh = px * n0 + py * n1 + pz * n2 - cv[3, e]
+    s0 = px * cv[4, e] + py * cv[5, e] + pz * cv[6, e] - cv[7, e]
+    s1 = px * cv[8, e] + py * cv[9, e] + pz * cv[10, e] - cv[11, e]
+    s2 = px * cv[12, e] + py * cv[13, e] + pz * cv[14, e] - cv[15, e]
+    vx = px - cv[16, e] - hh * n0
+    vy = py - cv[17, e] - hh * n1
+    vz = pz - cv[18, e] - hh * n2
     sd = np.sqrt(vx * vx + vy * vy + vz * vz) - cv[19, e]
     ss = max(max(s0, s1, s2, sd) - TOL, 0.0)
     hh = max(abs(hh) - TOL, 0.0)
