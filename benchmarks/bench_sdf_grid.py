@@ -43,7 +43,7 @@ seconds of queries (470 nodes and 280 exact distances each), 1.4-1.5 of filters 
 This session: a dual-tree traversal (the kernel's notes): top blocks of 16^3 start from the root
 of the hierarchy and every block hands its items, hierarchy nodes and triangles, down to its eight
 parts, which test them against their own block test and open the nodes that are large against
-them; no block queries from the root. Far blocks of the last two levels hold triangles only.
+them; no block queries from the root. Far blocks of 8^3 and smaller hold triangles only.
 Counts per sample (one thread, 1,854,840 samples): 16^3 and 8^3 (576 and 4,080 blocks, 354 and
 1,359 near): 2.9 node and 3.4 triangle tests; 4^3 (29,667, 4,596 near): 13.8 triangles filtered,
 3.0 node and 3.2 triangle tests, lists of 240; 2^3 (233,740, 12,166 near): 30.6 filtered, 2.8

@@ -74,8 +74,7 @@ def test_the_far_blocks_are_taken_and_agree_with_per_point_queries(compiled):
     d, found = dist.signed(P)
     assert found.all()
     assert np.allclose(sdf.values.ravel(), d, atol=1e-12, rtol=0)
-    # a 4^3 block (half of a top block of 8^3, which takes its own range query when its top
-    # block is near) has half-diagonal 1.5 voxel diagonals; beyond FAR = 2 of those it is far
+    # a 4^3 block has half-diagonal 1.5 voxel diagonals; beyond FAR = 2 of those it is far
     far = np.abs(d) > 3 * np.linalg.norm(sdf.spacing) + 1.5 * np.linalg.norm(sdf.spacing)
     assert far.mean() > 0.3
 
@@ -225,8 +224,7 @@ def test_the_kernels_triangle_bound_never_exceeds_the_distance(seed, thin, sprea
 
 def test_samples_on_vertices_edges_and_far_blocks_at_every_level(compiled):
     # the octahedron |x| + |y| + |z| = 2 on a grid of step 0.25 from -7 to 7: samples lie on its
-    # vertices, on its edges and on its faces, and the far corners are farther than a top block
-    # (8^3) needs to take its candidates by the range query and hand them down two levels
+    # vertices, on its edges and on its faces, and the far corners are far even for 8^3 blocks
     V = 2.0 * np.array([[1, 0, 0], [-1, 0, 0], [0, 1, 0], [0, -1, 0], [0, 0, 1], [0, 0, -1]], dtype=float)
     T = np.array([[0, 2, 4], [2, 1, 4], [1, 3, 4], [3, 0, 4], [2, 0, 5], [1, 2, 5], [3, 1, 5], [0, 3, 5]])
     dist = MeshDistance(V, T)
@@ -240,13 +238,13 @@ def test_samples_on_vertices_edges_and_far_blocks_at_every_level(compiled):
     assert on.sum() > 100  # vertices, edges and faces all carry samples
     inside = np.abs(P).sum(axis=1) < 2.0
     assert np.array_equal(d.ravel()[~on] < 0, inside[~on])
-    # a top block's half-diagonal is 3.5 sqrt(3) steps; beyond FAR of those it is far
+    # an 8^3 block's half-diagonal is 3.5 sqrt(3) steps; beyond FAR of those it is far
     assert (exact > 2 * 3.5 * np.sqrt(3) * 0.25 + 3.5 * np.sqrt(3) * 0.25).mean() > 0.2
 
 
 @pytest.mark.parametrize("block", [2, 4, 16])
 def test_the_answer_does_not_depend_on_the_block_size(compiled, block, monkeypatch):
-    # one level (2: the leaves take the range query's list), two, four: the same exact grid
+    # one level (2: the leaf blocks open the root), two, four: the same exact grid
     mesh = lumpy_sphere(2)
     dist = MeshDistance.of_mesh(mesh)
     args = (np.full(3, -2.5), np.full(3, 0.13), (39, 40, 41))

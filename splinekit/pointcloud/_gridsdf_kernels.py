@@ -40,11 +40,11 @@ block, level by level down to ``2^3``,
    node's bounding ball, with its box's distance as the flat bound: ``may_hold``): a node that
    passes is kept when its bounding radius is at most ``open_ratio`` half-diagonals of the
    block, else replaced by its children (tested in turn), a leaf by its four triangles (tested
-   by their bounds, in one vectorized pass). Far blocks of the last two levels open every node,
+   by their bounds, in one vectorized pass). Far blocks of 8^3 and 4^3 (``OPENS``) open every node,
    so that the lists the many small blocks filter are triangles only; the leaf blocks (``2^3``)
-   always do:
+   always do.
 
-then each sample of a ``2^3`` block scans its list (about 44 candidates here, a branch-free
+Then each sample of a ``2^3`` block scans its list (about 44 candidates here, a branch-free
 loop) and measures exactly only those whose bound beats the best of two seeds (the block
 centre's and the previous sample's triangle): about 3.5 a sample, most of them ties.
 
@@ -71,8 +71,12 @@ from ._gridsdf_bounds import FAR, NB, SLACK, bound2, margin, may_hold
 from ._meshdistance_kernels import box_d2, closest_on_triangle, walk
 
 CHUNKS = 256
-OPENS = 2
 """Parallel chunks of top blocks (each allocates its work arrays once)."""
+
+OPENS = 2
+"""Far blocks of this many levels above the leaf blocks (8^3 and 4^3 under top blocks of 16^3)
+open every hierarchy node they are handed (the leaf blocks always do), so that the lists the
+many small blocks filter are triangles only (one vectorized loop, no node work)."""
 
 
 @njit(cache=True, inline="always")
@@ -149,15 +153,16 @@ def _node_far(cx, cy, cz, lo, hi, nd, R2, D, eps, gx, gy, gz, hn):
 
 
 @njit(cache=True)
-def _filter(pn, pnodes, pt, pct, pcv, nodes, ct, cv, lb, cx, cy, cz, hx, hy, hz, r, D, cp, last, opens_far, open_at, lo, hi,
-            L, m, prism_t, front, nxt, gap):
+def _filter(pn, pnodes, pt, pct, pcv, nodes, ct, cv, lb, cx, cy, cz, hx, hy, hz, r, D, cp, last, opens_far, open_at,
+            lo, hi, L, m, prism_t, front, nxt, gap):
     """A block's items from its parent's (module notes): the block has centre ``c``, half
     extents ``h``, half-diagonal ``r``, exact nearest distance ``D`` at ``c`` (closest point
     ``cp``); the parent's ``pt`` triangles ``pct``, ``pcv`` (their bounds at ``c`` in ``lb``)
     and ``pn`` nodes ``pnodes``. A node that passes the block test is kept when its bounding
     radius is at most ``open_at``, else opened (its children tested in turn, a leaf's triangles
-    by their own bounds); ``last``: every node is opened. Writes the block's triangles to ``ct``,
-    ``cv`` and nodes to ``nodes``; returns their counts ``(nodes, triangles)``."""
+    by their own bounds); ``last``, or ``opens_far`` for a far block: every node is opened.
+    ``front``, ``nxt``, ``gap``: scratch for the node frontier. Writes the block's triangles to
+    ``ct``, ``cv`` and nodes to ``nodes``; returns their counts ``(nodes, triangles)``."""
     near = D <= FAR * r
     if near:
         # d(x) <= D + r and d(x, t) >= d(c, t) - r
@@ -387,8 +392,9 @@ def grid_signed(origin, spacing, shape, limit, block, open_ratio, lo, hi, tlo, t
                 if lev == 1:
                     tlist[0] = tc  # the next top block's first bound
                 last = lev == nlev
+                far_end = lev >= nlev - OPENS
                 nnod[lev], ntri[lev] = _filter(nnod[p], nodes[p], ntri[p], ct[p], cv[p], nodes[lev], ct[lev], cv[lev],
-                                               lb, cx, cy, cz, hx, hy, hz, r, np.sqrt(best), cp, last, lev >= nlev - OPENS,
+                                               lb, cx, cy, cz, hx, hy, hz, r, np.sqrt(best), cp, last, far_end,
                                                open_ratio * r, lo, hi, L, m, prism_t, front, nxt, gap)
                 tlist[lev] = tc
                 if not last:
