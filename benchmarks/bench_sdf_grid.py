@@ -34,39 +34,44 @@ generalized winding number, by brute force, agrees with splinekit there).
 Profile of ``from_mesh`` at 128^3 (81,920 triangles): the kernel call (``MeshDistance.grid_signed``;
 the compiled kernel is ``splinekit/pointcloud/_gridsdf_kernels.py``, whose notes describe it) takes
 nearly all of it; the component sign pass about 0.13 CPU seconds, the hierarchy, pseudo-normals and
-bounds about 0.2. Earlier sessions: blocks of 4^3 samples, one range query per block, a half-plane
-bound per candidate and sample (4.2-4.5 CPU seconds on one thread: centre queries 0.3-0.4, range
-queries 1.9-2.4, per-sample scans 1.3-1.5, near blocks 0.2; about 200 bounds and 11 exact
-distances per far sample, most exact distances loose bounds rather than ties).
+bounds about 0.2. Earlier sessions: blocks of 4^3 samples with one range query each (4.2-4.5 CPU
+seconds on one thread), then a hierarchy of candidate lists 8^3 -> 4^3 -> 2^3 (3.2-3.4) that still
+queried the triangle hierarchy from its root for every far 8^3 block (2,721), for every far 4^3
+part of a near 8^3 block (6,276) and for every 2^3 part of a near 4^3 block (36,768): 1.5-1.6 CPU
+seconds of queries (470 nodes and 280 exact distances each), 1.4-1.5 of filters and leaves.
 
-This session (the docstring's "next step"): a hierarchy of candidate lists, 8^3 -> 4^3 -> 2^3,
-each child filtering its parent's list by a per-triangle bound (plane, edge lines and bounding
-disk: exact where the sample faces the triangle or an edge) linearized at its own centre, with
-no exact distance but the child centre's nearest triangle. Counts per sample (one thread,
-1,854,840 samples): range queries 2,721 at 8^3, 6,276 at 4^3, 36,768 at 2^3 (fresh queries of
-the 2^3 parts of 4^3 blocks near the surface; 12,166 of them near), together 11.7 hierarchy
-nodes and 6.9 exact distances; filters 42.8 bounds, 0.7 exact distances, 6.7 kept; leaves 44
-bounds and 3.5 exact distances (1.2 of them ties, 1.0 improvements; the old scan measured 11).
-One-thread CPU seconds, old and new kernels interleaved in fresh processes (load 4.6-5.2):
-from_mesh 4.40, 4.44, 4.55, 4.48 (old) against 3.32, 3.31, 3.40, 3.22 (new): 1.35x. By stage
-(the kernel alone, stages switched off one at a time, load about 4): 2.9-3.0 in all, of which
-1.5-1.6 the centre and range queries and 1.4-1.5 the filters and the leaves. Per operation
-(microbenchmark): a bound 1.7 ns in the vectorized loop; the range queries about 33 us each
-(470 nodes and 280 exact distances), 0.8 us per sample in all.
+This session: a dual-tree traversal (the kernel's notes): top blocks of 16^3 start from the root
+of the hierarchy and every block hands its items, hierarchy nodes and triangles, down to its eight
+parts, which test them against their own block test and open the nodes that are large against
+them; no block queries from the root. Far blocks of 8^3 and smaller hold triangles only.
+Counts per sample (one thread, 1,854,840 samples): 16^3 and 8^3 (576 and 4,080 blocks, 354 and
+1,359 near): 2.9 node and 3.4 triangle tests; 4^3 (29,667, 4,596 near): 13.8 triangles filtered,
+3.0 node and 3.2 triangle tests, lists of 240; 2^3 (233,740, 12,166 near): 30.6 filtered, 2.8
+node and 3.4 triangle tests, lists of 44; samples: 44 bounds and 3.5 exact distances. A finding
+on the way: the block test (``margin``) read some coefficients twice, and numba 0.68 then did not
+vectorize its loop: 16 ns per candidate in the earlier kernels, 4 ns once each is read once into
+a local (the leaf bound, 1.7-1.9 ns, was vectorized all along).
 
-What limits 3x pysdf (about 0.75 us of CPU per sample in all): the range queries alone cost
-0.8 us per sample, spread over the levels: at 8^3 5.4 M hierarchy nodes and 4.7 M exact
-distances (2,721 queries), at 4^3 5.9 M and 3.9 M (6,276), at 2^3 10.3 M and 4.1 M (36,768 fresh
-queries of the 2^3 parts of near 4^3 blocks, 8 samples each). The filters and the leaves cost
-as much again (80 M bounds and margins, 82 M leaf bounds, 11 M exact
-distances with the seeds). Tried and dropped here: one ball query (``D + 2 r``) for a near 4^3
-block handed down to its parts (estimated hundreds to a thousand candidates each; measured 5.7
-s against 2.9-3.0 just before, no win, though the noise below is as large), the parent's nearest
-triangle as the child's upper bound instead of its exact nearest (the lists doubled). The
-next step would be fewer and cheaper range queries: the far 2^3 parts of a near 4^3 block
-filtering one list of their parent (a near list bounded by the farthest part's need, not the
-ball of ``D + 2 r``), and a range query that tests each hierarchy node by the per-triangle
-bound's kind of margin rather than the bounding-ball test of ``_may_hold``.
+One-thread CPU seconds by level (the kernel alone, levels cut off one at a time, load 3.5-4):
+16^3 and 8^3 0.48, 4^3 0.64, 2^3 1.55, the samples 0.25: 2.9 in all. Interleaved with the kernel
+before this session (same load): 2.97, 3.11, 3.46 against 3.36, 4.10, 3.48; with that kernel's
+margin fixed the same way: 3.04, 3.18 against 3.25, 3.67. So the traversal saves the queries
+(about 1.5 s) but its node work and the opening of nodes into triangles cost most of it again;
+the gain is 10-20 %, and the whole run (``--threads``, load 3.3-4.4) stays at 2.9-3.0 CPU seconds
+against pysdf's 4.1-4.5 (1.4-1.5x in CPU).
+
+What limits 3x pysdf (about 0.75 us of CPU per sample): the filters, not the search. At the 2^3
+level each block computes the bounds of its parent's 240 triangles twice (at its centre for its
+own nearest, 1.9 ns each, and the block test, 4 ns each) and copies the 44 it keeps (20
+coefficients each): 6.6 us a block, 0.84 us per sample; the 4^3 level 0.35 us per sample, the
+samples 0.13 us (44 bounds and 3.5 exact distances), the levels above 0.26. The list sizes follow
+from the block test: a far block of half size ``h`` keeps a cap of the surface of radius about
+``2 h`` whatever its distance (``pi (2 h)^2`` at about 4.3 triangles per square voxel here),
+and each of its eight parts scans it, so every level costs about ``8 N / block^3`` bounds per
+sample. Next steps, untried: float32 coefficients and bounds (twice the vector width, half the
+bytes; the margins need a rounding analysis), candidates stored in groups of 8 or 16 with their
+coefficients together instead of 20 rows 660 kB apart, and the 2^3 level's centre search from
+fewer candidates.
 Machine noise: on this shared machine the same build measured 3.0 and 5.5 CPU seconds twenty
 minutes apart (load 4-5); compare only interleaved runs.
 

@@ -74,8 +74,7 @@ def test_the_far_blocks_are_taken_and_agree_with_per_point_queries(compiled):
     d, found = dist.signed(P)
     assert found.all()
     assert np.allclose(sdf.values.ravel(), d, atol=1e-12, rtol=0)
-    # a 4^3 block (half of a top block of 8^3, which takes its own range query when its top
-    # block is near) has half-diagonal 1.5 voxel diagonals; beyond FAR = 2 of those it is far
+    # a 4^3 block has half-diagonal 1.5 voxel diagonals; beyond FAR = 2 of those it is far
     far = np.abs(d) > 3 * np.linalg.norm(sdf.spacing) + 1.5 * np.linalg.norm(sdf.spacing)
     assert far.mean() > 0.3
 
@@ -184,7 +183,7 @@ def prism_bound(prism, P):
     """The grid kernel's lower bound of the distance from points ``P`` (n, 3) to each triangle
     (rows of ``prism``, unit-box coordinates), in numpy: plane part and in-plane part (edge lines,
     bounding disk), each lowered by the kernel's margin."""
-    from splinekit.pointcloud._gridsdf_kernels import TOL
+    from splinekit.pointcloud._gridsdf_bounds import TOL
 
     n, off = prism[:, :3], prism[:, 3]
     p = P @ n.T - off
@@ -225,8 +224,7 @@ def test_the_kernels_triangle_bound_never_exceeds_the_distance(seed, thin, sprea
 
 def test_samples_on_vertices_edges_and_far_blocks_at_every_level(compiled):
     # the octahedron |x| + |y| + |z| = 2 on a grid of step 0.25 from -7 to 7: samples lie on its
-    # vertices, on its edges and on its faces, and the far corners are farther than a top block
-    # (8^3) needs to take its candidates by the range query and hand them down two levels
+    # vertices, on its edges and on its faces, and the far corners are far even for 8^3 blocks
     V = 2.0 * np.array([[1, 0, 0], [-1, 0, 0], [0, 1, 0], [0, -1, 0], [0, 0, 1], [0, 0, -1]], dtype=float)
     T = np.array([[0, 2, 4], [2, 1, 4], [1, 3, 4], [3, 0, 4], [2, 0, 5], [1, 2, 5], [3, 1, 5], [0, 3, 5]])
     dist = MeshDistance(V, T)
@@ -240,13 +238,13 @@ def test_samples_on_vertices_edges_and_far_blocks_at_every_level(compiled):
     assert on.sum() > 100  # vertices, edges and faces all carry samples
     inside = np.abs(P).sum(axis=1) < 2.0
     assert np.array_equal(d.ravel()[~on] < 0, inside[~on])
-    # a top block's half-diagonal is 3.5 sqrt(3) steps; beyond FAR of those it is far
+    # an 8^3 block's half-diagonal is 3.5 sqrt(3) steps; beyond FAR of those it is far
     assert (exact > 2 * 3.5 * np.sqrt(3) * 0.25 + 3.5 * np.sqrt(3) * 0.25).mean() > 0.2
 
 
 @pytest.mark.parametrize("block", [2, 4, 16])
 def test_the_answer_does_not_depend_on_the_block_size(compiled, block, monkeypatch):
-    # one level (2: the leaves take the range query's list), two, four: the same exact grid
+    # one level (2: the leaf blocks open the root), two, four: the same exact grid
     mesh = lumpy_sphere(2)
     dist = MeshDistance.of_mesh(mesh)
     args = (np.full(3, -2.5), np.full(3, 0.13), (39, 40, 41))
@@ -254,3 +252,32 @@ def test_the_answer_does_not_depend_on_the_block_size(compiled, block, monkeypat
     monkeypatch.setattr(meshdistance, "GRID_BLOCK", block)
     assert np.allclose(dist.grid_signed(*args), ref, atol=1e-12, rtol=0)
     check_random_samples(mesh, from_mesh(mesh, 30), 600, seed=block)
+
+
+@settings(max_examples=10, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), block=st.sampled_from([2, 4, 8, 16, 32]),
+       open_ratio=st.sampled_from([0.25, 1.0, 4.0]), level=st.sampled_from([1, 2]))
+def test_spiky_meshes_any_block_and_node_size_against_brute_force(seed, block, open_ratio, level):
+    # star-shaped meshes with a random radius per vertex (spikes and pits next to each other): the
+    # nearest triangle jumps between distant parts of the surface, so the blocks' lists (hierarchy
+    # nodes kept or opened, near and far blocks at every level) are tested where they are tight
+    rng = np.random.default_rng(seed)
+    m = primitives.icosphere(level)
+    V = np.asarray(m.vertices) * rng.uniform(0.3, 1.6, (len(m.vertices), 1))
+    T = np.asarray(triangulate(m)[0])
+    step = float(rng.uniform(0.04, 0.12))
+    shape = tuple(int(n) for n in rng.integers(16, 28, 3))
+    origin = -0.5 * step * (np.array(shape) - 1) + rng.uniform(-0.2, 0.2, 3)
+    dist = MeshDistance(V, T)
+    with forced(), pytest.MonkeyPatch.context() as mp:
+        mp.setattr(meshdistance, "GRID_BLOCK", block)
+        mp.setattr(meshdistance, "GRID_OPEN", open_ratio)
+        d = dist.grid_signed(origin, np.full(3, step), shape).ravel()
+    axes = [origin[k] + step * np.arange(shape[k]) for k in range(3)]
+    P = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, 3)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        exact = np.concatenate([brute_distance(P[s : s + 4000], V, T) for s in range(0, len(P), 4000)])
+    assert np.allclose(np.abs(d), exact, atol=1e-12, rtol=0)
+    clear = exact > 1e-9
+    w = np.concatenate([winding_number(P[s : s + 4000], V, T) for s in range(0, len(P), 4000)])
+    assert np.array_equal((d < 0)[clear], (w > 0.5)[clear])

@@ -4,7 +4,7 @@ Loaded through :func:`splinekit._kernels.load`, never by ``import splinekit``. T
 must agree with is in :mod:`splinekit.pointcloud.meshdistance`: :func:`closest_on_triangle` is
 the scalar form of its ``closest_points_on_triangles`` (the same Voronoi-region tests in the
 same order, the same feature codes), and :func:`nearest` answers what its k-d tree search
-answers, the exact nearest triangle, by walking the bounding-volume hierarchy ``_TriangleBVH``.
+answers, the exact nearest triangle, by walking the bounding-volume hierarchy ``TriangleBVH`` (:mod:`._trianglebvh`).
 """
 
 from __future__ import annotations
@@ -77,13 +77,14 @@ def box_d2(px, py, pz, lo, hi, i):
 
 
 @njit(cache=True, inline="always")
-def walk(px, py, pz, best, bt, br, lo, hi, tlo, thi, tri, L, m, stack, q, cp):
-    """Depth-first BVH search for the nearest triangle of ``p``, nearer child first, pruning
+def walk(px, py, pz, best, bt, br, lo, hi, tlo, thi, tri, L, m, stack, q, cp, root):
+    """Depth-first search of the BVH below node ``root`` (1 for all of it) for the nearest
+    triangle of ``p``, nearer child first, pruning
     every box farther than the squared distance ``best`` (that of triangle ``bt``, region
     ``br``, closest point ``cp``; ``bt = -1`` for none yet). Returns the improved
     ``(best, bt, br)`` and leaves the closest point in ``cp``."""
     sp = 1
-    stack[0] = 1
+    stack[0] = root
     while sp > 0:
         sp -= 1
         node = stack[sp]
@@ -135,7 +136,7 @@ def seeded(px, py, pz, limit, prev, lo, hi, tlo, thi, tri, L, m, stack, q, cp):
         if d2 <= best:
             best, bt, br = d2, prev, r
             cp[0], cp[1], cp[2] = q[0], q[1], q[2]
-    return walk(px, py, pz, best, bt, br, lo, hi, tlo, thi, tri, L, m, stack, q, cp)
+    return walk(px, py, pz, best, bt, br, lo, hi, tlo, thi, tri, L, m, stack, q, cp, 1)
 
 
 @njit(cache=True, parallel=True)

@@ -6,7 +6,7 @@ Unsigned: the exact nearest triangle, closest point and distance of every query 
 one of two searches that answer the same question:
 
 * compiled (numba, loaded by :func:`splinekit._kernels.load` for large queries): a depth-first
-  walk of a bounding-volume hierarchy over Morton-ordered triangles (:class:`_TriangleBVH`),
+  walk of a bounding-volume hierarchy over Morton-ordered triangles (:class:`TriangleBVH`),
   nearer child first, each point starting from the previous point's triangle (grid points come
   in order, so that bound is tight and prunes most of the tree);
 * numpy (small queries, or compiled code switched off): candidate triangles from a k-d tree over
@@ -43,6 +43,7 @@ from ..mesh.geometry import triangulate
 from ..mesh.polymesh import PolyMesh
 from ..mesh.topology import Topology
 from ._cloud import as_cloud, kd_tree
+from ._trianglebvh import TriangleBVH
 
 __all__ = ["MeshDistance", "closest_points_on_mesh", "closest_points_on_triangles"]
 
@@ -65,18 +66,23 @@ KERNELS = "splinekit.pointcloud._meshdistance_kernels"
 
 GRID_KERNELS = "splinekit.pointcloud._gridsdf_kernels"
 
-GRID_BLOCK = 8
+GRID_BLOCK = 16
 """Samples along each side of the top blocks :meth:`MeshDistance.grid_signed` shares its work
-over, halved level by level down to 2^3 (module notes of its kernels); 82k triangles at 128^3,
-one thread: 3.2 CPU s with 8, 3.9-4.0 with 4, 3.2-3.3 with 16 (four levels, more memory)."""
+over, halved level by level down to 2^3 (module notes of its kernels)."""
+
+GRID_OPEN = 1.0
+"""A block of the grid kernel keeps a hierarchy node (rather than opening it) when the node's
+bounding radius is at most this many of the block's half-diagonals (82k triangles at 128^3,
+one thread: 0.5, 1 and 2 within the noise of each other)."""
 
 THIN = 1e-6
 """A triangle whose edge cross product is shorter than this times its two edges' lengths gets
 no plane in the grid kernel's bounds (it is then always measured exactly)."""
 
-GRID_WORK_BYTES = 512
-"""Bytes per triangle and thread of the grid kernel's work arrays: a candidate list per level
-(three for GRID_BLOCK = 8) of triangles with their 20 bound coefficients, and a scratch value."""
+GRID_WORK_BYTES = 1024
+"""Bytes per triangle and thread of the grid kernel's work arrays: per level (four for
+GRID_BLOCK = 16) and the root, a list of triangles with their 20 bound coefficients and a list
+of hierarchy nodes (at most half as many as triangles), a node frontier and scratch values."""
 
 # features of a closest point: 0 face interior, 1-3 vertex 0-2, 4 edge 01, 5 edge 12, 6 edge 20
 FACE, EDGE01, EDGE12, EDGE20 = 0, 4, 5, 6
@@ -142,8 +148,6 @@ def closest_points_on_triangles(p, a, b, c) -> np.ndarray:
     return _closest_and_feature(p, a, b, c)[0]
 
 
-_LEAF = 4  # triangles per leaf; the kernel assumes 4
-
 QUERY_WORK = 60
 """Cost of one query point on the numpy path, in :mod:`splinekit._kernels` work units: 19-120
 microseconds of CPU a point (meshes of 320 to 40,000 triangles, points near and far) where a
@@ -156,66 +160,6 @@ against 0.80-1.00 s on the numpy path (at twenty units it stayed on the numpy pa
 MIN_QUERIES = 1000
 """Smallest query sent to the compiled search once it is loaded (the numpy path serves smaller
 ones)."""
-
-
-class _TriangleBVH:
-    """A complete binary tree over Morton-ordered triangles (``_LEAF`` per leaf),
-    stored as a heap: node 1 is the root, node ``i`` has children ``2i, 2i + 1``,
-    the leaves are nodes ``L .. 2L - 1``. Built with whole-array numpy."""
-
-    def __init__(self, V, T):
-        m = len(T)
-        tri = V[T]  # (m, 3, 3)
-        cen = tri.mean(axis=1)
-        lo, hi = cen.min(axis=0), cen.max(axis=0)
-        q = np.clip(((cen - lo) / np.maximum(hi - lo, 1e-300) * 1023.0).astype(np.int64), 0, 1023)
-        code = np.zeros(m, dtype=np.int64)
-        for bit in range(10):  # interleave 10 bits per axis
-            for ax in range(3):
-                code |= ((q[:, ax] >> bit) & 1) << (3 * bit + (2 - ax))
-        order = np.argsort(code, kind="stable")
-        n_leaves = max(1, -(-m // _LEAF))
-        L = 1 << int(np.ceil(np.log2(n_leaves))) if n_leaves > 1 else 1
-        pad = L * _LEAF - m
-        tri_s = tri[order]
-        tlo = np.concatenate([tri_s.min(axis=1), np.full((pad, 3), np.inf)])
-        thi = np.concatenate([tri_s.max(axis=1), np.full((pad, 3), -np.inf)])
-        nlo = np.empty((2 * L, 3))
-        nhi = np.empty((2 * L, 3))
-        nlo[L:] = tlo.reshape(L, _LEAF, 3).min(axis=1)
-        nhi[L:] = thi.reshape(L, _LEAF, 3).max(axis=1)
-        s = L // 2
-        while s >= 1:
-            nlo[s : 2 * s] = np.minimum(nlo[2 * s : 4 * s : 2], nlo[2 * s + 1 : 4 * s : 2])
-            nhi[s : 2 * s] = np.maximum(nhi[2 * s : 4 * s : 2], nhi[2 * s + 1 : 4 * s : 2])
-            s //= 2
-        nlo[0], nhi[0] = np.inf, -np.inf
-        self.order = order
-        self.tri = np.ascontiguousarray(tri_s)
-        self.tlo, self.thi = np.ascontiguousarray(tlo), np.ascontiguousarray(thi)
-        self.lo, self.hi, self.n_leaves, self.m = nlo, nhi, L, m
-
-    def nearest(self, kernels, points, max_distance=np.inf):
-        """Exact nearest triangle of each point within ``max_distance``.
-
-        Returns ``(d (n,), triangle (n,), closest (n, 3), region (n,))``: the
-        distance (``inf`` and triangle -1 beyond ``max_distance``), the original
-        triangle index, the closest point and its feature (0 face interior,
-        1-3 vertex 0-2, 4 edge 01, 5 edge 12, 6 edge 20). ``kernels`` is the compiled
-        module (:data:`KERNELS`), whose leaves hold ``_LEAF`` = 4 triangles as here."""
-        P = np.ascontiguousarray(points, dtype=np.float64)
-        n = len(P)
-        d2 = np.full(n, np.inf)
-        tri = np.full(n, -1, dtype=np.int64)
-        cp = np.zeros((n, 3))
-        reg = np.zeros(n, dtype=np.int64)
-        limit = float(max_distance) ** 2 if np.isfinite(max_distance) else np.inf
-        kernels.nearest(
-            P, limit, self.lo, self.hi, self.tlo, self.thi, self.tri, self.n_leaves, self.m, d2, tri, cp, reg
-        )
-        found = tri >= 0
-        tri[found] = self.order[tri[found]]
-        return np.sqrt(d2), tri, cp, reg
 
 
 def _pseudo_normals(V, T):
@@ -307,9 +251,9 @@ class MeshDistance:
         return kd_tree(self.centroids)
 
     @cached_property
-    def bvh(self) -> _TriangleBVH:
+    def bvh(self) -> TriangleBVH:
         """Bounding-volume hierarchy over the triangles (the compiled search)."""
-        return _TriangleBVH(self.unit_vertices, self.tris)
+        return TriangleBVH(self.unit_vertices, self.tris)
 
     @cached_property
     def pseudo_normals(self):
@@ -427,9 +371,8 @@ class MeshDistance:
         with np.errstate(over="ignore"):
             limit = float(max_distance / self._scale) ** 2
         out = np.empty(total)
-        plane, ball = self._bvh_planes
-        kernels.grid_signed(o, h, np.array(shape, dtype=np.int64), limit, GRID_BLOCK, b.lo, b.hi, b.tlo, b.thi,
-                            b.tri, b.n_leaves, b.m, fn, en, vn, plane, ball, self._bvh_prisms, out)
+        kernels.grid_signed(o, h, np.array(shape, dtype=np.int64), limit, GRID_BLOCK, GRID_OPEN, b.lo, b.hi, b.tlo,
+                            b.thi, b.tri, b.n_leaves, b.m, fn, en, vn, self._bvh_prisms, out)
         return (out * self._scale).reshape(shape)
 
     def _nearest(self, P, max_distance, kernels=None):
