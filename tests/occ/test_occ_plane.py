@@ -187,3 +187,14 @@ def test_plane_is_the_patch_at_the_mapped_parameter(origin, a, b, u0, v0, du, dv
     p = plane_to_occ(frame).Value(float(x), float(y))
     size = np.abs(np.asarray(surface.control_points)).max() + 1.0
     assert np.abs(np.array([p.X(), p.Y(), p.Z()]) - surface.evaluate(u, v)).max() <= 1e-12 * size
+
+
+def test_rectangles_on_planes_are_untrimmed_faces():
+    # a face on an unbounded surface is trimmed unless its wire runs along its (u, v) box
+    from splinekit.interop.gprop import trimmed_face_count
+
+    assert trimmed_face_count(bd.Box(10, 10, 10).wrapped) == 0
+    assert trimmed_face_count(bd.Face(bd.Wire.make_polygon([(0, 0, 0), (4, 0, 0), (0, 3, 0)])).wrapped) == 1
+    # build123d's own box with a hole (planes and an infinite cylinder) and ours agree
+    part = bd.Box(20, 20, 20) - bd.Cylinder(4, 20)
+    assert trimmed_face_count(part.wrapped) == trimmed_face_count(occ.to_occ(_box_with_hole())) == 2
