@@ -116,32 +116,10 @@ def face_kinds(shape) -> dict:
     return kinds
 
 
-_UNBOUNDED = 1e100
-"""A surface bound beyond this is OCC's infinity (``Precision::Infinite()``, 2e100)."""
-
-
-def _on_box_sides(face, box, scale) -> bool:
-    """Whether every edge of ``face`` runs along one side of its (u, v) ``box``
-    ``(u0, u1, v0, v1)``: the face is the whole box (checked at both ends and the middle)."""
-    BRepAdaptor, TopoDS = _ocp("BRepAdaptor", "TopoDS")
-    sides = np.reshape(box, (2, 2))  # rows: u bounds, v bounds
-    for e in _sub_shapes(face, "EDGE"):
-        curve = BRepAdaptor.BRepAdaptor_Curve2d(TopoDS.TopoDS.Edge_s(e), face)
-        a, b = curve.FirstParameter(), curve.LastParameter()
-        uv = np.array([[p.X(), p.Y()] for p in (curve.Value(t) for t in (a, 0.5 * (a + b), b))])
-        # one coordinate constant on one of its two bounds at all three points
-        on = np.abs(uv.T[:, :, None] - sides[:, None, :]).max(axis=1) <= 1e-9 * scale
-        if not on.any():
-            return False
-    return True
-
-
 def trimmed_face_count(shape) -> int:
     """How many faces of ``shape`` are trimmed: with more than one wire (holes), or with an
     outer wire whose (u, v) box lies inside the surface's own parameter domain (relative
-    1e-9 of the parameters' size). On an unbounded surface (a plane; a cylinder along its
-    axis) the box is the domain when the wire runs along the box's sides: a rectangle on a
-    plane is untrimmed, as the bilinear patch it is read as."""
+    1e-9 of the parameters' size)."""
     BRep, BRepTools = _ocp("BRep", "BRepTools")
     trimmed = 0
     for face in _sub_shapes(shape, "FACE"):
@@ -151,11 +129,7 @@ def trimmed_face_count(shape) -> int:
         box = BRepTools.BRepTools.UVBounds_s(face)
         natural = BRep.BRep_Tool.Surface_s(face).Bounds()
         scale = max(1.0, *(abs(x) for x in box))
-        inside = [abs(a - b) > 1e-9 * scale for a, b in zip(box, natural)]
-        if any(k for k, b in zip(inside, natural) if abs(b) < _UNBOUNDED):
-            trimmed += 1
-        elif any(inside):  # inside only where the surface is unbounded
-            trimmed += not _on_box_sides(face, box, scale)
+        trimmed += any(abs(a - b) > 1e-9 * scale for a, b in zip(box, natural))
     return trimmed
 
 

@@ -20,7 +20,6 @@ from ..errors import BackendError, ParameterError
 from ..tolerances import OCC_CONFUSION
 from .occ_backend import _ocp
 from .occ_geometry import _curve2d_to_occ, _same_domain, geom_to_occ
-from .occ_plane import plane_frame, plane_to_occ
 from .occ_shapes import _compound
 
 __all__ = ["brep_to_shape", "brep_list_to_shape"]
@@ -205,18 +204,12 @@ def brep_to_shape(obj, *, tolerance: float = OCC_CONFUSION):
         builder.MakeVertex(v, gp.gp_Pnt(*c.tolist()), max(tol, tolerance))
         vertices[root] = v
 
-    # faces (unoriented, FORWARD) first: the pcurves are attached to them. Affine patches become
-    # planes (OCC's STEP reader repairs free-form faces, not planes: see .occ_plane), their pcurves
-    # mapped into the plane's parameter
-    occ_faces, planes = [], [plane_frame(f.surface) for f in faces]
-    for f, plane in zip(faces, planes):
+    # faces (unoriented, FORWARD) first: the pcurves are attached to them
+    occ_faces = []
+    for f in faces:
         F = TopoDS.TopoDS_Face()
-        surface = geom_to_occ(f.surface) if plane is None else plane_to_occ(plane)
-        builder.MakeFace(F, surface, max(f.tolerance, tolerance))
+        builder.MakeFace(F, geom_to_occ(f.surface), max(f.tolerance, tolerance))
         occ_faces.append(F)
-
-    def pcurve_on(i, pc):
-        return _curve2d_to_occ(pc if planes[i] is None else planes[i].map_pcurve(pc))
 
     # edges, one per key
     occ_edges = {}
@@ -252,9 +245,9 @@ def brep_to_shape(obj, *, tolerance: float = OCC_CONFUSION):
         for i, pcs in per_face.items():
             if len(pcs) == 2 and pcs[0][1] != pcs[1][1]:  # a seam: the FORWARD use's pcurve first
                 first, second = (pcs[0][0], pcs[1][0]) if pcs[0][1] else (pcs[1][0], pcs[0][0])
-                builder.UpdateEdge(E, pcurve_on(i, first), pcurve_on(i, second), occ_faces[i], tol_e)
+                builder.UpdateEdge(E, _curve2d_to_occ(first), _curve2d_to_occ(second), occ_faces[i], tol_e)
             else:
-                builder.UpdateEdge(E, pcurve_on(i, pcs[0][0]), occ_faces[i], tol_e)
+                builder.UpdateEdge(E, _curve2d_to_occ(pcs[0][0]), occ_faces[i], tol_e)
         builder.Range(E, dom[0], dom[1])
         builder.Add(E, vertices[uf.find((key, 0))].Oriented(FORWARD))
         builder.Add(E, vertices[uf.find((key, 1))].Oriented(REVERSED))
