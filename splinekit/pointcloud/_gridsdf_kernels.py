@@ -305,15 +305,6 @@ def _fill_inf(i0, i1, j0, j1, k0, k1, ny, nz, out):
                 out[(i * ny + j) * nz + k] = np.inf
 
 
-
-@njit(cache=True)
-def _fill_inf(i0, i1, j0, j1, k0, k1, ny, nz, out):
-    for i in range(i0, i1):
-        for j in range(j0, j1):
-            for k in range(k0, k1):
-                out[(i * ny + j) * nz + k] = np.inf
-
-
 @njit(cache=True, parallel=True)
 def grid_signed(origin, spacing, shape, limit, block, open_ratio, lo, hi, tlo, thi, tri, L, m, fn, en, vn, prism,
                 out):

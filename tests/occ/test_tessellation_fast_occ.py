@@ -53,6 +53,19 @@ def _occ_mesh(shape, deflection, faces):
     return count, worst
 
 
+def occ_triangles_at(solid, ours, floor=0.0):
+    """BRepMesh's triangle count on ``solid`` once its measured deviation is at most ``ours``:
+    OCC's deflection starts at ``max(2 ours, floor)`` and is lowered until it gets there."""
+    shape = sk.occ.to_occ(solid)
+    deflection = max(2.0 * ours, floor)
+    for _ in range(12):
+        count, theirs = _occ_mesh(shape, deflection, solid.faces)
+        if theirs <= ours * (1 + 1e-9):
+            return count
+        deflection *= 0.7
+    pytest.fail(f"BRepMesh did not reach splinekit's deviation {ours:.3g}")
+
+
 def _z_filleted_plate():
     # planes and quarter cylinders only (the vertical edges rounded), and two through holes
     bd = pytest.importorskip("build123d")
@@ -81,16 +94,8 @@ def test_no_more_triangles_than_brepmesh_at_equal_deviation(name, rel):
     assert solid.faces[0]._cache["tessellate"].memo.get("fast") is not None
     # (planes: rounding only, so both are compared at the model's rounding level)
     ours = max(measured_deviation(mesh, solid.faces), 1e-9 * mesh.tolerance / rel)
-    shape = sk.occ.to_occ(solid)
-    deflection = max(2.0 * ours, 1e-6 * mesh.tolerance / rel)  # OCC refuses deflections under 1e-7
-    for _ in range(12):  # lower OCC's deflection until its measured deviation is at most ours
-        count, theirs = _occ_mesh(shape, deflection, solid.faces)
-        if theirs <= ours * (1 + 1e-9):
-            break
-        deflection *= 0.7
-    else:
-        pytest.fail(f"BRepMesh did not reach splinekit's deviation {ours:.3g}")
-    assert mesh.n_faces <= count
+    # (OCC refuses deflections under 1e-7)
+    assert mesh.n_faces <= occ_triangles_at(solid, ours, floor=1e-6 * mesh.tolerance / rel)
 
 
 def _b123d(name):

@@ -21,7 +21,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from test_tessellation_brep import measured_deviation
 from test_tessellation_fast import _check
-from test_tessellation_fast_occ import _occ_mesh
+from test_tessellation_fast_occ import occ_triangles_at
 
 import splinekit as sk
 from splinekit import _kernels
@@ -150,16 +150,7 @@ def test_no_more_triangles_than_brepmesh_at_equal_deviation(name, rel):
     mesh = sk.tessellate(solid, rel, relative=True)
     assert _plan(solid).lat is not None
     ours = measured_deviation(mesh, solid.faces)
-    shape = sk.occ.to_occ(solid)
-    deflection = 2.0 * ours
-    for _ in range(12):  # lower OCC's deflection until its measured deviation is at most ours
-        count, theirs = _occ_mesh(shape, deflection, solid.faces)
-        if theirs <= ours * (1 + 1e-9):
-            break
-        deflection *= 0.7
-    else:
-        pytest.fail(f"BRepMesh did not reach splinekit's deviation {ours:.3g}")
-    assert mesh.n_faces <= count
+    assert mesh.n_faces <= occ_triangles_at(solid, ours)
 
 
 @pytest.mark.parametrize("rel", [1e-1, 1e-3, 1e-4])
