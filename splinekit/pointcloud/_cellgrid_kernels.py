@@ -353,15 +353,9 @@ def search(S, order, start, lo, h, guard, dims, mask, k, out_d, out_idx, out_kth
                 out_kth[o] = guess
             if out_d.shape[0]:
                 # ascending, the point itself (at 0, distance 0) staying first among ties
+                # (insertion sort: the point's own entry, distance 0, is never passed)
                 for a in range(2, k):
-                    d, j = bd[a], bi[a]
-                    b = a
-                    while b > 1 and bd[b - 1] > d:
-                        bd[b] = bd[b - 1]
-                        bi[b] = bi[b - 1]
-                        b -= 1
-                    bd[b] = d
-                    bi[b] = j
+                    _insert(bd, bi, a, k, bd[a], bi[a])
                 for j in range(k):
                     out_d[o, j] = np.sqrt(bd[j])
             if out_idx.shape[0]:
