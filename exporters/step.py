@@ -78,9 +78,21 @@ def _ocp_step():
     return IFSelect, Interface, Message, STEPCAFControl, STEPControl, TCollection, TDataStd, TDF, TDocStd, XCAFDoc
 
 
+# OCC's "write.precision.mode": 1 ("Greatest") writes the greatest tolerance in the shape as the
+# file's UNCERTAINTY_MEASURE_WITH_UNIT (OCC's default, "Average", writes the mean). OCC's reader
+# takes that uncertainty as its precision and, while it translates each face, re-fits a pcurve by
+# projecting the 3-D curve onto the surface wherever the pcurve lies further than twice the
+# precision from the curve (XSAlgo_ShapeProcessor::CheckPCurve): with the mean, the loose edges of
+# parts read from other CAD systems (a pcurve up to their tolerance off its curve) were re-fitted,
+# which moved their faces' areas by up to 5e-8 relative; with the greatest, no pcurve we write is
+# re-fitted.
+_WRITE_PRECISION_GREATEST = 1
+
+
 @contextmanager
 def _occ_settings(step_unit: str | None = None):
-    """Silence OCC's translator chatter and set ``write.step.unit``, restoring both after.
+    """Silence OCC's translator chatter and set ``write.step.unit`` and ``write.precision.mode``,
+    restoring all after.
 
     OCC prints transfer statistics and parse errors on stdout through its default
     messenger; its printers are detached for the duration (errors reach the
@@ -90,13 +102,14 @@ def _occ_settings(step_unit: str | None = None):
     messenger = Message.Message.DefaultMessenger_s()
     printers = list(messenger.Printers())
     static = Interface.Interface_Static
-    saved = {key: static.CVal_s(key) for key in ("write.step.unit", "write.step.schema")}
+    saved = {key: static.CVal_s(key) for key in ("write.step.unit", "write.step.schema", "write.precision.mode")}
     try:
         for p in printers:
             messenger.RemovePrinter(p)
         if step_unit is not None:
             static.SetCVal_s("write.step.unit", step_unit)
             static.SetCVal_s("write.step.schema", "AP214IS")
+            static.SetIVal_s("write.precision.mode", _WRITE_PRECISION_GREATEST)
         yield
     finally:
         for p in printers:

@@ -35,6 +35,40 @@ def _use_points(face, use) -> np.ndarray:
     return _on_surface(face, use.pcurve.evaluate(t))
 
 
+def _end_tangents(use):
+    """``(2, 3)`` unit tangents of the use's 3-D curve at its start and end, or None (no 3-D curve,
+    degenerate, or a zero derivative at an end)."""
+    if use.curve is None or use.degenerate:
+        return None
+    d = use.curve.derivatives(np.asarray(use.domain, dtype=float), 1)[1]
+    n = np.linalg.norm(d, axis=1, keepdims=True)
+    return d / n if np.all(n > 0.0) else None
+
+
+_RCOND = 1e-2
+"""Singular values of a vertex's tangent rows below this fraction of the largest are dropped: along
+such a direction the curves barely tell where the vertex lies, and following them would move it far."""
+
+
+def _vertex_points(centers, owner, P, T):
+    """Vertex positions, ``(n, 3)``: each of the ``(n, 3)`` ``centers`` moved the least (least
+    squares) so that it lies in the normal plane of every incident 3-D curve end, i.e. projects
+    onto that end. ``owner`` ``(m,)`` names the vertex of each curve end, ``P`` ``(m, 3)`` its point
+    and ``T`` ``(m, 3)`` its unit tangent.
+
+    A STEP file carries no edge ranges: OCC's reader sets an edge's range by projecting its vertices
+    onto its 3-D curve, and its pcurves' ranges by projecting the curve's ends onto their traces.
+    On a loose edge (curve ends a tolerance apart, as read from another CAD system) a vertex at the
+    ends' centroid projects inside a curve, so every re-read shortens that edge a little and moves
+    its faces' areas; a vertex in every end's normal plane keeps the ranges."""
+    M = np.zeros((len(centers), 3, 3))
+    r = np.zeros((len(centers), 3))
+    np.add.at(M, owner, T[:, :, None] * T[:, None, :])  # normal equations of each vertex's rows
+    np.add.at(r, owner, T * np.einsum("ij,ij->i", T, P - centers[owner])[:, None])
+    # M's eigenvalues are the squared singular values of the rows
+    return centers + np.einsum("nij,nj->ni", np.linalg.pinv(M, rcond=_RCOND**2, hermitian=True), r)
+
+
 class _UnionFind:
     def __init__(self):
         self.parent: dict = {}
@@ -196,10 +230,28 @@ def brep_to_shape(obj, *, tolerance: float = OCC_CONFUSION):
             merged.setdefault(uf.find(r), []).extend(items)
         points = merged
     vertices = {}
-    for root, items in points.items():
+    roots = list(points)
+    centers = np.array([np.mean([p for p, _ in points[root]], axis=0) for root in roots])
+    # each 3-D curve end at its vertex: the vertex goes where the STEP reader keeps the edges' ranges
+    index = {root: i for i, root in enumerate(roots)}
+    owner, end_points, end_tangents = [], [], []
+    for r in uses:
+        tangents = _end_tangents(r[3])
+        if tangents is None:
+            continue
+        forward = same[id(r)]
+        owner += [index[uf.find((r[4], 0 if forward else 1))], index[uf.find((r[4], 1 if forward else 0))]]
+        end_points += [r[5][0], r[5][-1]]
+        end_tangents += [tangents[0], tangents[1]]
+    moved = centers if not owner else _vertex_points(centers, np.array(owner), np.array(end_points),
+                                                     np.array(end_tangents))
+    for root, c, m in zip(roots, centers, moved):
+        items = points[root]
         P = np.array([p for p, _ in items])
-        c = P.mean(axis=0)
-        tol = max(max(t for _, t in items), float(np.max(np.linalg.norm(P - c, axis=1))) * 1.001)
+        own = max(t for _, t in items)
+        if np.linalg.norm(m - c) <= own:  # never further than the vertex's own tolerance
+            c = m
+        tol = max(own, float(np.max(np.linalg.norm(P - c, axis=1))) * 1.001)
         v = TopoDS.TopoDS_Vertex()
         builder.MakeVertex(v, gp.gp_Pnt(*c.tolist()), max(tol, tolerance))
         vertices[root] = v
