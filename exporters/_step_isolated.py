@@ -6,7 +6,8 @@ whose entities make no sense: a reference to an entity of the wrong type, a refe
 impossible count (11 of 20,000 fuzzed files in the reliability report). No Python code can catch
 a crash in the same process, so :func:`transfer` runs the transfer in a worker process
 (:mod:`exporters._step_worker`) under a time limit and an address-space limit, and brings the
-shapes back as OCC's native BREP files. A crash, a hang or a memory exhaustion there raises
+shapes back as OCC's binary BREP files (exact: a file read in the worker gives the same shapes,
+to the last bit, as one read in this process). A crash, a hang or a memory exhaustion there raises
 FileFormatError / ResourceLimitError naming the file, and the worker is replaced.
 
 The worker is one long-lived interpreter per process, started on first use, because starting
@@ -31,7 +32,6 @@ import threading
 from splinekit import limits
 from splinekit.errors import FileFormatError, ResourceLimitError
 
-from .brep import read_brep_shape
 
 __all__ = ["BASE_SECONDS", "SECONDS_PER_MB", "START_SECONDS", "start", "transfer"]
 
@@ -149,4 +149,15 @@ def transfer(path: str, mode: str, metres: float = 0.001) -> list:
                 message = (f"translating the STEP file {path!r} needs more than the memory budget of "
                            f"{budget_text}; raise it with {limits.ENV_VAR}=<bytes>")
             raise _ERRORS.get(result["error"], FileFormatError)(message)
-        return [(name, read_brep_shape(os.path.join(out, f"{i}.brep"))) for i, name in enumerate(result["names"])]
+        return [(name, _read_binary(os.path.join(out, f"{i}.bin"))) for i, name in enumerate(result["names"])]
+
+
+def _read_binary(path: str):
+    """The shape the worker wrote to ``path`` in OCC's binary BREP format."""
+    from OCP.BinTools import BinTools
+    from OCP.TopoDS import TopoDS_Shape
+
+    shape = TopoDS_Shape()
+    if not BinTools.Read_s(shape, path) or shape.IsNull():
+        raise FileFormatError(f"the STEP reader's worker process wrote no readable shape to {path!r}")
+    return shape

@@ -3,7 +3,9 @@
 Run as ``python -m exporters._step_worker``. It imports OCP once, prints ``"ready"`` as a JSON
 line, then serves one request per line of its standard input, a JSON object ``{"path", "mode",
 "metres", "out", "budget"}``: it limits its address space to what it maps then plus ``budget``
-bytes, transfers the file, writes ``out/0.brep``, ``out/1.brep``, ... and answers with one JSON
+bytes, transfers the file, writes ``out/0.bin``, ``out/1.bin``, ... (OCC's binary BREP, which
+keeps every double exactly; the text BREP format rounds coordinates by up to 1e-13, enough to
+change how OCC's STEP reader treats a written face on a knife edge) and answers with one JSON
 line, ``{"names": [...]}`` or ``{"error": class name, "message": ...}`` for a SplineKitError.
 A crash or a hang gives no answer: the parent kills it and starts another.
 """
@@ -34,7 +36,7 @@ def _limit_address_space(extra: float) -> None:
 
 def serve(request: dict) -> dict:
     """One transfer: the answer for ``request`` (see the module docstring)."""
-    from OCP.BRepTools import BRepTools  # optional heavy backend, loaded by _ocp_step already
+    from OCP.BinTools import BinTools  # optional heavy backend, loaded by _ocp_step already
 
     try:
         _limit_address_space(float(request["budget"]))
@@ -46,8 +48,8 @@ def serve(request: dict) -> dict:
         else:
             named = _read_named_shapes(request["path"], float(request["metres"]))
         for i, (_, shape) in enumerate(named):
-            if not BRepTools.Write_s(shape, os.path.join(request["out"], f"{i}.brep")):
-                raise OSError("OpenCascade could not write a BREP file")
+            if not BinTools.Write_s(shape, os.path.join(request["out"], f"{i}.bin")):
+                raise OSError("OpenCascade could not write a binary BREP file")
         return {"names": [name for name, _ in named]}
     except SplineKitError as exc:
         return {"error": type(exc).__name__, "message": str(exc)}

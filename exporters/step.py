@@ -98,7 +98,11 @@ def _occ_settings(step_unit: str | None = None):
     messenger; its printers are detached for the duration (errors reach the
     caller as exceptions instead).
     """
-    _, Interface, Message, *_ = _ocp_step()
+    _, Interface, Message, _, STEPControl, *_ = _ocp_step()
+    # the STEP statics exist only once OCC's STEP controller is initialised (its first reader or
+    # writer does that): before, setting them fails silently, and the first export of a process
+    # ignored its unit
+    STEPControl.STEPControl_Controller.Init_s()
     messenger = Message.Message.DefaultMessenger_s()
     printers = list(messenger.Printers())
     static = Interface.Interface_Static

@@ -20,6 +20,9 @@ part by far more than 1e-9: without the setting the test fails. References: OCC'
 
 from __future__ import annotations
 
+import subprocess
+import sys
+
 import numpy as np
 import pytest
 
@@ -166,3 +169,14 @@ def test_a_loose_pcurve_is_not_refitted(tmp_path, monkeypatch):
     c0, c1, dv, da = _round_trip(bulged, tmp_path / "average.step")
     assert c0 == c1
     assert da > 1e-5 and dv > 1e-5
+
+
+def test_the_first_export_of_a_process_applies_its_settings(tmp_path):
+    """OCC's STEP statics (unit, uncertainty mode) exist only once its STEP controller is set up;
+    the first export of a fresh process used to set them before that, silently in vain (a file
+    asked for in inches came out in millimetres)."""
+    path = tmp_path / "inch.step"
+    code = ("import numpy as np, exporters, splinekit as sk; "
+            "exporters.export_step(%r, sk.BSplineCurve(1, [0, 0, 1, 1], np.eye(3)[:2]), unit='inch')" % str(path))
+    subprocess.run([sys.executable, "-c", code], check=True, timeout=300)
+    assert "INCH" in path.read_text()
