@@ -29,6 +29,7 @@ import numpy as np
 from ..tolerances import WELD
 from .arcs import REL, CircleMap, CircleMaps, circle_param, fit_circle, is_segment
 from .latitude import latitude_plan
+from .plan_checks import loops_valid
 from .revolution import revolution_of
 from .welding import close_pairs, components
 
@@ -117,7 +118,7 @@ class FastPlan:
         "faces", "kind", "reversed", "corners", "end_vid", "arc_of", "arcs", "arc_c", "arc_r", "arc_e1", "arc_e2",
         "arc_sweep", "arc_closed", "arc_min", "arc_factor", "use_group", "use_face", "use_flip", "use_uv0",
         "use_arc_cyl", "A", "b", "normal", "origin", "fixed_T", "fixed_face", "curved_planes", "face_loops",
-        "loop_first", "cyl", "cyl_faces", "map_error",
+        "loop_first", "cyl", "cyl_faces", "map_error", "checked",
         # derived for the per-call path (:func:`_derive`)
         "use_arc", "start_vid", "start_X", "au", "au_arc", "au_flip", "au_slot", "au_off", "au_sense", "au_v",
         "au_A", "au_b", "maps", "slot_of_face", "slot_centre", "slot_axis", "slot_sign", "slot_radius", "slot_lo",
@@ -242,6 +243,8 @@ def build_plan(prep):
     if rev and plan.lat is None:
         return None
     plan.map_error = map_error
+    # the loops checked on their exact shapes, so that a first call needs no general-path mesh
+    plan.checked = loops_valid(plan, prep.table, pred, use_uv0, use_uv1, kind[use_face] == PLANE, arc_of[use_group] >= 0)
     # straight-edged planes: triangulated once (indices into the face's loop points, which are
     # its uses' start corners at every tolerance)
     fixed_T, fixed_face, plan.curved_planes, plan.face_loops = [], [], [], {}

@@ -282,20 +282,22 @@ def tessellate_faces(faces, tol: float, angle_tol, size: float) -> Tessellation:
             return mesh
         return concatenate([(mesh, k), (_tessellate_trimmed(prep.rest, tol, angle_tol), prep.rest.index)], tol)
     plan = prep.memo.get("fast", False)  # False: not decided yet for this face set
+    if plan is False:
+        plan = build_plan(prep)
+        if plan is None or not plan.checked:
+            # loops the plan's own checks do not accept (.plan_checks) go through the general
+            # path first, which raises on bad loops (or repairs a sloppy file's crossings), so
+            # both paths refuse the same input; the fast mesh is still the result where there is one
+            mesh = _tessellate_trimmed(prep, tol, angle_tol)
+            prep.memo["fast"] = plan
+            fast = fast_tessellation(plan, tol, angle_tol) if plan is not None else None
+            return mesh if fast is None else fast
+        prep.memo["fast"] = plan
     if plan:
         mesh = fast_tessellation(plan, tol, angle_tol)
         if mesh is not None:
             return mesh
-    mesh = _tessellate_trimmed(prep, tol, angle_tol)
-    if plan is False:
-        # decided after the general path has checked the face set (it raises on bad loops), so
-        # both paths refuse the same input; the first call already returns the fast mesh, so
-        # every call on a face set gives the same kind of mesh
-        plan = prep.memo["fast"] = build_plan(prep)
-        fast = fast_tessellation(plan, tol, angle_tol) if plan is not None else None
-        if fast is not None:
-            return fast
-    return mesh
+    return _tessellate_trimmed(prep, tol, angle_tol)
 
 
 def _tessellate_trimmed(prep, tol: float, angle_tol) -> Tessellation:
