@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["Circle", "CircleMap", "circle_param", "fit_circle", "is_segment"]
+__all__ = ["Circle", "CircleMap", "Circles", "circle_param", "fit_circle", "fit_circles", "is_segment", "segments"]
 
 REL = 1e-10
 """Relative agreement (of the radius, or of the model size) required to call samples a circle
@@ -41,60 +41,84 @@ class Circle:
 
 
 def _cross(a, b):
-    """``a x b`` of two ``(3,)`` vectors (``np.cross`` costs ~10 us of axis handling per call)."""
-    return np.array([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]])
+    """``a x b`` of ``(..., 3)`` vectors (``np.cross`` costs ~10 us of axis handling per call)."""
+    a0, a1, a2 = a[..., 0], a[..., 1], a[..., 2]
+    b0, b1, b2 = b[..., 0], b[..., 1], b[..., 2]
+    return np.stack([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0], axis=-1)
 
 
-def _circumcentre(a, b, c):
+def _dot(a, b):
+    return (a * b).sum(axis=-1)
+
+
+class Circles:
+    """Several fitted circle arcs as arrays (see :func:`fit_circles`): per curve ``ok`` (a circle
+    arc), and for those ``centre``, ``radius``, ``e1``, ``e2``, ``normal``, ``sweep``, ``closed``."""
+
+    __slots__ = ("ok", "centre", "radius", "e1", "e2", "normal", "sweep", "closed")
+
+    def circle(self, i) -> Circle:
+        """Curve ``i``'s :class:`Circle`."""
+        out = Circle()
+        out.centre, out.radius, out.e1, out.e2 = self.centre[i], float(self.radius[i]), self.e1[i], self.e2[i]
+        out.normal, out.sweep, out.closed = self.normal[i], float(self.sweep[i]), bool(self.closed[i])
+        return out
+
+
+def fit_circles(X, scale) -> Circles:
+    """The circle arcs through the samples ``X`` ``(n, k, 3)`` of ``n`` curves (in order along
+    each curve, ``k >= 7``, uniform in the curve's parameter): curve ``i`` is one (``ok[i]``) if
+    every sample lies on one circle within ``REL * max(radius, scale)`` and the angle grows
+    monotonically. Conics (rational quadratic pieces) with five points on a circle are that
+    circle, so enough samples per piece make this exact for the curves the tessellator meets.
+    The circle through the first sample and those at a third and two thirds; angle 0 at the
+    first sample."""
+    k = X.shape[1]
+    a, b, c = X[:, 0], X[:, k // 3], X[:, (2 * k) // 3]
     u, v = b - a, c - a
     n = _cross(u, v)
-    nn = float(n @ n)
-    if not nn > 0:
-        return None, None
-    return a + (_cross(n, u) * (v @ v) + _cross(v, n) * (u @ u)) / (2.0 * nn), n
-
-
-def fit_circle(X, scale) -> Circle | None:
-    """The circle arc through the samples ``X`` ``(k, 3)`` (in order along the curve, ``k >= 7``,
-    uniform in the curve's parameter) if every sample lies on one circle within
-    ``REL * max(radius, scale)`` and the angle grows monotonically, else None. Conics (rational
-    quadratic pieces) with five points on a circle are that circle, so enough samples per piece
-    make this exact for the curves the tessellator meets."""
-    k = len(X)
-    c, n = _circumcentre(X[0], X[k // 3], X[(2 * k) // 3])
-    if c is None:
-        return None
-    r = float(np.linalg.norm(X[0] - c))
-    eps = REL * max(r, scale)
-    d = X - c
-    normal = n / np.linalg.norm(n)
-    if np.abs(np.linalg.norm(d, axis=1) - r).max() > eps or np.abs(d @ normal).max() > eps:
-        return None
-    out = Circle()
-    out.centre, out.radius, out.normal = c, r, normal
-    out.e1 = d[0] / r
-    out.e2 = _cross(normal, out.e1)
-    theta = np.unwrap(np.arctan2(d @ out.e2, d @ out.e1))
-    step = np.diff(theta)
-    if not (step > 0).all() or step.max() >= np.pi / 2:
-        return None
-    out.closed = bool(np.linalg.norm(X[-1] - X[0]) <= eps)
-    out.sweep = 2.0 * np.pi if out.closed else float(theta[-1] - theta[0])
-    if out.sweep > 2.0 * np.pi + 1e-9:
-        return None
+    nn = _dot(n, n)
+    good = nn > 0
+    nn = np.where(good, nn, 1.0)
+    out = Circles()
+    centre = out.centre = a + (_cross(n, u) * _dot(v, v)[:, None] + _cross(v, n) * _dot(u, u)[:, None]) / (2.0 * nn)[:, None]
+    d = X - centre[:, None]
+    r = out.radius = np.linalg.norm(d[:, 0], axis=1)
+    eps = REL * np.maximum(r, scale)
+    normal = out.normal = n / np.sqrt(nn)[:, None]
+    on = (np.abs(np.linalg.norm(d, axis=2) - r[:, None]).max(axis=1) <= eps) & (np.abs(_dot(d, normal[:, None])).max(axis=1) <= eps)
+    e1 = out.e1 = d[:, 0] / np.where(r > 0, r, 1.0)[:, None]
+    e2 = out.e2 = _cross(normal, e1)
+    theta = np.unwrap(np.arctan2(_dot(d, e2[:, None]), _dot(d, e1[:, None])), axis=1)
+    step = np.diff(theta, axis=1)
+    closed = out.closed = np.linalg.norm(X[:, -1] - X[:, 0], axis=1) <= eps
+    out.sweep = np.where(closed, 2.0 * np.pi, theta[:, -1] - theta[:, 0])
+    out.ok = good & on & (step > 0).all(axis=1) & (step.max(axis=1) < np.pi / 2) & (out.sweep <= 2.0 * np.pi + 1e-9)
     return out
 
 
+def fit_circle(X, scale) -> Circle | None:
+    """The :class:`Circle` through the samples ``X`` ``(k, 3)`` of one curve, or None (see
+    :func:`fit_circles`)."""
+    c = fit_circles(X[None], scale)
+    return c.circle(0) if c.ok[0] else None
+
+
+def segments(X, scale):
+    """``(n,)`` bool: whether the samples ``X`` ``(n, k, 3)`` of each curve lie on the straight
+    segment between its first and last (within ``REL * scale``), in order, with distinct ends."""
+    a, b = X[:, :1], X[:, -1:]
+    ab = b - a
+    L2 = _dot(ab, ab)[:, 0]
+    long = np.sqrt(L2) > REL * scale
+    t = _dot(X - a, ab) / np.where(long, L2, 1.0)[:, None]
+    off = np.linalg.norm(X - a - t[..., None] * ab, axis=2)
+    return long & (off.max(axis=1) <= REL * scale) & (np.diff(t, axis=1) > 0).all(axis=1)
+
+
 def is_segment(X, scale) -> bool:
-    """Whether the samples ``X`` ``(k, 3)`` lie on the straight segment between the first and
-    the last (within ``REL * scale``), in order, with distinct ends."""
-    a, b = X[0], X[-1]
-    L = float(np.linalg.norm(b - a))
-    if not L > REL * scale:
-        return False
-    t = (X - a) @ (b - a) / (L * L)
-    off = np.linalg.norm(X - a - t[:, None] * (b - a), axis=1)
-    return bool(off.max() <= REL * scale and (np.diff(t) > 0).all())
+    """:func:`segments` of one curve's samples ``X`` ``(k, 3)``."""
+    return bool(segments(X[None], scale)[0])
 
 
 class CircleMap:

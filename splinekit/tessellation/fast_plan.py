@@ -27,7 +27,7 @@ import mapbox_earcut as earcut
 import numpy as np
 
 from ..tolerances import WELD
-from .arcs import REL, CircleMap, CircleMaps, circle_param, fit_circle, is_segment
+from .arcs import REL, CircleMap, CircleMaps, circle_param, fit_circles, segments
 from .latitude import latitude_plan
 from .plan_checks import loops_valid
 from .revolution import revolution_of
@@ -164,15 +164,14 @@ def build_plan(prep):
     t = (pdom[rep, :1] + (pdom[rep, 1:] - pdom[rep, :1]) * r).ravel()
     uv = prep.pcurves.evaluate(np.repeat(rep, SAMPLES), t)
     X = prep.batch.evaluate(np.repeat(use_face[rep], SAMPLES), uv[:, 0], uv[:, 1]).reshape(G, SAMPLES, 3)
-    arcs, arc_of = [], np.full(G, -1, dtype=np.int64)
-    for g in range(G):
-        if pole_group[g] or is_segment(X[g], size):
-            continue
-        c = fit_circle(X[g], size)
-        if c is None:
-            return None
-        arc_of[g] = len(arcs)
-        arcs.append(c)
+    # every group a pole, a straight segment or a circle arc
+    curved = np.flatnonzero(~pole_group & ~segments(X, size))
+    fits = fit_circles(X[curved], size)
+    if not fits.ok.all():
+        return None
+    arcs = [fits.circle(i) for i in range(curved.size)]
+    arc_of = np.full(G, -1, dtype=np.int64)
+    arc_of[curved] = np.arange(curved.size)
     # each use's direction against its group's samples, and its (u, v) at its start
     third = prep.pcurves.evaluate(np.arange(U), pdom[:, 0] + (pdom[:, 1] - pdom[:, 0]) / 3.0)
     Y = prep.batch.evaluate(use_face, third[:, 0], third[:, 1])
