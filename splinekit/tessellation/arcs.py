@@ -15,6 +15,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..curves import NurbsCurve
+
 __all__ = ["Circle", "CircleMap", "Circles", "circle_param", "fit_circle", "fit_circles", "is_segment", "segments"]
 
 REL = 1e-10
@@ -137,20 +139,38 @@ class CircleMap:
         or None if it is not a circle arc in this exact sense."""
         if curve.degree != 2 or curve.weights is None:
             return None
-        breaks, mult = np.unique(np.asarray(curve.knots, dtype=np.float64), return_counts=True)
+        return cls.of_net(curve.knots, curve.control_points, curve.weights, scale, curve)
+
+    @classmethod
+    def of_net(cls, knots, P, W, scale, curve=None):
+        """:meth:`of` the rational quadratic curve with ``knots``, control points ``P`` ``(n, 3)``
+        and weights ``W`` ``(n,)`` (``curve``: that curve, if at hand; built only when its joints
+        are not of multiplicity 2)."""
+        breaks, mult = np.unique(np.asarray(knots, dtype=np.float64), return_counts=True)
         if mult[0] == 3 and mult[-1] == 3 and (mult[1:-1] == 2).all():
             # joints of multiplicity 2 (circles as CAD systems write them): the pieces' control
-            # points are the curve's, three at a time
+            # points are the curve's, three at a time, and the curve is evaluated piece by piece
             idx = 2 * np.arange(len(breaks) - 1)[:, None] + np.arange(3)
-            P, W = np.asarray(curve.control_points)[idx], np.asarray(curve.weights)[idx]  # (k, 3, 3), (k, 3)
+            P, W = np.asarray(P, dtype=np.float64)[idx], np.asarray(W, dtype=np.float64)[idx]  # (k, 3, 3), (k, 3)
+            if (W <= 0).any():
+                return None
+            lo, hi = breaks[0], breaks[-1]
+            t = np.linspace(lo, hi, 8 * len(P) + 1)
+            j = np.clip(np.searchsorted(breaks, t, side="right") - 1, 0, len(P) - 1)
+            x = ((t - breaks[j]) / (breaks[j + 1] - breaks[j]))[:, None]
+            B = np.concatenate([(1.0 - x) ** 2, 2.0 * x * (1.0 - x), x * x], axis=1) * W[j]  # (m, 3)
+            X = np.einsum("mi,mid->md", B, P[j]) / B.sum(axis=1, keepdims=True)
         else:
+            if curve is None:
+                curve = NurbsCurve(2, knots, P, W)
             pieces = curve.to_bezier()
             if len(breaks) != len(pieces) + 1:
                 return None
             P = np.array([p.control_points for p in pieces])
             W = np.array([p.weights for p in pieces])
-        lo, hi = curve.domain
-        X = curve.evaluate(np.linspace(lo, hi, 8 * len(P) + 1))
+            lo, hi = curve.domain
+            t = np.linspace(lo, hi, 8 * len(P) + 1)
+            X = curve.evaluate(t)
         circle = fit_circle(X, scale)
         if circle is None:
             return None
@@ -166,8 +186,7 @@ class CircleMap:
         m.start -= m.start[0]
         m.lam = np.sqrt(W[:, 0] / W[:, 2])
         m.t_half = np.tan(m.half / 2.0)
-        # checked against the evaluator: the map's angles at the samples' parameters
-        t = np.linspace(lo, hi, 8 * len(P) + 1)
+        # checked against the curve's points: the map's angles at the samples' parameters
         if np.abs(circle.points(m.angle(t)) - X).max() > REL * max(circle.radius, scale):
             return None
         return m

@@ -80,19 +80,19 @@ class _Cylinder:
     __slots__ = ("cmap", "axis", "sign")
 
 
-def _cylinder(surface, batch, f, scale):
-    """The :class:`_Cylinder` of face ``f``'s surface, or None."""
+def _cylinder(surface, mid, scale):
+    """The :class:`_Cylinder` of ``surface``, or None (``mid``: its ``(S, Su, Sv)`` ``(3,)`` each
+    at the middle of its domain)."""
     if surface.degree_v != 1 or surface.degree_u != 2 or surface.weights is None:
         return None
     P = np.asarray(surface.control_points)
     W = np.asarray(surface.weights)
-    kv = np.asarray(surface.knots_v)
     if P.shape[1] != 2 or np.abs(W[:, 1] - W[:, 0]).max() > 1e-14 * W.max():
         return None
     D = P[:, 1] - P[:, 0]
     if np.abs(D - D[0]).max() > REL * scale:
         return None
-    cmap = CircleMap.of(surface.isocurve(v=kv[0]), scale)
+    cmap = CircleMap.of_net(surface.knots_u, P[:, 0], W[:, 0], scale)  # the isocurve at the first v
     if cmap is None:
         return None
     axis = D[0] / np.linalg.norm(D[0])
@@ -101,12 +101,44 @@ def _cylinder(surface, batch, f, scale):
     c = _Cylinder()
     c.cmap, c.axis = cmap, axis
     # which way Su x Sv points: outward (from the axis) or inward
-    (u0, u1), (v0, v1) = surface.domain
-    S, Su, Sv = batch.partials(np.array([f]), np.array([0.5 * (u0 + u1)]), np.array([0.5 * (v0 + v1)]))
-    radial = S[0] - cmap.circle.centre
+    S, Su, Sv = mid
+    radial = S - cmap.circle.centre
     radial -= (radial @ axis) * axis
-    c.sign = 1.0 if np.cross(Su[0], Sv[0]) @ radial > 0 else -1.0
+    c.sign = 1.0 if np.cross(Su, Sv) @ radial > 0 else -1.0
     return c
+
+
+def _curved_faces(prep, size):
+    """``(kind, cyl, rev)`` of the faces that are not affine: each a right circular cylinder
+    (``cyl[f]``: :class:`_Cylinder`) or a face of revolution with a circular profile (``rev[f]``:
+    :class:`.revolution.Revolution`, its closed form checked against the surface's evaluator on
+    a grid, all faces in one batch); None if some face is neither."""
+    faces, batch = prep.faces, prep.batch
+    kind = np.full(len(faces), PLANE)
+    cyl, rev, grids = {}, {}, []
+    curved = np.flatnonzero(~prep.affine)
+    if curved.size == 0:
+        return kind, cyl, rev
+    dom = np.array([faces[f].surface.domain for f in curved])  # (n, 2, 2)
+    S, Su, Sv = batch.partials(curved, 0.5 * (dom[:, 0, 0] + dom[:, 0, 1]), 0.5 * (dom[:, 1, 0] + dom[:, 1, 1]))
+    for k, f in enumerate(curved.tolist()):
+        surface = faces[f].surface
+        c = _cylinder(surface, (S[k], Su[k], Sv[k]), size)
+        if c is not None:
+            kind[f], cyl[f] = CYLINDER, c
+            continue
+        found = revolution_of(surface, size)
+        if found is None:
+            return None
+        kind[f], rev[f] = REVOLUTION, found[0]
+        grids.append((f, found[1], found[2], found[3]))
+    if grids:
+        f = np.concatenate([np.full(u.size, f) for f, u, _, _ in grids])
+        want = batch.evaluate(f, np.concatenate([g[1] for g in grids]), np.concatenate([g[2] for g in grids]))
+        got = np.concatenate([g[3] for g in grids])
+        if np.abs(got - want).max() > REL * size:
+            return None
+    return kind, cyl, rev
 
 
 class FastPlan:
@@ -136,18 +168,10 @@ def build_plan(prep):
     if not uses:
         return None
     F, U, G = len(faces), len(uses), len(groups)
-    kind = np.full(F, PLANE)
-    cyl, rev = {}, {}
-    for f, face in enumerate(faces):
-        if not prep.affine[f]:
-            c = _cylinder(face.surface, prep.batch, f, size)
-            if c is not None:
-                kind[f], cyl[f] = CYLINDER, c
-                continue
-            r = revolution_of(face.surface, prep.batch, f, size)
-            if r is None:
-                return None
-            kind[f], rev[f] = REVOLUTION, r
+    found = _curved_faces(prep, size)
+    if found is None:
+        return None
+    kind, cyl, rev = found
     use_face = np.array([u.f for u in uses], dtype=np.int64)
     # a collapsed edge (a pole) only where a face of revolution meets its axis
     degenerate = np.array([u.edge.degenerate for u in uses], dtype=bool)

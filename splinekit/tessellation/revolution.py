@@ -54,15 +54,23 @@ class Revolution:
         return out
 
 
-def revolution_of(surface, batch, f, scale) -> Revolution | None:
-    """The :class:`Revolution` of face ``f``'s ``surface`` (``batch``: the face set's
-    :class:`.batch.SurfaceBatch`), or None when it is not one with ``rho >= 0`` on its domain."""
+def revolution_of(surface, scale):
+    """``(r, u, v, X)``: the :class:`Revolution` ``r`` of ``surface`` and its closed form's
+    points ``X`` ``(n, 3)`` at a grid of parameters ``u, v`` ``(n,)``, which the caller checks
+    against the surface's own evaluator (for several faces in one batch); None when it is not
+    one with ``rho >= 0`` on its domain."""
     if surface.degree_u != 2 or surface.degree_v != 2 or surface.weights is None:
         return None
     (u0, u1), (v0, v1) = surface.domain
     umap = CircleMap.of(surface.isocurve(v=0.5 * (v0 + v1)), scale)
-    vmap = CircleMap.of(surface.isocurve(u=u0), scale)
-    if umap is None or vmap is None:
+    ku = np.asarray(surface.knots_u)
+    if umap is None:
+        return None
+    if ku[2] == ku[0]:  # clamped: the isocurve at the first u is the first row of the net
+        vmap = CircleMap.of_net(surface.knots_v, np.asarray(surface.control_points)[0], np.asarray(surface.weights)[0], scale)
+    else:
+        vmap = CircleMap.of(surface.isocurve(u=u0), scale)
+    if vmap is None:
         return None
     c, pc = umap.circle, vmap.circle
     r = Revolution()
@@ -77,14 +85,11 @@ def revolution_of(surface, batch, f, scale) -> Revolution | None:
         return None
     u = np.repeat(np.linspace(u0, u1, CHECK), CHECK)
     v = np.tile(np.linspace(v0, v1, CHECK), CHECK)
-    rho = r.rho_c + r.p * (np.cos(vmap.angle(v)) * r.g1[0] + np.sin(vmap.angle(v)) * r.g2[0])
+    psi = vmap.angle(v)
+    rho = r.rho_c + r.p * (np.cos(psi) * r.g1[0] + np.sin(psi) * r.g2[0])
     if rho.min() < -REL * scale:
         return None
-    got = point(r, umap.angle(u), vmap.angle(v))
-    want = batch.evaluate(np.full(u.size, f), u, v)
-    if np.abs(got - want).max() > REL * scale:
-        return None
-    return r
+    return r, u, v, point(r, umap.angle(u), psi)
 
 
 def point(r, phi, psi):
