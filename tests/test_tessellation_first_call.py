@@ -14,6 +14,8 @@ import math
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 from test_tessellation_brep import SOLIDS
 
 import splinekit as sk
@@ -21,6 +23,7 @@ from splinekit.brep import TrimmedFace, primitives
 from splinekit.construct.curves import line
 from splinekit.errors import SplineKitError
 from splinekit.tessellation import fast_plan, trimmed
+from splinekit.tessellation.arcs import CircleMap
 from splinekit.tessellation.trimmed import _Prepared
 
 import _brep_shapes as shapes
@@ -141,3 +144,29 @@ def test_valid_curved_loops_pass_the_plan_checks():
     mesh = sk.tessellate(face, 1e-3)
     area = math.pi * 0.45**2 - 0.15**2 - math.pi * 0.1**2
     assert abs(mesh.area - area) <= 2 * math.pi * 0.55 * 1e-3
+
+
+@settings(max_examples=30, deadline=None)
+@given(
+    arcs=st.lists(st.tuples(st.floats(-math.pi, math.pi), st.floats(0.2, 2 * math.pi), st.floats(0.01, 100.0)),
+                  min_size=1, max_size=6),  # fmt: skip
+    straight=st.booleans(),
+)
+def test_batched_circle_maps_against_the_curves_own_evaluators(arcs, straight):
+    # arcs of every piece count in one batch (and a straight quadratic, which is no circle): each
+    # map's angles give its curve's own points, and the batch agrees with the one-at-a-time maps
+    curves = [sk.arc([1.0, 2.0, 3.0], [0.3, -0.2, 1.0], r, a, a + sweep) for a, sweep, r in arcs]
+    if straight:
+        curves.append(sk.NurbsCurve(2, [0, 0, 0, 1, 1, 1], [[0, 0, 0], [1, 1, 0], [2, 2, 0]], [1, 0.5, 1]))
+    maps = CircleMap.batch([(c.knots, c.control_points, c.weights) for c in curves], 1.0)
+    for c, m in zip(curves, maps):
+        one = CircleMap.of(c, 1.0)
+        if straight and c is curves[-1]:
+            assert m is None and one is None
+            continue
+        assert m is not None and one is not None
+        t = np.linspace(*c.domain, 101)
+        r = m.circle.radius
+        assert np.abs(m.circle.points(m.angle(t)) - c.evaluate(t)).max() <= 1e-9 * r
+        assert np.abs(m.angle(t) - one.angle(t)).max() <= 1e-12
+        assert np.abs(m.param(m.angle(t)) - t).max() <= 1e-9 * (t[-1] - t[0])

@@ -191,6 +191,65 @@ class CircleMap:
             return None
         return m
 
+    @classmethod
+    def batch(cls, nets, scale):
+        """``[CircleMap or None]``: :meth:`of_net` of every ``(knots, P, W)`` in ``nets``, those
+        with joints of multiplicity 2 and the same number of pieces in one vectorised pass
+        (the same samples, fit and check as :meth:`of_net`), any other one by one."""
+        out = [None] * len(nets)
+        shapes: dict = {}
+        for i, (knots, P, W) in enumerate(nets):
+            n = len(knots)
+            if n % 2 == 0 and n >= 6 and len(P) == n - 3 and np.ndim(W) == 1:
+                shapes.setdefault(n, []).append(i)
+            else:
+                out[i] = cls.of_net(knots, P, W, scale)
+        for n, members in shapes.items():
+            K = (n - 4) // 2  # pieces
+            kn = np.array([nets[i][0] for i in members], dtype=np.float64)  # (m, 2K + 4)
+            inner = kn[:, 3:-3]
+            breaks = np.concatenate([kn[:, 2:3], inner[:, ::2], kn[:, -3:-2]], axis=1)  # (m, K + 1)
+            regular = ((kn[:, 0] == kn[:, 2]) & (kn[:, -1] == kn[:, -3]) & (inner[:, ::2] == inner[:, 1::2]).all(axis=1)
+                       & (np.diff(breaks, axis=1) > 0).all(axis=1))  # fmt: skip
+            idx = 2 * np.arange(K)[:, None] + np.arange(3)
+            P = np.array([nets[i][1] for i in members], dtype=np.float64)[:, idx]  # (m, K, 3, 3)
+            W = np.array([nets[i][2] for i in members], dtype=np.float64)[:, idx]  # (m, K, 3)
+            regular &= (W > 0).all(axis=(1, 2))
+            for k in np.flatnonzero(~regular):
+                out[members[k]] = cls.of_net(*nets[members[k]], scale)
+            if not regular.any():
+                continue
+            sel = np.flatnonzero(regular)
+            members, breaks, P, W = [members[k] for k in sel], breaks[sel], P[sel], W[sel]
+            m = len(members)
+            t = np.linspace(breaks[:, 0], breaks[:, -1], 8 * K + 1, axis=1)  # (m, 8K + 1)
+            rows = np.arange(m)[:, None]
+            j = (breaks[:, None, 1:K] <= t[:, :, None]).sum(axis=2)  # the piece of each sample
+            x = (t - breaks[rows, j]) / (breaks[rows, j + 1] - breaks[rows, j])
+            B = np.stack([(1.0 - x) ** 2, 2.0 * x * (1.0 - x), x * x], axis=2) * W[rows, j]  # (m, s, 3)
+            X = np.einsum("msi,msid->msd", B, P[rows, j]) / B.sum(axis=2)[..., None]
+            fits = fit_circles(X, scale)
+            cos_half = W[:, :, 1] / np.sqrt(W[:, :, 0] * W[:, :, 2])
+            ok = fits.ok & ((cos_half > 0) & (cos_half < 1)).all(axis=1)
+            half = np.arccos(np.clip(cos_half, -1.0, 1.0))
+            d = P[:, :, 0] - fits.centre[:, None]
+            start = np.unwrap(np.mod(np.arctan2(_dot(d, fits.e2[:, None]), _dot(d, fits.e1[:, None])), 2.0 * np.pi), axis=1)
+            start -= start[:, :1]
+            lam = np.sqrt(W[:, :, 0] / W[:, :, 2])
+            t_half = np.tan(half / 2.0)
+            # checked against the curves' points: the maps' angles at the samples' parameters (as :meth:`angle`)
+            k = np.minimum((breaks[:, None, 1:] < t[:, :, None]).sum(axis=2), K - 1)
+            x = (t - breaks[rows, k]) / (breaks[rows, k + 1] - breaks[rows, k])
+            s_ = x / (x + lam[rows, k] * (1.0 - x))
+            theta = start[rows, k] + half[rows, k] + 2.0 * np.arctan(t_half[rows, k] * (2.0 * s_ - 1.0))
+            Y = fits.centre[:, None] + fits.radius[:, None, None] * (np.cos(theta)[..., None] * fits.e1[:, None] + np.sin(theta)[..., None] * fits.e2[:, None])
+            ok &= np.abs(Y - X).max(axis=(1, 2)) <= REL * np.maximum(fits.radius, scale)
+            for q in np.flatnonzero(ok):
+                cm = out[members[q]] = cls()
+                cm.circle, cm.lo, cm.hi = fits.circle(q), breaks[q, :-1], breaks[q, 1:]
+                cm.half, cm.start, cm.lam, cm.t_half = half[q], start[q], lam[q], t_half[q]
+        return out
+
     def _piece(self, t):
         return np.clip(np.searchsorted(self.hi, t, side="left"), 0, len(self.hi) - 1)
 

@@ -30,7 +30,7 @@ from ..tolerances import WELD
 from .arcs import REL, CircleMap, CircleMaps, circle_param, fit_circles, segments
 from .latitude import latitude_plan
 from .plan_checks import loops_valid
-from .revolution import revolution_of
+from .revolution import revolution_nets, revolution_of
 from .welding import close_pairs, components
 
 __all__ = ["FastPlan", "build_plan", "planar_triangles"]
@@ -80,9 +80,10 @@ class _Cylinder:
     __slots__ = ("cmap", "axis", "sign")
 
 
-def _cylinder(surface, mid, scale):
-    """The :class:`_Cylinder` of ``surface``, or None (``mid``: its ``(S, Su, Sv)`` ``(3,)`` each
-    at the middle of its domain)."""
+def _cylinder_net(surface, scale):
+    """``(knots, P, W)`` of the circle of ``surface`` at its first ``v`` if ``surface`` may be a
+    right circular cylinder (rational quadratic in ``u``, linear in ``v`` along one direction with
+    equal weights), else None. Its :class:`.arcs.CircleMap` then goes to :func:`_cylinder`."""
     if surface.degree_v != 1 or surface.degree_u != 2 or surface.weights is None:
         return None
     P = np.asarray(surface.control_points)
@@ -92,10 +93,18 @@ def _cylinder(surface, mid, scale):
     D = P[:, 1] - P[:, 0]
     if np.abs(D - D[0]).max() > REL * scale:
         return None
-    cmap = CircleMap.of_net(surface.knots_u, P[:, 0], W[:, 0], scale)  # the isocurve at the first v
+    return surface.knots_u, P[:, 0], W[:, 0]
+
+
+def _cylinder(surface, cmap, mid):
+    """The :class:`_Cylinder` of ``surface`` (passed by :func:`_cylinder_net`) whose first circle
+    has the map ``cmap`` (or None: not a circle), or None (``mid``: its ``(S, Su, Sv)`` ``(3,)``
+    each at the middle of its domain)."""
     if cmap is None:
         return None
-    axis = D[0] / np.linalg.norm(D[0])
+    P = np.asarray(surface.control_points)
+    D = P[0, 1] - P[0, 0]
+    axis = D / np.linalg.norm(D)
     if np.linalg.norm(np.cross(axis, cmap.circle.normal)) > REL:
         return None
     c = _Cylinder()
@@ -112,22 +121,42 @@ def _curved_faces(prep, size):
     """``(kind, cyl, rev)`` of the faces that are not affine: each a right circular cylinder
     (``cyl[f]``: :class:`_Cylinder`) or a face of revolution with a circular profile (``rev[f]``:
     :class:`.revolution.Revolution`, its closed form checked against the surface's evaluator on
-    a grid, all faces in one batch); None if some face is neither."""
+    a grid); None if some face is neither. The circle maps of all faces are built in one batch
+    (:meth:`.arcs.CircleMap.batch`), the grid checks evaluated in one call."""
     faces, batch = prep.faces, prep.batch
     kind = np.full(len(faces), PLANE)
-    cyl, rev, grids = {}, {}, []
-    curved = np.flatnonzero(~prep.affine)
-    if curved.size == 0:
+    cyl, rev = {}, {}
+    curved = np.flatnonzero(~prep.affine).tolist()
+    if not curved:
         return kind, cyl, rev
-    dom = np.array([faces[f].surface.domain for f in curved])  # (n, 2, 2)
-    S, Su, Sv = batch.partials(curved, 0.5 * (dom[:, 0, 0] + dom[:, 0, 1]), 0.5 * (dom[:, 1, 0] + dom[:, 1, 1]))
-    for k, f in enumerate(curved.tolist()):
-        surface = faces[f].surface
-        c = _cylinder(surface, (S[k], Su[k], Sv[k]), size)
-        if c is not None:
+    # the circles each face needs: a cylinder's first circle, or a revolution's two isocurves
+    nets, wants = [], []
+    for f in curved:
+        net = _cylinder_net(faces[f].surface, size)
+        if net is not None:
+            wants.append((f, CYLINDER, len(nets)))
+            nets.append(net)
+            continue
+        pair = revolution_nets(faces[f].surface)
+        if pair is None:
+            return None
+        wants.append((f, REVOLUTION, len(nets)))
+        nets.extend(pair)
+    maps = CircleMap.batch(nets, size)
+    cf = np.array([f for f, k, _ in wants if k == CYLINDER], dtype=np.int64)
+    if cf.size:
+        dom = np.array([faces[f].surface.domain for f in cf])  # (n, 2, 2)
+        S, Su, Sv = batch.partials(cf, 0.5 * (dom[:, 0, 0] + dom[:, 0, 1]), 0.5 * (dom[:, 1, 0] + dom[:, 1, 1]))
+    grids, q = [], 0
+    for f, k, i in wants:
+        if k == CYLINDER:
+            c = _cylinder(faces[f].surface, maps[i], (S[q], Su[q], Sv[q]))
+            q += 1
+            if c is None:  # linear in v: no face of revolution with a circular profile either
+                return None
             kind[f], cyl[f] = CYLINDER, c
             continue
-        found = revolution_of(surface, size)
+        found = revolution_of(faces[f].surface, maps[i], maps[i + 1], size)
         if found is None:
             return None
         kind[f], rev[f] = REVOLUTION, found[0]

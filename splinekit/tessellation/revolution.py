@@ -21,7 +21,7 @@ import numpy as np
 
 from .arcs import REL, CircleMap, CircleMaps, circle_param
 
-__all__ = ["Revolution", "Revolutions", "revolution_of"]
+__all__ = ["Revolution", "Revolutions", "revolution_nets", "revolution_of"]
 
 CHECK = 9
 """Grid of ``CHECK x CHECK`` parameters on which the closed form is checked against the surface."""
@@ -54,24 +54,32 @@ class Revolution:
         return out
 
 
-def revolution_of(surface, scale):
-    """``(r, u, v, X)``: the :class:`Revolution` ``r`` of ``surface`` and its closed form's
-    points ``X`` ``(n, 3)`` at a grid of parameters ``u, v`` ``(n,)``, which the caller checks
-    against the surface's own evaluator (for several faces in one batch); None when it is not
-    one with ``rho >= 0`` on its domain."""
+def revolution_nets(surface):
+    """``((knots, P, W), (knots, P, W))`` of the two circles :func:`revolution_of` needs (the
+    ``u`` isocurve at the middle ``v``; the profile, the ``v`` isocurve at the first ``u``), or
+    None when ``surface`` is not rational biquadratic."""
     if surface.degree_u != 2 or surface.degree_v != 2 or surface.weights is None:
         return None
     (u0, u1), (v0, v1) = surface.domain
-    umap = CircleMap.of(surface.isocurve(v=0.5 * (v0 + v1)), scale)
+    c = surface.isocurve(v=0.5 * (v0 + v1))
     ku = np.asarray(surface.knots_u)
-    if umap is None:
-        return None
     if ku[2] == ku[0]:  # clamped: the isocurve at the first u is the first row of the net
-        vmap = CircleMap.of_net(surface.knots_v, np.asarray(surface.control_points)[0], np.asarray(surface.weights)[0], scale)
+        profile = surface.knots_v, np.asarray(surface.control_points)[0], np.asarray(surface.weights)[0]
     else:
-        vmap = CircleMap.of(surface.isocurve(u=u0), scale)
-    if vmap is None:
+        p = surface.isocurve(u=u0)
+        profile = p.knots, p.control_points, p.weights
+    return (c.knots, c.control_points, c.weights), profile
+
+
+def revolution_of(surface, umap, vmap, scale):
+    """``(r, u, v, X)``: the :class:`Revolution` ``r`` of ``surface`` (rational biquadratic) whose
+    circles (:func:`revolution_nets`) have the maps ``umap`` and ``vmap`` (:class:`.arcs.CircleMap`
+    or None), and its closed form's points ``X`` ``(n, 3)`` at a grid of parameters ``u, v``
+    ``(n,)``, which the caller checks against the surface's own evaluator (for several faces in
+    one batch); None when it is not one with ``rho >= 0`` on its domain."""
+    if umap is None or vmap is None:
         return None
+    (u0, u1), (v0, v1) = surface.domain
     c, pc = umap.circle, vmap.circle
     r = Revolution()
     r.umap, r.vmap = umap, vmap
