@@ -17,7 +17,7 @@ import numpy as np
 
 from ..curves import NurbsCurve
 
-__all__ = ["Circle", "CircleMap", "Circles", "circle_param", "fit_circle", "fit_circles", "is_segment", "segments"]
+__all__ = ["Circle", "CircleMap", "CircleMaps", "Circles", "fit_circle", "fit_circles", "segments"]
 
 REL = 1e-10
 """Relative agreement (of the radius, or of the model size) required to call samples a circle
@@ -116,11 +116,6 @@ def segments(X, scale):
     t = _dot(X - a, ab) / np.where(long, L2, 1.0)[:, None]
     off = np.linalg.norm(X - a - t[..., None] * ab, axis=2)
     return long & (off.max(axis=1) <= REL * scale) & (np.diff(t, axis=1) > 0).all(axis=1)
-
-
-def is_segment(X, scale) -> bool:
-    """:func:`segments` of one curve's samples ``X`` ``(k, 3)``."""
-    return bool(segments(X[None], scale)[0])
 
 
 class CircleMap:
@@ -268,16 +263,6 @@ class CircleMap:
         s = 0.5 * (np.tan((theta - self.start[k] - self.half[k]) / 2.0) / self.t_half[k] + 1.0)
         x = self.lam[k] * s / ((1.0 - s) + self.lam[k] * s)
         return self.lo[k] + x * (self.hi[k] - self.lo[k])
-
-
-def circle_param(cmap, theta):
-    """Parameters of the :class:`CircleMap` ``cmap`` at angles ``theta`` (in its circle's frame,
-    any branch): the angle is taken into ``[0, sweep]`` (an arc's far side is split halfway)."""
-    sweep = float(cmap.circle.sweep)
-    th = np.mod(theta, 2.0 * np.pi)
-    if sweep < 2.0 * np.pi - 1e-12:
-        th = np.where(th > 0.5 * (sweep + 2.0 * np.pi), th - 2.0 * np.pi, th)
-    return cmap.param(th)
 
 
 class CircleMaps:

@@ -27,10 +27,10 @@ import mapbox_earcut as earcut
 import numpy as np
 
 from ..tolerances import WELD
-from .arcs import REL, CircleMap, CircleMaps, circle_param, fit_circles, segments
+from .arcs import REL, CircleMap, CircleMaps, _dot, fit_circles, segments
 from .latitude import latitude_plan
 from .plan_checks import loops_valid
-from .revolution import revolution_nets, revolution_of
+from .revolution import Revolutions, revolution_nets, revolution_of
 from .welding import close_pairs, components
 
 __all__ = ["FastPlan", "build_plan", "planar_triangles"]
@@ -261,29 +261,42 @@ def build_plan(prep):
     # every use's (u, v) map, checked on its group's samples against its surface
     samples = X[use_group]  # (U, SAMPLES, 3)
     samples = np.where(use_flip[:, None, None], samples[:, ::-1], samples)
-    arc_cyl = np.zeros((U, 2))  # per cylinder arc use: (offset, sense) of its angles in the face's circle
-    is_cyl_arc = (kind[use_face] == CYLINDER) & (arc_of[use_group] >= 0)
-    for i in np.flatnonzero(is_cyl_arc):
-        cm = cyl[int(use_face[i])].cmap
-        a = arcs[arc_of[use_group[i]]]
-        th = cm.circle.angles(a.points(np.array([0.0, 0.25 * a.sweep])))
-        sense = 1.0 if np.mod(th[1] - th[0], 2 * np.pi) < np.pi else -1.0
-        arc_cyl[i] = th[0], sense
-    plan.use_arc_cyl = arc_cyl
     pred = np.empty((U, SAMPLES, 2))
     pred[:] = np.einsum("uij,usj->usi", plan.A[use_face], samples) + plan.b[use_face][:, None]
-    for i in np.flatnonzero(kind[use_face] == CYLINDER):
-        if arc_of[use_group[i]] < 0:
-            pred[i] = np.linspace(use_uv0[i], use_uv1[i], SAMPLES)  # a ruling: iso-u, v affine along it
-            continue
-        g = use_group[i]
-        theta = np.unwrap(arcs[arc_of[g]].angles(X[g]))
-        theta = (theta - theta[0])[::-1] if use_flip[i] else theta - theta[0]
-        pred[i, :, 0] = circle_param(cyl[int(use_face[i])].cmap, arc_cyl[i, 0] + arc_cyl[i, 1] * theta)
-        pred[i, :, 1] = use_uv0[i, 1]
-        pred[i, 0], pred[i, -1] = use_uv0[i], use_uv1[i]
-    for i in np.flatnonzero(kind[use_face] == REVOLUTION):
-        pred[i] = rev[int(use_face[i])].uv_of(samples[i], use_uv0[i], use_uv1[i], arc_of[use_group[i]] >= 0)
+    # cylinders: per arc use (offset, sense) of its angles in the face's circle; its samples'
+    # (u, v) through the face's circle map; a ruling runs iso-u, v affine along it
+    plan.use_arc_cyl = arc_cyl = np.zeros((U, 2))
+    slots = sorted(cyl)
+    plan.maps = CircleMaps([cyl[f].cmap for f in slots]) if slots else None
+    slot_of_face = np.full(F, -1, dtype=np.int64)
+    slot_of_face[slots] = np.arange(len(slots))
+    cu = np.flatnonzero((kind[use_face] == CYLINDER) & (arc_of[use_group] >= 0))
+    if cu.size:
+        a, q = arc_of[use_group[cu]], slot_of_face[use_face[cu]]
+        cc = np.array([cyl[f].cmap.circle.centre for f in slots])[q]
+        ce1 = np.array([cyl[f].cmap.circle.e1 for f in slots])[q]
+        ce2 = np.array([cyl[f].cmap.circle.e2 for f in slots])[q]
+        # the arc's points at its start and a quarter of its sweep, as angles in the cylinder's circle
+        ang = np.column_stack([np.zeros(cu.size), 0.25 * plan.arc_sweep[a]])
+        d = plan.arc_c[a][:, None] + plan.arc_r[a][:, None, None] * (np.cos(ang)[..., None] * plan.arc_e1[a][:, None]
+                                                                   + np.sin(ang)[..., None] * plan.arc_e2[a][:, None]) - cc[:, None]  # fmt: skip
+        th = np.mod(np.arctan2(_dot(d, ce2[:, None]), _dot(d, ce1[:, None])), 2 * np.pi)
+        arc_cyl[cu, 0] = th[:, 0]
+        arc_cyl[cu, 1] = np.where(np.mod(th[:, 1] - th[:, 0], 2 * np.pi) < np.pi, 1.0, -1.0)
+        d = X[use_group[cu]] - plan.arc_c[a][:, None]
+        theta = np.unwrap(np.mod(np.arctan2(_dot(d, plan.arc_e2[a][:, None]), _dot(d, plan.arc_e1[a][:, None])), 2 * np.pi), axis=1)
+        theta -= theta[:, :1]
+        theta = np.where(use_flip[cu][:, None], theta[:, ::-1], theta)
+        pred[cu, :, 0] = plan.maps.param(np.repeat(q, SAMPLES), (arc_cyl[cu, :1] + arc_cyl[cu, 1:] * theta).ravel()).reshape(-1, SAMPLES)
+        pred[cu, :, 1] = use_uv0[cu, 1:]
+        pred[cu, 0], pred[cu, -1] = use_uv0[cu], use_uv1[cu]
+    ru = np.flatnonzero((kind[use_face] == CYLINDER) & (arc_of[use_group] < 0))
+    pred[ru] = np.linspace(use_uv0[ru], use_uv1[ru], SAMPLES, axis=1)
+    revs = Revolutions([rev[f] for f in sorted(rev)]) if rev else None
+    vu = np.flatnonzero(kind[use_face] == REVOLUTION)
+    if vu.size:
+        rq = np.searchsorted(np.array(sorted(rev)), use_face[vu])
+        pred[vu] = revs.uv_of(rq, samples[vu], use_uv0[vu], use_uv1[vu], arc_of[use_group[vu]] >= 0)
     back = prep.batch.evaluate(np.repeat(use_face, SAMPLES), pred[..., 0].ravel(), pred[..., 1].ravel())
     # (a sloppy file's edges off their faces take the general path, which allows for that)
     map_error = float(np.linalg.norm(back.reshape(U, SAMPLES, 3) - samples, axis=2).max())
@@ -291,7 +304,7 @@ def build_plan(prep):
         return None
     if not _cylinder_loops(plan, prep, use_uv0, use_uv1):
         return None
-    plan.lat = latitude_plan(plan, prep.table.loop, rev, pole_group, use_uv0, use_uv1, size) if rev else None
+    plan.lat = latitude_plan(plan, prep.table.loop, rev, revs, pole_group, use_uv0, use_uv1, size) if rev else None
     if rev and plan.lat is None:
         return None
     plan.map_error = map_error
@@ -354,7 +367,6 @@ def _derive(plan):
             on = arcs >= 0
             np.maximum.at(plan.arc_factor, arcs[on], half * np.sqrt(1.0 + (1.02 * kappa[on]) ** 2))
     if slots:
-        plan.maps = CircleMaps([plan.cyl[f].cmap for f in slots])
         on = plan.au_slot >= 0
         np.maximum.at(plan.arc_factor, plan.au_arc[on], np.sqrt(1.0 + (1.02 * plan.maps.kappa[plan.au_slot[on]]) ** 2))
         plan.slot_centre = np.array([plan.cyl[f].cmap.circle.centre for f in slots])
