@@ -227,14 +227,14 @@ class _Prepared:
     the groups of uses that are one edge, their loops' indices, which faces are affine and the
     tolerance-independent memo of the edge sampler and the grids."""
 
-    __slots__ = ("faces", "size", "batch", "bounds", "edge_tol", "uses", "pcurves", "groups", "table", "affine",
+    __slots__ = ("faces", "size", "batch", "_bounds", "edge_tol", "uses", "pcurves", "groups", "table", "affine",
                  "partials", "reversed", "memo", "index", "natural", "rest")
 
     def __init__(self, faces, size, index=None):
         self.faces, self.size = tuple(faces), size
         self.index = np.arange(len(faces)) if index is None else index  # the faces' numbers in messages
         self.batch = SurfaceBatch([face.surface for face in faces])
-        self.bounds = [second_derivative_bounds(cs) for cs in self.batch.cellsets]
+        self._bounds = None  # the general path's second-derivative bounds: on first use (:attr:`bounds`)
         self.edge_tol = max((e.tolerance for face in faces for e in face.edges), default=0.0)
         self.uses = edge_uses(faces)
         self.pcurves = CurveBatch([u.edge.pcurve for u in self.uses])
@@ -257,6 +257,14 @@ class _Prepared:
             if not natural.all():
                 k = np.flatnonzero(~natural)
                 self.rest = _Prepared([faces[i] for i in k], size, k)
+
+    @property
+    def bounds(self):
+        """Per face the second-derivative bounds of its Bézier cells (the general path's grids;
+        the fast path never needs them)."""
+        if self._bounds is None:
+            self._bounds = [second_derivative_bounds(cs) for cs in self.batch.cellsets]
+        return self._bounds
 
     @classmethod
     def of(cls, faces, size):
