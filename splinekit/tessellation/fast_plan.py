@@ -216,7 +216,23 @@ def build_plan(prep):
     r = np.linspace(0.0, 1.0, SAMPLES)
     t = (pdom[rep, :1] + (pdom[rep, 1:] - pdom[rep, :1]) * r).ravel()
     uv = prep.pcurves.evaluate(np.repeat(rep, SAMPLES), t)
-    X = prep.batch.evaluate(np.repeat(use_face[rep], SAMPLES), uv[:, 0], uv[:, 1]).reshape(G, SAMPLES, 3)
+    # every face's point and partials at its domain's corner: an affine face (a plane) is
+    # S + (u - u0) Su + (v - v0) Sv exactly, so its points need no surface evaluator
+    corner = np.column_stack([[b[0] for b in prep.batch.bu], [b[0] for b in prep.batch.bv]])  # (F, 2)
+    S, Su, Sv = prep.batch.partials(np.arange(F), corner[:, 0], corner[:, 1])
+
+    def surface_points(f, uv):
+        out = np.empty((len(f), 3))
+        flat = prep.affine[f]
+        k = np.flatnonzero(flat)
+        fk, d = f[k], uv[k] - corner[f[k]]
+        out[k] = S[fk] + d[:, :1] * Su[fk] + d[:, 1:] * Sv[fk]
+        k = np.flatnonzero(~flat)
+        if k.size:
+            out[k] = prep.batch.evaluate(f[k], uv[k, 0], uv[k, 1])
+        return out
+
+    X = surface_points(np.repeat(use_face[rep], SAMPLES), uv).reshape(G, SAMPLES, 3)
     # every group a pole, a straight segment or a circle arc
     curved = np.flatnonzero(~pole_group & ~segments(X, size))
     fits = fit_circles(X[curved], size)
@@ -227,7 +243,7 @@ def build_plan(prep):
     arc_of[curved] = np.arange(curved.size)
     # each use's direction against its group's samples, and its (u, v) at its start
     third = prep.pcurves.evaluate(np.arange(U), pdom[:, 0] + (pdom[:, 1] - pdom[:, 0]) / 3.0)
-    Y = prep.batch.evaluate(use_face, third[:, 0], third[:, 1])
+    Y = surface_points(use_face, third)
     nearest = np.argmin(np.linalg.norm(X[use_group] - Y[:, None], axis=2), axis=1)
     use_flip = nearest > SAMPLES // 2
     use_uv0 = prep.pcurves.evaluate(np.arange(U), pdom[:, 0])
@@ -249,8 +265,6 @@ def build_plan(prep):
     plan.arc_closed = np.array([a.closed for a in arcs], dtype=bool)
     plan.arc_min = np.where(plan.arc_closed, 3, 1)  # a closed circle is at least a triangle
     # planes: (u, v) = A X + b, unit normal (outward), a point
-    corner = np.column_stack([[b[0] for b in prep.batch.bu], [b[0] for b in prep.batch.bv]])  # (F, 2)
-    S, Su, Sv = prep.batch.partials(np.arange(F), corner[:, 0], corner[:, 1])
     plan.A = np.linalg.pinv(np.stack([Su, Sv], axis=2))  # (F, 2, 3): (u, v) of a point of an affine face
     plan.b = corner - np.einsum("fij,fj->fi", plan.A, S)
     n = np.cross(Su, Sv)
@@ -297,7 +311,7 @@ def build_plan(prep):
     if vu.size:
         rq = np.searchsorted(np.array(sorted(rev)), use_face[vu])
         pred[vu] = revs.uv_of(rq, samples[vu], use_uv0[vu], use_uv1[vu], arc_of[use_group[vu]] >= 0)
-    back = prep.batch.evaluate(np.repeat(use_face, SAMPLES), pred[..., 0].ravel(), pred[..., 1].ravel())
+    back = surface_points(np.repeat(use_face, SAMPLES), pred.reshape(-1, 2))
     # (a sloppy file's edges off their faces take the general path, which allows for that)
     map_error = float(np.linalg.norm(back.reshape(U, SAMPLES, 3) - samples, axis=2).max())
     if map_error > 10.0 * REL * size:
