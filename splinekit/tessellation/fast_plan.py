@@ -46,31 +46,50 @@ the tolerance): a meridian sets the rows' spacing, which must leave room for the
 triangles on the filleted box and cylinder (1.6: +5%, 2.4: +1-5% at 1e-3 and 1e-4)."""
 
 
-def planar_triangles(uv, ring_ends):
-    """Triangles ``(t, 3)`` (indices into ``uv`` ``(n, 2)``, counter-clockwise) of the polygon
-    whose rings (outer first, then holes) end at ``ring_ends``, by ear clipping; None unless it
-    is a proper triangulation: every point used, ``n + 2 holes - 2`` triangles, their areas
-    summing to the polygon's (ear clipping drops collinear points and does not check that
-    holes lie inside)."""
-    T = earcut.triangulate_float64(uv, ring_ends.astype(np.uint32)).reshape(-1, 3).astype(np.int64)
-    n, holes = len(uv), len(ring_ends) - 1
-    if len(T) != n + 2 * holes - 2:
-        return None
-    a, b, c = uv[T[:, 0]], uv[T[:, 1]], uv[T[:, 2]]
+def planar_triangles(polygons):
+    """Triangles ``(t, 3)`` (counter-clockwise, indices into its own points) of each polygon
+    ``(uv (n, 2), ring_ends)`` (rings: outer first, then holes, ending at ``ring_ends``), by ear
+    clipping (one call per polygon, the checks for all at once); None unless every polygon gets
+    a proper triangulation: ``n + 2 holes - 2`` triangles, its outer ring counter-clockwise and
+    its holes clockwise, their areas summing to the polygon's (ear clipping drops collinear points
+    and does not check that holes lie inside)."""
+    Ts, offsets, base = [], [], 0
+    for uv, ring_ends in polygons:
+        T = earcut.triangulate_float64(uv, ring_ends.astype(np.uint32)).reshape(-1, 3).astype(np.int64)
+        if len(T) != len(uv) + 2 * (len(ring_ends) - 1) - 2:
+            return None
+        Ts.append(T)
+        offsets.append(base)
+        base += len(uv)
+    if not polygons:
+        return []
+    P = np.concatenate([uv for uv, _ in polygons])
+    count = np.array([len(T) for T in Ts])
+    poly = np.repeat(np.arange(len(Ts)), count)
+    T = np.concatenate(Ts) + np.repeat(offsets, count)[:, None]
+    a, b, c = P[T[:, 0]], P[T[:, 1]], P[T[:, 2]]
     area = (b[:, 0] - a[:, 0]) * (c[:, 1] - a[:, 1]) - (b[:, 1] - a[:, 1]) * (c[:, 0] - a[:, 0])
-    T = np.where((area < 0)[:, None], T[:, [0, 2, 1]], T)
-    nxt = np.arange(1, n + 1)
-    starts = np.concatenate([[0], ring_ends[:-1]])
-    nxt[ring_ends - 1] = starts
-    shoelace = uv[:, 0] * uv[nxt, 1] - uv[nxt, 0] * uv[:, 1]
-    ring = np.repeat(np.arange(len(ring_ends)), np.diff(np.concatenate([[0], ring_ends])))
-    signed = np.bincount(ring, shoelace, len(ring_ends))
+    T = np.where((area < 0)[:, None], T[:, [0, 2, 1]], T) - np.repeat(offsets, count)[:, None]
+    # the rings, polygon after polygon
+    ends = np.concatenate([e + o for (_, e), o in zip(polygons, offsets)])
+    nrings = np.array([len(e) for _, e in polygons])
+    starts = np.concatenate([[0], ends[:-1]])
+    nxt = np.arange(1, len(P) + 1)
+    nxt[ends - 1] = starts
+    shoelace = P[:, 0] * P[nxt, 1] - P[nxt, 0] * P[:, 1]
+    ring = np.repeat(np.arange(len(ends)), ends - starts)
+    signed = np.bincount(ring, shoelace, len(ends))
+    outer = np.zeros(len(ends), dtype=bool)
+    outer[np.cumsum(nrings) - nrings] = True
     # the outer ring counter-clockwise, the holes clockwise: the material on the loops' left
-    if not (signed[0] > 0 and (signed[1:] < 0).all()):
+    if not np.where(outer, signed > 0, signed < 0).all():
         return None
-    if abs(np.abs(area).sum() - signed.sum()) > 1e-9 * np.abs(signed).sum():
+    ring_poly = np.repeat(np.arange(len(Ts)), nrings)
+    total = np.bincount(ring_poly, signed, len(Ts))
+    scale = np.bincount(ring_poly, np.abs(signed), len(Ts))
+    if (np.abs(np.bincount(poly, np.abs(area), len(Ts)) - total) > 1e-9 * scale).any():
         return None
-    return T
+    return np.split(T, np.cumsum(count)[:-1])
 
 
 class _Cylinder:
@@ -326,22 +345,20 @@ def build_plan(prep):
     plan.checked = loops_valid(plan, prep.table, pred, use_uv0, use_uv1, kind[use_face] == PLANE, arc_of[use_group] >= 0)
     # straight-edged planes: triangulated once (indices into the face's loop points, which are
     # its uses' start corners at every tolerance)
-    fixed_T, fixed_face, plan.curved_planes, plan.face_loops = [], [], [], {}
+    fixed_face, polygons, plan.curved_planes, plan.face_loops = [], [], [], {}
     plan.loop_first = prep.table.first
-    for f in range(F):
-        if kind[f] != PLANE:
-            continue
+    for f in np.flatnonzero(kind == PLANE).tolist():
         plan.face_loops[f] = np.flatnonzero(prep.table.loop_face == f)
         mine = np.flatnonzero(use_face == f)
         if (arc_of[use_group[mine]] < 0).all():
-            ring_ends = np.cumsum(prep.table.count[plan.face_loops[f]])
-            T = planar_triangles(use_uv0[mine], ring_ends)
-            if T is None:
-                return None
-            fixed_T.append(T)
-            fixed_face.append(np.full(len(T), f))
+            polygons.append((use_uv0[mine], np.cumsum(prep.table.count[plan.face_loops[f]])))
+            fixed_face.append(f)
         else:
             plan.curved_planes.append((f, plan.face_loops[f]))
+    fixed_T = planar_triangles(polygons)
+    if fixed_T is None:
+        return None
+    fixed_face = [np.full(len(T), f) for f, T in zip(fixed_face, fixed_T)]
     plan.fixed_T = np.concatenate(fixed_T) if fixed_T else np.zeros((0, 3), dtype=np.int64)
     plan.fixed_face = np.concatenate(fixed_face) if fixed_face else np.zeros(0, dtype=np.int64)
     plan.cp_loops = np.concatenate([loops for _, loops in plan.curved_planes]) if plan.curved_planes else np.zeros(0, dtype=np.int64)
