@@ -679,7 +679,8 @@ def brep_main(args):
     from splinekit.interop.occ_brep import brep_to_shape
 
     header = ("| part | faces | tol / size | splinekit triangles | time | first-call time | tri/s | dev / tol | closed | "
-              "OCC deflection / tol | OCC triangles | OCC time | OCC tri/s | OCC dev / tol | tri/s ratio | triangle ratio | time ratio |")  # fmt: skip
+              "OCC deflection / tol | OCC triangles | OCC time | OCC tri/s | OCC dev / tol | tri/s ratio | triangle ratio | time ratio | "
+              "first-call ratio |")  # fmt: skip
     print(header)
     print("|" + "|".join(["---"] * (header.count("|") - 1)) + "|")
     for index, (name, obj) in enumerate(brep_parts(args.quick)):
@@ -733,15 +734,17 @@ def brep_main(args):
                 name, str(len(faces)), f"{rel:g}", fmt_int(mesh.n_faces), f"{t_sk * 1e3:.1f} ms", f"{t_cold * 1e3:.1f} ms", f"{rate_sk / 1e6:.3f} M",
                 f"{dev_sk / tol:.2f}", "yes" if mesh.is_closed else "no", f"{d / tol:.2f}", fmt_int(n_occ),
                 f"{t_occ * 1e3:.1f} ms", f"{rate_occ / 1e6:.3f} M", f"{dev_occ / tol:.2f}" + _above(dev_occ, dev_sk), f"{rate_sk / rate_occ:.2f}x",
-                f"{mesh.n_faces / n_occ:.2f}", f"{t_occ / t_sk:.2f}x",
+                f"{mesh.n_faces / n_occ:.2f}", f"{t_occ / t_sk:.2f}x", f"{t_occ / t_cold:.2f}x",
             ]) + " |", flush=True)  # fmt: skip
+    print(f"\nload average after the run: {os.getloadavg()[0]:.1f}")
     print(
         "\ndev / tol: the largest distance between the exact surface at the barycentric (u, v) of every "
         "triangle's centre and edge midpoints and the flat triangle's point (all triangles, both meshers, "
         "the same code); OCC's deflection is lowered until its deviation is at most splinekit's. "
         "triangle ratio: splinekit's triangles / OCC's; time ratio: OCC's time / splinekit's for the same "
         "measured deviation (repeated calls on the same solid: its tolerance-independent preparation is "
-        "cached on the faces; first-call time: that cache cleared before each call). OCC meshes each face with shared edge "
+        "cached on the faces; first-call time: that cache cleared before each call; first-call ratio: OCC's time / "
+        "splinekit's first-call time). OCC meshes each face with shared edge "
         "discretizations (one solid), serial."
     )
 
