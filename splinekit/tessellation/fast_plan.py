@@ -27,7 +27,7 @@ import mapbox_earcut as earcut
 import numpy as np
 
 from ..tolerances import WELD
-from .arcs import REL, CircleMap, CircleMaps, _dot, fit_circles, segments
+from .arcs import REL, CircleMap, CircleMaps, _cross, _dot, fit_circles, segments
 from .latitude import latitude_plan
 from .plan_checks import loops_valid
 from .revolution import Revolutions, revolution_nets, revolution_of
@@ -124,7 +124,7 @@ def _cylinder(surface, cmap, mid):
     P = np.asarray(surface.control_points)
     D = P[0, 1] - P[0, 0]
     axis = D / np.linalg.norm(D)
-    if np.linalg.norm(np.cross(axis, cmap.circle.normal)) > REL:
+    if np.linalg.norm(_cross(axis, cmap.circle.normal)) > REL:
         return None
     c = _Cylinder()
     c.cmap, c.axis = cmap, axis
@@ -132,7 +132,7 @@ def _cylinder(surface, cmap, mid):
     S, Su, Sv = mid
     radial = S - cmap.circle.centre
     radial -= (radial @ axis) * axis
-    c.sign = 1.0 if np.cross(Su, Sv) @ radial > 0 else -1.0
+    c.sign = 1.0 if _cross(Su, Sv) @ radial > 0 else -1.0
     return c
 
 
@@ -286,7 +286,7 @@ def build_plan(prep):
     # planes: (u, v) = A X + b, unit normal (outward), a point
     plan.A = np.linalg.pinv(np.stack([Su, Sv], axis=2))  # (F, 2, 3): (u, v) of a point of an affine face
     plan.b = corner - np.einsum("fij,fj->fi", plan.A, S)
-    n = np.cross(Su, Sv)
+    n = _cross(Su, Sv)
     length = np.linalg.norm(n, axis=1, keepdims=True)  # zero at a pole (a face of revolution: not used)
     plan.normal = n / np.where(length > 0, length, 1.0) * np.where(prep.reversed, -1.0, 1.0)[:, None]
     plan.origin = S
@@ -451,29 +451,46 @@ def _cylinder_loops(plan, prep, uv0, uv1) -> bool:
     """Whether every cylinder face has one loop that is a rectangle in ``(u, v)``: circle arcs
     along ``v = v_lo`` (u increasing, the bottom), a ruling at ``u = u_hi``, arcs along
     ``v = v_hi`` (u decreasing, the top) and a ruling at ``u = u_lo``. Keeps per face the loop's
-    uses rotated to start at the bottom: ``cyl_faces[f] = (uses, n_bottom)``."""
+    uses rotated to start at the bottom: ``cyl_faces[f] = (uses, n_bottom)``. All cylinders at
+    once (their uses are consecutive, face after face)."""
     plan.cyl_faces = {}
-    for f in plan.cyl:
-        mine = np.flatnonzero(plan.use_face == f)
-        if (prep.table.loop[mine] != 0).any():
-            return False
-        a, b = uv0[mine], uv1[mine]
-        lo, hi = np.minimum(a, b).min(axis=0), np.maximum(a, b).max(axis=0)
-        eps = 1e-9 * (hi - lo)
-        arc = plan.arc_of[plan.use_group[mine]] >= 0
-        bottom = arc & (np.abs(a[:, 1] - lo[1]) <= eps[1]) & (np.abs(b[:, 1] - lo[1]) <= eps[1]) & (b[:, 0] > a[:, 0])
-        top = arc & (np.abs(a[:, 1] - hi[1]) <= eps[1]) & (np.abs(b[:, 1] - hi[1]) <= eps[1]) & (b[:, 0] < a[:, 0])
-        right = ~arc & (np.abs(a[:, 0] - hi[0]) <= eps[0]) & (np.abs(b[:, 0] - hi[0]) <= eps[0]) & (b[:, 1] > a[:, 1])
-        left = ~arc & (np.abs(a[:, 0] - lo[0]) <= eps[0]) & (np.abs(b[:, 0] - lo[0]) <= eps[0]) & (b[:, 1] < a[:, 1])
-        label = np.select([bottom, right, top, left], [0, 1, 2, 3], -1)
-        if (label < 0).any() or (label == 1).sum() != 1 or (label == 3).sum() != 1:
-            return False
-        start = int(np.flatnonzero(label == 1)[0])
-        start = (start - int((label == 0).sum())) % len(mine)
-        order = np.roll(mine, -start)
-        lab = label[np.roll(np.arange(len(mine)), -start)]
-        nb, nt = int((lab == 0).sum()), int((lab == 2).sum())
-        if not (lab == np.repeat([0, 1, 2, 3], [nb, 1, nt, 1])).all():
-            return False
-        plan.cyl_faces[f] = (order, nb)
+    faces = np.array(sorted(plan.cyl), dtype=np.int64)
+    if faces.size == 0:
+        return True
+    on = np.isin(plan.use_face, faces)
+    use = np.flatnonzero(on)
+    if (prep.table.loop[use] != 0).any():
+        return False
+    fu = plan.use_face[use]
+    first = np.flatnonzero(np.concatenate([[True], fu[1:] != fu[:-1]]))
+    n = np.diff(np.append(first, use.size))
+    block = np.repeat(np.arange(first.size), n)
+    a, b = uv0[use], uv1[use]
+    lo = np.minimum.reduceat(np.minimum(a, b), first)[block]
+    hi = np.maximum.reduceat(np.maximum(a, b), first)[block]
+    eps = 1e-9 * (hi - lo)
+    arc = plan.arc_of[plan.use_group[use]] >= 0
+
+    def at(c, d):
+        return (np.abs(a[:, d] - c[:, d]) <= eps[:, d]) & (np.abs(b[:, d] - c[:, d]) <= eps[:, d])
+
+    bottom = arc & at(lo, 1) & (b[:, 0] > a[:, 0])
+    top = arc & at(hi, 1) & (b[:, 0] < a[:, 0])
+    right = ~arc & at(hi, 0) & (b[:, 1] > a[:, 1])
+    left = ~arc & at(lo, 0) & (b[:, 1] < a[:, 1])
+    label = np.select([bottom, right, top, left], [0, 1, 2, 3], -1)
+    count = np.stack([np.bincount(block, label == k, first.size) for k in range(4)], axis=1)
+    if (label < 0).any() or (count[:, 1] != 1).any() or (count[:, 3] != 1).any():
+        return False
+    # each loop rotated to start at its bottom: the bottoms, the right ruling, the tops, the left ruling
+    nb, nt = count[:, 0].astype(np.int64), count[:, 2].astype(np.int64)
+    start = (np.flatnonzero(label == 1) - first - nb) % n
+    j = np.arange(use.size) - first[block]
+    order = first[block] + (start[block] + j) % n[block]
+    lab = label[order]
+    want = np.where(j < nb[block], 0, np.where(j == nb[block], 1, np.where(j <= nb[block] + nt[block], 2, 3)))
+    if (lab != want).any():
+        return False
+    for k, f in enumerate(faces.tolist()):
+        plan.cyl_faces[f] = (use[order[first[k] : first[k] + n[k]]], int(nb[k]))
     return True
