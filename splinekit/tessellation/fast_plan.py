@@ -18,7 +18,10 @@ no interior points and no measuring rounds:
 the tessellator's per-face-set preparation) and returns None for any other: those go through
 the general path (:mod:`.trimmed`) whole. Everything the plan claims is checked against the
 faces' own evaluators when it is built (the edges' samples against the recognised lines and
-circles, every use's ``(u, v)`` map against its surface).
+circles, every use's ``(u, v)`` map against its surface), and its loops are checked as the
+general path would check them (closed, oriented, not crossing, nested right: :mod:`.plan_checks`),
+so a first call needs no general-path mesh. The recognition runs over all faces and edges at once
+(circle fits, circle maps, the uses' ``(u, v)`` maps), not one object at a time.
 """
 
 from __future__ import annotations

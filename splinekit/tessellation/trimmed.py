@@ -6,7 +6,9 @@ of planes, right circular cylinders and sphere or torus pieces bounded by parall
 and poles, with straight segments and circle arcs for edges (boxes, plates with holes, chamfered
 blocks, cylinders, filleted boxes and cylinders: most machined parts) take a fast path
 (:mod:`.fast_plan`, :mod:`.fast_mesh`, :mod:`.latitude`): a tolerance-independent plan, built once
-per face set after the general path below has checked it on the first call, and per call only
+per face set on its first call with its loops checked on their exact shapes (:mod:`.plan_checks`;
+loops it does not accept go through the general path below first, which raises on bad ones),
+and per call only
 the circles' counts in closed form, ear clipping of the planes' boundary polygons, strips on the
 cylinders and latitude strips on the spheres and tori, with the same guarantees and the same
 ``max_deviation`` yardstick. Every other face
