@@ -15,7 +15,9 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["Circle", "CircleMap", "circle_param", "fit_circle", "is_segment"]
+from ..curves import NurbsCurve
+
+__all__ = ["Circle", "CircleMap", "CircleMaps", "Circles", "fit_circle", "fit_circles", "segments"]
 
 REL = 1e-10
 """Relative agreement (of the radius, or of the model size) required to call samples a circle
@@ -41,60 +43,79 @@ class Circle:
 
 
 def _cross(a, b):
-    """``a x b`` of two ``(3,)`` vectors (``np.cross`` costs ~10 us of axis handling per call)."""
-    return np.array([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]])
+    """``a x b`` of ``(..., 3)`` vectors (``np.cross`` costs ~10 us of axis handling per call)."""
+    a0, a1, a2 = a[..., 0], a[..., 1], a[..., 2]
+    b0, b1, b2 = b[..., 0], b[..., 1], b[..., 2]
+    return np.stack([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0], axis=-1)
 
 
-def _circumcentre(a, b, c):
+def _dot(a, b):
+    return (a * b).sum(axis=-1)
+
+
+class Circles:
+    """Several fitted circle arcs as arrays (see :func:`fit_circles`): per curve ``ok`` (a circle
+    arc), and for those ``centre``, ``radius``, ``e1``, ``e2``, ``normal``, ``sweep``, ``closed``."""
+
+    __slots__ = ("ok", "centre", "radius", "e1", "e2", "normal", "sweep", "closed")
+
+    def circle(self, i) -> Circle:
+        """Curve ``i``'s :class:`Circle`."""
+        out = Circle()
+        out.centre, out.radius, out.e1, out.e2 = self.centre[i], float(self.radius[i]), self.e1[i], self.e2[i]
+        out.normal, out.sweep, out.closed = self.normal[i], float(self.sweep[i]), bool(self.closed[i])
+        return out
+
+
+def fit_circles(X, scale) -> Circles:
+    """The circle arcs through the samples ``X`` ``(n, k, 3)`` of ``n`` curves (in order along
+    each curve, ``k >= 7``, uniform in the curve's parameter): curve ``i`` is one (``ok[i]``) if
+    every sample lies on one circle within ``REL * max(radius, scale)`` and the angle grows
+    monotonically. Conics (rational quadratic pieces) with five points on a circle are that
+    circle, so enough samples per piece make this exact for the curves the tessellator meets.
+    The circle through the first sample and those at a third and two thirds; angle 0 at the
+    first sample."""
+    k = X.shape[1]
+    a, b, c = X[:, 0], X[:, k // 3], X[:, (2 * k) // 3]
     u, v = b - a, c - a
     n = _cross(u, v)
-    nn = float(n @ n)
-    if not nn > 0:
-        return None, None
-    return a + (_cross(n, u) * (v @ v) + _cross(v, n) * (u @ u)) / (2.0 * nn), n
-
-
-def fit_circle(X, scale) -> Circle | None:
-    """The circle arc through the samples ``X`` ``(k, 3)`` (in order along the curve, ``k >= 7``,
-    uniform in the curve's parameter) if every sample lies on one circle within
-    ``REL * max(radius, scale)`` and the angle grows monotonically, else None. Conics (rational
-    quadratic pieces) with five points on a circle are that circle, so enough samples per piece
-    make this exact for the curves the tessellator meets."""
-    k = len(X)
-    c, n = _circumcentre(X[0], X[k // 3], X[(2 * k) // 3])
-    if c is None:
-        return None
-    r = float(np.linalg.norm(X[0] - c))
-    eps = REL * max(r, scale)
-    d = X - c
-    normal = n / np.linalg.norm(n)
-    if np.abs(np.linalg.norm(d, axis=1) - r).max() > eps or np.abs(d @ normal).max() > eps:
-        return None
-    out = Circle()
-    out.centre, out.radius, out.normal = c, r, normal
-    out.e1 = d[0] / r
-    out.e2 = _cross(normal, out.e1)
-    theta = np.unwrap(np.arctan2(d @ out.e2, d @ out.e1))
-    step = np.diff(theta)
-    if not (step > 0).all() or step.max() >= np.pi / 2:
-        return None
-    out.closed = bool(np.linalg.norm(X[-1] - X[0]) <= eps)
-    out.sweep = 2.0 * np.pi if out.closed else float(theta[-1] - theta[0])
-    if out.sweep > 2.0 * np.pi + 1e-9:
-        return None
+    nn = _dot(n, n)
+    good = nn > 0
+    nn = np.where(good, nn, 1.0)
+    out = Circles()
+    centre = out.centre = a + (_cross(n, u) * _dot(v, v)[:, None] + _cross(v, n) * _dot(u, u)[:, None]) / (2.0 * nn)[:, None]
+    d = X - centre[:, None]
+    r = out.radius = np.linalg.norm(d[:, 0], axis=1)
+    eps = REL * np.maximum(r, scale)
+    normal = out.normal = n / np.sqrt(nn)[:, None]
+    on = (np.abs(np.linalg.norm(d, axis=2) - r[:, None]).max(axis=1) <= eps) & (np.abs(_dot(d, normal[:, None])).max(axis=1) <= eps)
+    e1 = out.e1 = d[:, 0] / np.where(r > 0, r, 1.0)[:, None]
+    e2 = out.e2 = _cross(normal, e1)
+    theta = np.unwrap(np.arctan2(_dot(d, e2[:, None]), _dot(d, e1[:, None])), axis=1)
+    step = np.diff(theta, axis=1)
+    closed = out.closed = np.linalg.norm(X[:, -1] - X[:, 0], axis=1) <= eps
+    out.sweep = np.where(closed, 2.0 * np.pi, theta[:, -1] - theta[:, 0])
+    out.ok = good & on & (step > 0).all(axis=1) & (step.max(axis=1) < np.pi / 2) & (out.sweep <= 2.0 * np.pi + 1e-9)
     return out
 
 
-def is_segment(X, scale) -> bool:
-    """Whether the samples ``X`` ``(k, 3)`` lie on the straight segment between the first and
-    the last (within ``REL * scale``), in order, with distinct ends."""
-    a, b = X[0], X[-1]
-    L = float(np.linalg.norm(b - a))
-    if not L > REL * scale:
-        return False
-    t = (X - a) @ (b - a) / (L * L)
-    off = np.linalg.norm(X - a - t[:, None] * (b - a), axis=1)
-    return bool(off.max() <= REL * scale and (np.diff(t) > 0).all())
+def fit_circle(X, scale) -> Circle | None:
+    """The :class:`Circle` through the samples ``X`` ``(k, 3)`` of one curve, or None (see
+    :func:`fit_circles`)."""
+    c = fit_circles(X[None], scale)
+    return c.circle(0) if c.ok[0] else None
+
+
+def segments(X, scale):
+    """``(n,)`` bool: whether the samples ``X`` ``(n, k, 3)`` of each curve lie on the straight
+    segment between its first and last (within ``REL * scale``), in order, with distinct ends."""
+    a, b = X[:, :1], X[:, -1:]
+    ab = b - a
+    L2 = _dot(ab, ab)[:, 0]
+    long = np.sqrt(L2) > REL * scale
+    t = _dot(X - a, ab) / np.where(long, L2, 1.0)[:, None]
+    off = np.linalg.norm(X - a - t[..., None] * ab, axis=2)
+    return long & (off.max(axis=1) <= REL * scale) & (np.diff(t, axis=1) > 0).all(axis=1)
 
 
 class CircleMap:
@@ -113,20 +134,38 @@ class CircleMap:
         or None if it is not a circle arc in this exact sense."""
         if curve.degree != 2 or curve.weights is None:
             return None
-        breaks, mult = np.unique(np.asarray(curve.knots, dtype=np.float64), return_counts=True)
+        return cls.of_net(curve.knots, curve.control_points, curve.weights, scale, curve)
+
+    @classmethod
+    def of_net(cls, knots, P, W, scale, curve=None):
+        """:meth:`of` the rational quadratic curve with ``knots``, control points ``P`` ``(n, 3)``
+        and weights ``W`` ``(n,)`` (``curve``: that curve, if at hand; built only when its joints
+        are not of multiplicity 2)."""
+        breaks, mult = np.unique(np.asarray(knots, dtype=np.float64), return_counts=True)
         if mult[0] == 3 and mult[-1] == 3 and (mult[1:-1] == 2).all():
             # joints of multiplicity 2 (circles as CAD systems write them): the pieces' control
-            # points are the curve's, three at a time
+            # points are the curve's, three at a time, and the curve is evaluated piece by piece
             idx = 2 * np.arange(len(breaks) - 1)[:, None] + np.arange(3)
-            P, W = np.asarray(curve.control_points)[idx], np.asarray(curve.weights)[idx]  # (k, 3, 3), (k, 3)
+            P, W = np.asarray(P, dtype=np.float64)[idx], np.asarray(W, dtype=np.float64)[idx]  # (k, 3, 3), (k, 3)
+            if (W <= 0).any():
+                return None
+            lo, hi = breaks[0], breaks[-1]
+            t = np.linspace(lo, hi, 8 * len(P) + 1)
+            j = np.clip(np.searchsorted(breaks, t, side="right") - 1, 0, len(P) - 1)
+            x = ((t - breaks[j]) / (breaks[j + 1] - breaks[j]))[:, None]
+            B = np.concatenate([(1.0 - x) ** 2, 2.0 * x * (1.0 - x), x * x], axis=1) * W[j]  # (m, 3)
+            X = np.einsum("mi,mid->md", B, P[j]) / B.sum(axis=1, keepdims=True)
         else:
+            if curve is None:
+                curve = NurbsCurve(2, knots, P, W)
             pieces = curve.to_bezier()
             if len(breaks) != len(pieces) + 1:
                 return None
             P = np.array([p.control_points for p in pieces])
             W = np.array([p.weights for p in pieces])
-        lo, hi = curve.domain
-        X = curve.evaluate(np.linspace(lo, hi, 8 * len(P) + 1))
+            lo, hi = curve.domain
+            t = np.linspace(lo, hi, 8 * len(P) + 1)
+            X = curve.evaluate(t)
         circle = fit_circle(X, scale)
         if circle is None:
             return None
@@ -142,11 +181,69 @@ class CircleMap:
         m.start -= m.start[0]
         m.lam = np.sqrt(W[:, 0] / W[:, 2])
         m.t_half = np.tan(m.half / 2.0)
-        # checked against the evaluator: the map's angles at the samples' parameters
-        t = np.linspace(lo, hi, 8 * len(P) + 1)
+        # checked against the curve's points: the map's angles at the samples' parameters
         if np.abs(circle.points(m.angle(t)) - X).max() > REL * max(circle.radius, scale):
             return None
         return m
+
+    @classmethod
+    def batch(cls, nets, scale):
+        """``[CircleMap or None]``: :meth:`of_net` of every ``(knots, P, W)`` in ``nets``, those
+        with joints of multiplicity 2 and the same number of pieces in one vectorised pass
+        (the same samples, fit and check as :meth:`of_net`), any other one by one."""
+        out = [None] * len(nets)
+        shapes: dict = {}
+        for i, (knots, P, W) in enumerate(nets):
+            n = len(knots)
+            if n % 2 == 0 and n >= 6 and len(P) == n - 3 and np.ndim(W) == 1:
+                shapes.setdefault(n, []).append(i)
+            else:
+                out[i] = cls.of_net(knots, P, W, scale)
+        for n, members in shapes.items():
+            K = (n - 4) // 2  # pieces
+            kn = np.array([nets[i][0] for i in members], dtype=np.float64)  # (m, 2K + 4)
+            inner = kn[:, 3:-3]
+            breaks = np.concatenate([kn[:, 2:3], inner[:, ::2], kn[:, -3:-2]], axis=1)  # (m, K + 1)
+            regular = ((kn[:, 0] == kn[:, 2]) & (kn[:, -1] == kn[:, -3]) & (inner[:, ::2] == inner[:, 1::2]).all(axis=1)
+                       & (np.diff(breaks, axis=1) > 0).all(axis=1))  # fmt: skip
+            idx = 2 * np.arange(K)[:, None] + np.arange(3)
+            P = np.array([nets[i][1] for i in members], dtype=np.float64)[:, idx]  # (m, K, 3, 3)
+            W = np.array([nets[i][2] for i in members], dtype=np.float64)[:, idx]  # (m, K, 3)
+            regular &= (W > 0).all(axis=(1, 2))
+            for k in np.flatnonzero(~regular):
+                out[members[k]] = cls.of_net(*nets[members[k]], scale)
+            if not regular.any():
+                continue
+            sel = np.flatnonzero(regular)
+            members, breaks, P, W = [members[k] for k in sel], breaks[sel], P[sel], W[sel]
+            m = len(members)
+            t = np.linspace(breaks[:, 0], breaks[:, -1], 8 * K + 1, axis=1)  # (m, 8K + 1)
+            rows = np.arange(m)[:, None]
+            j = (breaks[:, None, 1:K] <= t[:, :, None]).sum(axis=2)  # the piece of each sample
+            x = (t - breaks[rows, j]) / (breaks[rows, j + 1] - breaks[rows, j])
+            B = np.stack([(1.0 - x) ** 2, 2.0 * x * (1.0 - x), x * x], axis=2) * W[rows, j]  # (m, s, 3)
+            X = np.einsum("msi,msid->msd", B, P[rows, j]) / B.sum(axis=2)[..., None]
+            fits = fit_circles(X, scale)
+            cos_half = W[:, :, 1] / np.sqrt(W[:, :, 0] * W[:, :, 2])
+            ok = fits.ok & ((cos_half > 0) & (cos_half < 1)).all(axis=1)
+            half = np.arccos(np.clip(cos_half, -1.0, 1.0))
+            d = P[:, :, 0] - fits.centre[:, None]
+            start = np.unwrap(np.mod(np.arctan2(_dot(d, fits.e2[:, None]), _dot(d, fits.e1[:, None])), 2.0 * np.pi), axis=1)
+            start -= start[:, :1]
+            lam = np.sqrt(W[:, :, 0] / W[:, :, 2])
+            t_half = np.tan(half / 2.0)
+            # checked against the curves' points: the maps' angles at the samples' parameters (as :meth:`angle`)
+            k = np.minimum((breaks[:, None, 1:] < t[:, :, None]).sum(axis=2), K - 1)
+            x = (t - breaks[rows, k]) / (breaks[rows, k + 1] - breaks[rows, k])
+            s_ = x / (x + lam[rows, k] * (1.0 - x))
+            theta = start[rows, k] + half[rows, k] + 2.0 * np.arctan(t_half[rows, k] * (2.0 * s_ - 1.0))
+            Y = fits.centre[:, None] + fits.radius[:, None, None] * (np.cos(theta)[..., None] * fits.e1[:, None] + np.sin(theta)[..., None] * fits.e2[:, None])
+            ok &= np.abs(Y - X).max(axis=(1, 2)) <= REL * np.maximum(fits.radius, scale)
+            for q in np.flatnonzero(ok):
+                cm = out[members[q]] = cls()
+                cm.circle, cm.lo, cm.hi = fits.circle(q), breaks[q, :-1], breaks[q, 1:]
+                cm.half, cm.start, cm.lam, cm.t_half = half[q], start[q], lam[q], t_half[q]
+        return out
 
     def _piece(self, t):
         return np.clip(np.searchsorted(self.hi, t, side="left"), 0, len(self.hi) - 1)
@@ -166,16 +263,6 @@ class CircleMap:
         s = 0.5 * (np.tan((theta - self.start[k] - self.half[k]) / 2.0) / self.t_half[k] + 1.0)
         x = self.lam[k] * s / ((1.0 - s) + self.lam[k] * s)
         return self.lo[k] + x * (self.hi[k] - self.lo[k])
-
-
-def circle_param(cmap, theta):
-    """Parameters of the :class:`CircleMap` ``cmap`` at angles ``theta`` (in its circle's frame,
-    any branch): the angle is taken into ``[0, sweep]`` (an arc's far side is split halfway)."""
-    sweep = float(cmap.circle.sweep)
-    th = np.mod(theta, 2.0 * np.pi)
-    if sweep < 2.0 * np.pi - 1e-12:
-        th = np.where(th > 0.5 * (sweep + 2.0 * np.pi), th - 2.0 * np.pi, th)
-    return cmap.param(th)
 
 
 class CircleMaps:

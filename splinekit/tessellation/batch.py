@@ -94,7 +94,11 @@ class CurveBatch:
         segs = [None] * len(curves)
         for (p, knots), members in by_knots.items():
             br, M = bezier_matrix(p, knots)
-            coefs = np.stack([_homogeneous(curves[i]) for i in members])  # (m, n, dim + 1)
+            if any(curves[i].is_rational for i in members):
+                coefs = np.stack([_homogeneous(curves[i]) for i in members])  # (m, n, dim + 1)
+            else:  # polynomial curves (most pcurves): unit weights appended once for all
+                P = np.stack([curves[i].control_points for i in members])
+                coefs = np.concatenate([P, np.ones(P.shape[:2] + (1,))], axis=2)
             S = np.einsum("sij,mjk->msik", M, coefs)
             for r, i in enumerate(members):
                 breaks[i], segs[i] = br, S[r]

@@ -18,7 +18,10 @@ no interior points and no measuring rounds:
 the tessellator's per-face-set preparation) and returns None for any other: those go through
 the general path (:mod:`.trimmed`) whole. Everything the plan claims is checked against the
 faces' own evaluators when it is built (the edges' samples against the recognised lines and
-circles, every use's ``(u, v)`` map against its surface).
+circles, every use's ``(u, v)`` map against its surface), and its loops are checked as the
+general path would check them (closed, oriented, not crossing, nested right: :mod:`.plan_checks`),
+so a first call needs no general-path mesh. The recognition runs over all faces and edges at once
+(circle fits, circle maps, the uses' ``(u, v)`` maps), not one object at a time.
 """
 
 from __future__ import annotations
@@ -27,9 +30,10 @@ import mapbox_earcut as earcut
 import numpy as np
 
 from ..tolerances import WELD
-from .arcs import REL, CircleMap, CircleMaps, circle_param, fit_circle, is_segment
+from .arcs import REL, CircleMap, CircleMaps, _cross, _dot, fit_circles, segments
 from .latitude import latitude_plan
-from .revolution import revolution_of
+from .plan_checks import loops_valid
+from .revolution import Revolutions, revolution_nets, revolution_of
 from .welding import close_pairs, components
 
 __all__ = ["FastPlan", "build_plan", "planar_triangles"]
@@ -45,31 +49,50 @@ the tolerance): a meridian sets the rows' spacing, which must leave room for the
 triangles on the filleted box and cylinder (1.6: +5%, 2.4: +1-5% at 1e-3 and 1e-4)."""
 
 
-def planar_triangles(uv, ring_ends):
-    """Triangles ``(t, 3)`` (indices into ``uv`` ``(n, 2)``, counter-clockwise) of the polygon
-    whose rings (outer first, then holes) end at ``ring_ends``, by ear clipping; None unless it
-    is a proper triangulation: every point used, ``n + 2 holes - 2`` triangles, their areas
-    summing to the polygon's (ear clipping drops collinear points and does not check that
-    holes lie inside)."""
-    T = earcut.triangulate_float64(uv, ring_ends.astype(np.uint32)).reshape(-1, 3).astype(np.int64)
-    n, holes = len(uv), len(ring_ends) - 1
-    if len(T) != n + 2 * holes - 2:
-        return None
-    a, b, c = uv[T[:, 0]], uv[T[:, 1]], uv[T[:, 2]]
+def planar_triangles(polygons):
+    """Triangles ``(t, 3)`` (counter-clockwise, indices into its own points) of each polygon
+    ``(uv (n, 2), ring_ends)`` (rings: outer first, then holes, ending at ``ring_ends``), by ear
+    clipping (one call per polygon, the checks for all at once); None unless every polygon gets
+    a proper triangulation: ``n + 2 holes - 2`` triangles, its outer ring counter-clockwise and
+    its holes clockwise, their areas summing to the polygon's (ear clipping drops collinear points
+    and does not check that holes lie inside)."""
+    Ts, offsets, base = [], [], 0
+    for uv, ring_ends in polygons:
+        T = earcut.triangulate_float64(uv, ring_ends.astype(np.uint32)).reshape(-1, 3).astype(np.int64)
+        if len(T) != len(uv) + 2 * (len(ring_ends) - 1) - 2:
+            return None
+        Ts.append(T)
+        offsets.append(base)
+        base += len(uv)
+    if not polygons:
+        return []
+    P = np.concatenate([uv for uv, _ in polygons])
+    count = np.array([len(T) for T in Ts])
+    poly = np.repeat(np.arange(len(Ts)), count)
+    T = np.concatenate(Ts) + np.repeat(offsets, count)[:, None]
+    a, b, c = P[T[:, 0]], P[T[:, 1]], P[T[:, 2]]
     area = (b[:, 0] - a[:, 0]) * (c[:, 1] - a[:, 1]) - (b[:, 1] - a[:, 1]) * (c[:, 0] - a[:, 0])
-    T = np.where((area < 0)[:, None], T[:, [0, 2, 1]], T)
-    nxt = np.arange(1, n + 1)
-    starts = np.concatenate([[0], ring_ends[:-1]])
-    nxt[ring_ends - 1] = starts
-    shoelace = uv[:, 0] * uv[nxt, 1] - uv[nxt, 0] * uv[:, 1]
-    ring = np.repeat(np.arange(len(ring_ends)), np.diff(np.concatenate([[0], ring_ends])))
-    signed = np.bincount(ring, shoelace, len(ring_ends))
+    T = np.where((area < 0)[:, None], T[:, [0, 2, 1]], T) - np.repeat(offsets, count)[:, None]
+    # the rings, polygon after polygon
+    ends = np.concatenate([e + o for (_, e), o in zip(polygons, offsets)])
+    nrings = np.array([len(e) for _, e in polygons])
+    starts = np.concatenate([[0], ends[:-1]])
+    nxt = np.arange(1, len(P) + 1)
+    nxt[ends - 1] = starts
+    shoelace = P[:, 0] * P[nxt, 1] - P[nxt, 0] * P[:, 1]
+    ring = np.repeat(np.arange(len(ends)), ends - starts)
+    signed = np.bincount(ring, shoelace, len(ends))
+    outer = np.zeros(len(ends), dtype=bool)
+    outer[np.cumsum(nrings) - nrings] = True
     # the outer ring counter-clockwise, the holes clockwise: the material on the loops' left
-    if not (signed[0] > 0 and (signed[1:] < 0).all()):
+    if not np.where(outer, signed > 0, signed < 0).all():
         return None
-    if abs(np.abs(area).sum() - signed.sum()) > 1e-9 * np.abs(signed).sum():
+    ring_poly = np.repeat(np.arange(len(Ts)), nrings)
+    total = np.bincount(ring_poly, signed, len(Ts))
+    scale = np.bincount(ring_poly, np.abs(signed), len(Ts))
+    if (np.abs(np.bincount(poly, np.abs(area), len(Ts)) - total) > 1e-9 * scale).any():
         return None
-    return T
+    return np.split(T, np.cumsum(count)[:-1])
 
 
 class _Cylinder:
@@ -79,33 +102,94 @@ class _Cylinder:
     __slots__ = ("cmap", "axis", "sign")
 
 
-def _cylinder(surface, batch, f, scale):
-    """The :class:`_Cylinder` of face ``f``'s surface, or None."""
+def _cylinder_net(surface, scale):
+    """``(knots, P, W)`` of the circle of ``surface`` at its first ``v`` if ``surface`` may be a
+    right circular cylinder (rational quadratic in ``u``, linear in ``v`` along one direction with
+    equal weights), else None. Its :class:`.arcs.CircleMap` then goes to :func:`_cylinder`."""
     if surface.degree_v != 1 or surface.degree_u != 2 or surface.weights is None:
         return None
     P = np.asarray(surface.control_points)
     W = np.asarray(surface.weights)
-    kv = np.asarray(surface.knots_v)
     if P.shape[1] != 2 or np.abs(W[:, 1] - W[:, 0]).max() > 1e-14 * W.max():
         return None
     D = P[:, 1] - P[:, 0]
     if np.abs(D - D[0]).max() > REL * scale:
         return None
-    cmap = CircleMap.of(surface.isocurve(v=kv[0]), scale)
+    return surface.knots_u, P[:, 0], W[:, 0]
+
+
+def _cylinder(surface, cmap, mid):
+    """The :class:`_Cylinder` of ``surface`` (passed by :func:`_cylinder_net`) whose first circle
+    has the map ``cmap`` (or None: not a circle), or None (``mid``: its ``(S, Su, Sv)`` ``(3,)``
+    each at the middle of its domain)."""
     if cmap is None:
         return None
-    axis = D[0] / np.linalg.norm(D[0])
-    if np.linalg.norm(np.cross(axis, cmap.circle.normal)) > REL:
+    P = np.asarray(surface.control_points)
+    D = P[0, 1] - P[0, 0]
+    axis = D / np.linalg.norm(D)
+    if np.linalg.norm(_cross(axis, cmap.circle.normal)) > REL:
         return None
     c = _Cylinder()
     c.cmap, c.axis = cmap, axis
     # which way Su x Sv points: outward (from the axis) or inward
-    (u0, u1), (v0, v1) = surface.domain
-    S, Su, Sv = batch.partials(np.array([f]), np.array([0.5 * (u0 + u1)]), np.array([0.5 * (v0 + v1)]))
-    radial = S[0] - cmap.circle.centre
+    S, Su, Sv = mid
+    radial = S - cmap.circle.centre
     radial -= (radial @ axis) * axis
-    c.sign = 1.0 if np.cross(Su[0], Sv[0]) @ radial > 0 else -1.0
+    c.sign = 1.0 if _cross(Su, Sv) @ radial > 0 else -1.0
     return c
+
+
+def _curved_faces(prep, size):
+    """``(kind, cyl, rev)`` of the faces that are not affine: each a right circular cylinder
+    (``cyl[f]``: :class:`_Cylinder`) or a face of revolution with a circular profile (``rev[f]``:
+    :class:`.revolution.Revolution`, its closed form checked against the surface's evaluator on
+    a grid); None if some face is neither. The circle maps of all faces are built in one batch
+    (:meth:`.arcs.CircleMap.batch`), the grid checks evaluated in one call."""
+    faces, batch = prep.faces, prep.batch
+    kind = np.full(len(faces), PLANE)
+    cyl, rev = {}, {}
+    curved = np.flatnonzero(~prep.affine).tolist()
+    if not curved:
+        return kind, cyl, rev
+    # the circles each face needs: a cylinder's first circle, or a revolution's two isocurves
+    nets, wants = [], []
+    for f in curved:
+        net = _cylinder_net(faces[f].surface, size)
+        if net is not None:
+            wants.append((f, CYLINDER, len(nets)))
+            nets.append(net)
+            continue
+        pair = revolution_nets(faces[f].surface)
+        if pair is None:
+            return None
+        wants.append((f, REVOLUTION, len(nets)))
+        nets.extend(pair)
+    maps = CircleMap.batch(nets, size)
+    cf = np.array([f for f, k, _ in wants if k == CYLINDER], dtype=np.int64)
+    if cf.size:
+        dom = np.array([faces[f].surface.domain for f in cf])  # (n, 2, 2)
+        S, Su, Sv = batch.partials(cf, 0.5 * (dom[:, 0, 0] + dom[:, 0, 1]), 0.5 * (dom[:, 1, 0] + dom[:, 1, 1]))
+    grids, q = [], 0
+    for f, k, i in wants:
+        if k == CYLINDER:
+            c = _cylinder(faces[f].surface, maps[i], (S[q], Su[q], Sv[q]))
+            q += 1
+            if c is None:  # linear in v: no face of revolution with a circular profile either
+                return None
+            kind[f], cyl[f] = CYLINDER, c
+            continue
+        found = revolution_of(faces[f].surface, maps[i], maps[i + 1], size)
+        if found is None:
+            return None
+        kind[f], rev[f] = REVOLUTION, found[0]
+        grids.append((f, found[1], found[2], found[3]))
+    if grids:
+        f = np.concatenate([np.full(u.size, f) for f, u, _, _ in grids])
+        want = batch.evaluate(f, np.concatenate([g[1] for g in grids]), np.concatenate([g[2] for g in grids]))
+        got = np.concatenate([g[3] for g in grids])
+        if np.abs(got - want).max() > REL * size:
+            return None
+    return kind, cyl, rev
 
 
 class FastPlan:
@@ -117,7 +201,7 @@ class FastPlan:
         "faces", "kind", "reversed", "corners", "end_vid", "arc_of", "arcs", "arc_c", "arc_r", "arc_e1", "arc_e2",
         "arc_sweep", "arc_closed", "arc_min", "arc_factor", "use_group", "use_face", "use_flip", "use_uv0",
         "use_arc_cyl", "A", "b", "normal", "origin", "fixed_T", "fixed_face", "curved_planes", "face_loops",
-        "loop_first", "cyl", "cyl_faces", "map_error",
+        "loop_first", "cyl", "cyl_faces", "map_error", "checked",
         # derived for the per-call path (:func:`_derive`)
         "use_arc", "start_vid", "start_X", "au", "au_arc", "au_flip", "au_slot", "au_off", "au_sense", "au_v",
         "au_A", "au_b", "maps", "slot_of_face", "slot_centre", "slot_axis", "slot_sign", "slot_radius", "slot_lo",
@@ -135,18 +219,10 @@ def build_plan(prep):
     if not uses:
         return None
     F, U, G = len(faces), len(uses), len(groups)
-    kind = np.full(F, PLANE)
-    cyl, rev = {}, {}
-    for f, face in enumerate(faces):
-        if not prep.affine[f]:
-            c = _cylinder(face.surface, prep.batch, f, size)
-            if c is not None:
-                kind[f], cyl[f] = CYLINDER, c
-                continue
-            r = revolution_of(face.surface, prep.batch, f, size)
-            if r is None:
-                return None
-            kind[f], rev[f] = REVOLUTION, r
+    found = _curved_faces(prep, size)
+    if found is None:
+        return None
+    kind, cyl, rev = found
     use_face = np.array([u.f for u in uses], dtype=np.int64)
     # a collapsed edge (a pole) only where a face of revolution meets its axis
     degenerate = np.array([u.edge.degenerate for u in uses], dtype=bool)
@@ -162,19 +238,34 @@ def build_plan(prep):
     r = np.linspace(0.0, 1.0, SAMPLES)
     t = (pdom[rep, :1] + (pdom[rep, 1:] - pdom[rep, :1]) * r).ravel()
     uv = prep.pcurves.evaluate(np.repeat(rep, SAMPLES), t)
-    X = prep.batch.evaluate(np.repeat(use_face[rep], SAMPLES), uv[:, 0], uv[:, 1]).reshape(G, SAMPLES, 3)
-    arcs, arc_of = [], np.full(G, -1, dtype=np.int64)
-    for g in range(G):
-        if pole_group[g] or is_segment(X[g], size):
-            continue
-        c = fit_circle(X[g], size)
-        if c is None:
-            return None
-        arc_of[g] = len(arcs)
-        arcs.append(c)
+    # every face's point and partials at its domain's corner: an affine face (a plane) is
+    # S + (u - u0) Su + (v - v0) Sv exactly, so its points need no surface evaluator
+    corner = np.column_stack([[b[0] for b in prep.batch.bu], [b[0] for b in prep.batch.bv]])  # (F, 2)
+    S, Su, Sv = prep.batch.partials(np.arange(F), corner[:, 0], corner[:, 1])
+
+    def surface_points(f, uv):
+        out = np.empty((len(f), 3))
+        flat = prep.affine[f]
+        k = np.flatnonzero(flat)
+        fk, d = f[k], uv[k] - corner[f[k]]
+        out[k] = S[fk] + d[:, :1] * Su[fk] + d[:, 1:] * Sv[fk]
+        k = np.flatnonzero(~flat)
+        if k.size:
+            out[k] = prep.batch.evaluate(f[k], uv[k, 0], uv[k, 1])
+        return out
+
+    X = surface_points(np.repeat(use_face[rep], SAMPLES), uv).reshape(G, SAMPLES, 3)
+    # every group a pole, a straight segment or a circle arc
+    curved = np.flatnonzero(~pole_group & ~segments(X, size))
+    fits = fit_circles(X[curved], size)
+    if not fits.ok.all():
+        return None
+    arcs = [fits.circle(i) for i in range(curved.size)]
+    arc_of = np.full(G, -1, dtype=np.int64)
+    arc_of[curved] = np.arange(curved.size)
     # each use's direction against its group's samples, and its (u, v) at its start
     third = prep.pcurves.evaluate(np.arange(U), pdom[:, 0] + (pdom[:, 1] - pdom[:, 0]) / 3.0)
-    Y = prep.batch.evaluate(use_face, third[:, 0], third[:, 1])
+    Y = surface_points(use_face, third)
     nearest = np.argmin(np.linalg.norm(X[use_group] - Y[:, None], axis=2), axis=1)
     use_flip = nearest > SAMPLES // 2
     use_uv0 = prep.pcurves.evaluate(np.arange(U), pdom[:, 0])
@@ -196,11 +287,9 @@ def build_plan(prep):
     plan.arc_closed = np.array([a.closed for a in arcs], dtype=bool)
     plan.arc_min = np.where(plan.arc_closed, 3, 1)  # a closed circle is at least a triangle
     # planes: (u, v) = A X + b, unit normal (outward), a point
-    corner = np.column_stack([[b[0] for b in prep.batch.bu], [b[0] for b in prep.batch.bv]])  # (F, 2)
-    S, Su, Sv = prep.batch.partials(np.arange(F), corner[:, 0], corner[:, 1])
     plan.A = np.linalg.pinv(np.stack([Su, Sv], axis=2))  # (F, 2, 3): (u, v) of a point of an affine face
     plan.b = corner - np.einsum("fij,fj->fi", plan.A, S)
-    n = np.cross(Su, Sv)
+    n = _cross(Su, Sv)
     length = np.linalg.norm(n, axis=1, keepdims=True)  # zero at a pole (a face of revolution: not used)
     plan.normal = n / np.where(length > 0, length, 1.0) * np.where(prep.reversed, -1.0, 1.0)[:, None]
     plan.origin = S
@@ -208,58 +297,71 @@ def build_plan(prep):
     # every use's (u, v) map, checked on its group's samples against its surface
     samples = X[use_group]  # (U, SAMPLES, 3)
     samples = np.where(use_flip[:, None, None], samples[:, ::-1], samples)
-    arc_cyl = np.zeros((U, 2))  # per cylinder arc use: (offset, sense) of its angles in the face's circle
-    is_cyl_arc = (kind[use_face] == CYLINDER) & (arc_of[use_group] >= 0)
-    for i in np.flatnonzero(is_cyl_arc):
-        cm = cyl[int(use_face[i])].cmap
-        a = arcs[arc_of[use_group[i]]]
-        th = cm.circle.angles(a.points(np.array([0.0, 0.25 * a.sweep])))
-        sense = 1.0 if np.mod(th[1] - th[0], 2 * np.pi) < np.pi else -1.0
-        arc_cyl[i] = th[0], sense
-    plan.use_arc_cyl = arc_cyl
     pred = np.empty((U, SAMPLES, 2))
     pred[:] = np.einsum("uij,usj->usi", plan.A[use_face], samples) + plan.b[use_face][:, None]
-    for i in np.flatnonzero(kind[use_face] == CYLINDER):
-        if arc_of[use_group[i]] < 0:
-            pred[i] = np.linspace(use_uv0[i], use_uv1[i], SAMPLES)  # a ruling: iso-u, v affine along it
-            continue
-        g = use_group[i]
-        theta = np.unwrap(arcs[arc_of[g]].angles(X[g]))
-        theta = (theta - theta[0])[::-1] if use_flip[i] else theta - theta[0]
-        pred[i, :, 0] = circle_param(cyl[int(use_face[i])].cmap, arc_cyl[i, 0] + arc_cyl[i, 1] * theta)
-        pred[i, :, 1] = use_uv0[i, 1]
-        pred[i, 0], pred[i, -1] = use_uv0[i], use_uv1[i]
-    for i in np.flatnonzero(kind[use_face] == REVOLUTION):
-        pred[i] = rev[int(use_face[i])].uv_of(samples[i], use_uv0[i], use_uv1[i], arc_of[use_group[i]] >= 0)
-    back = prep.batch.evaluate(np.repeat(use_face, SAMPLES), pred[..., 0].ravel(), pred[..., 1].ravel())
+    # cylinders: per arc use (offset, sense) of its angles in the face's circle; its samples'
+    # (u, v) through the face's circle map; a ruling runs iso-u, v affine along it
+    plan.use_arc_cyl = arc_cyl = np.zeros((U, 2))
+    slots = sorted(cyl)
+    plan.maps = CircleMaps([cyl[f].cmap for f in slots]) if slots else None
+    slot_of_face = np.full(F, -1, dtype=np.int64)
+    slot_of_face[slots] = np.arange(len(slots))
+    cu = np.flatnonzero((kind[use_face] == CYLINDER) & (arc_of[use_group] >= 0))
+    if cu.size:
+        a, q = arc_of[use_group[cu]], slot_of_face[use_face[cu]]
+        cc = np.array([cyl[f].cmap.circle.centre for f in slots])[q]
+        ce1 = np.array([cyl[f].cmap.circle.e1 for f in slots])[q]
+        ce2 = np.array([cyl[f].cmap.circle.e2 for f in slots])[q]
+        # the arc's points at its start and a quarter of its sweep, as angles in the cylinder's circle
+        ang = np.column_stack([np.zeros(cu.size), 0.25 * plan.arc_sweep[a]])
+        d = plan.arc_c[a][:, None] + plan.arc_r[a][:, None, None] * (np.cos(ang)[..., None] * plan.arc_e1[a][:, None]
+                                                                   + np.sin(ang)[..., None] * plan.arc_e2[a][:, None]) - cc[:, None]  # fmt: skip
+        th = np.mod(np.arctan2(_dot(d, ce2[:, None]), _dot(d, ce1[:, None])), 2 * np.pi)
+        arc_cyl[cu, 0] = th[:, 0]
+        arc_cyl[cu, 1] = np.where(np.mod(th[:, 1] - th[:, 0], 2 * np.pi) < np.pi, 1.0, -1.0)
+        d = X[use_group[cu]] - plan.arc_c[a][:, None]
+        theta = np.unwrap(np.mod(np.arctan2(_dot(d, plan.arc_e2[a][:, None]), _dot(d, plan.arc_e1[a][:, None])), 2 * np.pi), axis=1)
+        theta -= theta[:, :1]
+        theta = np.where(use_flip[cu][:, None], theta[:, ::-1], theta)
+        pred[cu, :, 0] = plan.maps.param(np.repeat(q, SAMPLES), (arc_cyl[cu, :1] + arc_cyl[cu, 1:] * theta).ravel()).reshape(-1, SAMPLES)
+        pred[cu, :, 1] = use_uv0[cu, 1:]
+        pred[cu, 0], pred[cu, -1] = use_uv0[cu], use_uv1[cu]
+    ru = np.flatnonzero((kind[use_face] == CYLINDER) & (arc_of[use_group] < 0))
+    pred[ru] = np.linspace(use_uv0[ru], use_uv1[ru], SAMPLES, axis=1)
+    revs = Revolutions([rev[f] for f in sorted(rev)]) if rev else None
+    vu = np.flatnonzero(kind[use_face] == REVOLUTION)
+    if vu.size:
+        rq = np.searchsorted(np.array(sorted(rev)), use_face[vu])
+        pred[vu] = revs.uv_of(rq, samples[vu], use_uv0[vu], use_uv1[vu], arc_of[use_group[vu]] >= 0)
+    back = surface_points(np.repeat(use_face, SAMPLES), pred.reshape(-1, 2))
     # (a sloppy file's edges off their faces take the general path, which allows for that)
     map_error = float(np.linalg.norm(back.reshape(U, SAMPLES, 3) - samples, axis=2).max())
     if map_error > 10.0 * REL * size:
         return None
     if not _cylinder_loops(plan, prep, use_uv0, use_uv1):
         return None
-    plan.lat = latitude_plan(plan, prep.table.loop, rev, pole_group, use_uv0, use_uv1, size) if rev else None
+    plan.lat = latitude_plan(plan, prep.table.loop, rev, revs, pole_group, use_uv0, use_uv1, size) if rev else None
     if rev and plan.lat is None:
         return None
     plan.map_error = map_error
+    # the loops checked on their exact shapes, so that a first call needs no general-path mesh
+    plan.checked = loops_valid(plan, prep.table, pred, use_uv0, use_uv1, kind[use_face] == PLANE, arc_of[use_group] >= 0)
     # straight-edged planes: triangulated once (indices into the face's loop points, which are
     # its uses' start corners at every tolerance)
-    fixed_T, fixed_face, plan.curved_planes, plan.face_loops = [], [], [], {}
+    fixed_face, polygons, plan.curved_planes, plan.face_loops = [], [], [], {}
     plan.loop_first = prep.table.first
-    for f in range(F):
-        if kind[f] != PLANE:
-            continue
+    for f in np.flatnonzero(kind == PLANE).tolist():
         plan.face_loops[f] = np.flatnonzero(prep.table.loop_face == f)
         mine = np.flatnonzero(use_face == f)
         if (arc_of[use_group[mine]] < 0).all():
-            ring_ends = np.cumsum(prep.table.count[plan.face_loops[f]])
-            T = planar_triangles(use_uv0[mine], ring_ends)
-            if T is None:
-                return None
-            fixed_T.append(T)
-            fixed_face.append(np.full(len(T), f))
+            polygons.append((use_uv0[mine], np.cumsum(prep.table.count[plan.face_loops[f]])))
+            fixed_face.append(f)
         else:
             plan.curved_planes.append((f, plan.face_loops[f]))
+    fixed_T = planar_triangles(polygons)
+    if fixed_T is None:
+        return None
+    fixed_face = [np.full(len(T), f) for f, T in zip(fixed_face, fixed_T)]
     plan.fixed_T = np.concatenate(fixed_T) if fixed_T else np.zeros((0, 3), dtype=np.int64)
     plan.fixed_face = np.concatenate(fixed_face) if fixed_face else np.zeros(0, dtype=np.int64)
     plan.cp_loops = np.concatenate([loops for _, loops in plan.curved_planes]) if plan.curved_planes else np.zeros(0, dtype=np.int64)
@@ -299,7 +401,6 @@ def _derive(plan):
             on = arcs >= 0
             np.maximum.at(plan.arc_factor, arcs[on], half * np.sqrt(1.0 + (1.02 * kappa[on]) ** 2))
     if slots:
-        plan.maps = CircleMaps([plan.cyl[f].cmap for f in slots])
         on = plan.au_slot >= 0
         np.maximum.at(plan.arc_factor, plan.au_arc[on], np.sqrt(1.0 + (1.02 * plan.maps.kappa[plan.au_slot[on]]) ** 2))
         plan.slot_centre = np.array([plan.cyl[f].cmap.circle.centre for f in slots])
@@ -353,29 +454,46 @@ def _cylinder_loops(plan, prep, uv0, uv1) -> bool:
     """Whether every cylinder face has one loop that is a rectangle in ``(u, v)``: circle arcs
     along ``v = v_lo`` (u increasing, the bottom), a ruling at ``u = u_hi``, arcs along
     ``v = v_hi`` (u decreasing, the top) and a ruling at ``u = u_lo``. Keeps per face the loop's
-    uses rotated to start at the bottom: ``cyl_faces[f] = (uses, n_bottom)``."""
+    uses rotated to start at the bottom: ``cyl_faces[f] = (uses, n_bottom)``. All cylinders at
+    once (their uses are consecutive, face after face)."""
     plan.cyl_faces = {}
-    for f in plan.cyl:
-        mine = np.flatnonzero(plan.use_face == f)
-        if (prep.table.loop[mine] != 0).any():
-            return False
-        a, b = uv0[mine], uv1[mine]
-        lo, hi = np.minimum(a, b).min(axis=0), np.maximum(a, b).max(axis=0)
-        eps = 1e-9 * (hi - lo)
-        arc = plan.arc_of[plan.use_group[mine]] >= 0
-        bottom = arc & (np.abs(a[:, 1] - lo[1]) <= eps[1]) & (np.abs(b[:, 1] - lo[1]) <= eps[1]) & (b[:, 0] > a[:, 0])
-        top = arc & (np.abs(a[:, 1] - hi[1]) <= eps[1]) & (np.abs(b[:, 1] - hi[1]) <= eps[1]) & (b[:, 0] < a[:, 0])
-        right = ~arc & (np.abs(a[:, 0] - hi[0]) <= eps[0]) & (np.abs(b[:, 0] - hi[0]) <= eps[0]) & (b[:, 1] > a[:, 1])
-        left = ~arc & (np.abs(a[:, 0] - lo[0]) <= eps[0]) & (np.abs(b[:, 0] - lo[0]) <= eps[0]) & (b[:, 1] < a[:, 1])
-        label = np.select([bottom, right, top, left], [0, 1, 2, 3], -1)
-        if (label < 0).any() or (label == 1).sum() != 1 or (label == 3).sum() != 1:
-            return False
-        start = int(np.flatnonzero(label == 1)[0])
-        start = (start - int((label == 0).sum())) % len(mine)
-        order = np.roll(mine, -start)
-        lab = label[np.roll(np.arange(len(mine)), -start)]
-        nb, nt = int((lab == 0).sum()), int((lab == 2).sum())
-        if not (lab == np.repeat([0, 1, 2, 3], [nb, 1, nt, 1])).all():
-            return False
-        plan.cyl_faces[f] = (order, nb)
+    faces = np.array(sorted(plan.cyl), dtype=np.int64)
+    if faces.size == 0:
+        return True
+    on = np.isin(plan.use_face, faces)
+    use = np.flatnonzero(on)
+    if (prep.table.loop[use] != 0).any():
+        return False
+    fu = plan.use_face[use]
+    first = np.flatnonzero(np.concatenate([[True], fu[1:] != fu[:-1]]))
+    n = np.diff(np.append(first, use.size))
+    block = np.repeat(np.arange(first.size), n)
+    a, b = uv0[use], uv1[use]
+    lo = np.minimum.reduceat(np.minimum(a, b), first)[block]
+    hi = np.maximum.reduceat(np.maximum(a, b), first)[block]
+    eps = 1e-9 * (hi - lo)
+    arc = plan.arc_of[plan.use_group[use]] >= 0
+
+    def at(c, d):
+        return (np.abs(a[:, d] - c[:, d]) <= eps[:, d]) & (np.abs(b[:, d] - c[:, d]) <= eps[:, d])
+
+    bottom = arc & at(lo, 1) & (b[:, 0] > a[:, 0])
+    top = arc & at(hi, 1) & (b[:, 0] < a[:, 0])
+    right = ~arc & at(hi, 0) & (b[:, 1] > a[:, 1])
+    left = ~arc & at(lo, 0) & (b[:, 1] < a[:, 1])
+    label = np.select([bottom, right, top, left], [0, 1, 2, 3], -1)
+    count = np.stack([np.bincount(block, label == k, first.size) for k in range(4)], axis=1)
+    if (label < 0).any() or (count[:, 1] != 1).any() or (count[:, 3] != 1).any():
+        return False
+    # each loop rotated to start at its bottom: the bottoms, the right ruling, the tops, the left ruling
+    nb, nt = count[:, 0].astype(np.int64), count[:, 2].astype(np.int64)
+    start = (np.flatnonzero(label == 1) - first - nb) % n
+    j = np.arange(use.size) - first[block]
+    order = first[block] + (start[block] + j) % n[block]
+    lab = label[order]
+    want = np.where(j < nb[block], 0, np.where(j == nb[block], 1, np.where(j <= nb[block] + nt[block], 2, 3)))
+    if (lab != want).any():
+        return False
+    for k, f in enumerate(faces.tolist()):
+        plan.cyl_faces[f] = (use[order[first[k] : first[k] + n[k]]], int(nb[k]))
     return True

@@ -37,7 +37,6 @@ import numpy as np
 from .. import _kernels
 from ..mesh.topology import ranges
 from .edges import MAX_SEGMENTS
-from .revolution import Revolutions
 from .welding import components
 
 __all__ = ["LatitudePlan", "latitude_plan", "row_counts", "mesh_rows"]
@@ -80,9 +79,10 @@ def side_labels(uv0, uv1, arc, pole):
     return np.select([bottom, right, top, left], [BOTTOM, RIGHT, TOP, LEFT], -1), lo, hi
 
 
-def latitude_plan(plan, loop, rev, pole_group, uv0, uv1, size):
+def latitude_plan(plan, loop, rev, revs, pole_group, uv0, uv1, size):
     """The :class:`LatitudePlan` of the faces ``rev`` (``{face: Revolution}``) of the
-    :class:`.fast_plan.FastPlan` ``plan`` (``loop``: each use's loop within its face), or None
+    :class:`.fast_plan.FastPlan` ``plan`` (``loop``: each use's loop within its face; ``revs``:
+    their :class:`.revolution.Revolutions`, in face order), or None
     unless each has one loop of four uses, one per side of its ``(u, v)`` rectangle, its poles
     where the profile meets the axis."""
     faces = sorted(rev)
@@ -92,7 +92,7 @@ def latitude_plan(plan, loop, rev, pole_group, uv0, uv1, size):
     lp.uses = np.zeros((S, 4), dtype=np.int64)
     lp.pole = np.zeros((S, 2), dtype=bool)
     lp.lo, lp.hi = np.zeros((S, 2)), np.zeros((S, 2))
-    lp.revs = Revolutions([rev[f] for f in faces])
+    lp.revs = revs
     for s, f in enumerate(faces):
         mine = np.flatnonzero(plan.use_face == f)
         if len(mine) != 4 or (loop[mine] != 0).any():

@@ -49,13 +49,14 @@ def natural_faces(faces, uses, groups) -> np.ndarray:
     used by no other face (``uses``: the face set's :class:`.edges.EdgeUse` list; ``groups``:
     lists of the use indices that are one edge)."""
     ok = np.array([len(face.boundary_loops()) == 1 for face in faces], dtype=bool)
-    for u in uses:
-        if ok[u.f] and not _on_one_side(u.edge.pcurve, faces[u.f].surface.domain):
-            ok[u.f] = False
+    # shared edges first: in a closed solid every face has one, and no pcurve need be looked at
     for group in groups:
         owners = {uses[i].f for i in group}
         if len(owners) > 1:
             ok[list(owners)] = False
+    for u in uses:
+        if ok[u.f] and not _on_one_side(u.edge.pcurve, faces[u.f].surface.domain):
+            ok[u.f] = False
     return ok
 
 

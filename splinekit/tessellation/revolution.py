@@ -19,9 +19,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from .arcs import REL, CircleMap, CircleMaps, circle_param
+from .arcs import REL, CircleMaps, _dot
 
-__all__ = ["Revolution", "Revolutions", "revolution_of"]
+__all__ = ["Revolution", "Revolutions", "revolution_nets", "revolution_of"]
 
 CHECK = 9
 """Grid of ``CHECK x CHECK`` parameters on which the closed form is checked against the surface."""
@@ -34,36 +34,33 @@ class Revolution:
 
     __slots__ = ("umap", "vmap", "O", "a", "e1", "e2", "rho_c", "z_c", "p", "g1", "g2")
 
-    def uv_of(self, X, uv0, uv1, arc):
-        """``(k, 2)`` parameters of the points ``X`` ``(k, 3)`` of one edge use from ``uv0`` to
-        ``uv1``: along a parallel (``v`` constant) ``u`` from the angle about the axis, along a
-        meridian (``u`` constant) ``v`` from the angle on the profile circle; a pole (``arc``
-        False) runs straight from ``uv0`` to ``uv1``. The ends are ``uv0`` and ``uv1``."""
-        out = np.linspace(uv0, uv1, len(X))
-        if arc:
-            d = X - self.O
-            z = d @ self.a
-            if abs(uv1[1] - uv0[1]) <= abs(uv1[0] - uv0[0]):  # a parallel
-                out[:, 0] = circle_param(self.umap, np.arctan2(d @ self.e2, d @ self.e1))
-            else:
-                rho = np.linalg.norm(d - z[:, None] * self.a, axis=1) - self.rho_c
-                dz = z - self.z_c
-                psi = np.arctan2(rho * self.g2[0] + dz * self.g2[1], rho * self.g1[0] + dz * self.g1[1])
-                out[:, 1] = circle_param(self.vmap, psi)
-            out[0], out[-1] = uv0, uv1
-        return out
 
-
-def revolution_of(surface, batch, f, scale) -> Revolution | None:
-    """The :class:`Revolution` of face ``f``'s ``surface`` (``batch``: the face set's
-    :class:`.batch.SurfaceBatch`), or None when it is not one with ``rho >= 0`` on its domain."""
+def revolution_nets(surface):
+    """``((knots, P, W), (knots, P, W))`` of the two circles :func:`revolution_of` needs (the
+    ``u`` isocurve at the middle ``v``; the profile, the ``v`` isocurve at the first ``u``), or
+    None when ``surface`` is not rational biquadratic."""
     if surface.degree_u != 2 or surface.degree_v != 2 or surface.weights is None:
         return None
     (u0, u1), (v0, v1) = surface.domain
-    umap = CircleMap.of(surface.isocurve(v=0.5 * (v0 + v1)), scale)
-    vmap = CircleMap.of(surface.isocurve(u=u0), scale)
+    c = surface.isocurve(v=0.5 * (v0 + v1))
+    ku = np.asarray(surface.knots_u)
+    if ku[2] == ku[0]:  # clamped: the isocurve at the first u is the first row of the net
+        profile = surface.knots_v, np.asarray(surface.control_points)[0], np.asarray(surface.weights)[0]
+    else:
+        p = surface.isocurve(u=u0)
+        profile = p.knots, p.control_points, p.weights
+    return (c.knots, c.control_points, c.weights), profile
+
+
+def revolution_of(surface, umap, vmap, scale):
+    """``(r, u, v, X)``: the :class:`Revolution` ``r`` of ``surface`` (rational biquadratic) whose
+    circles (:func:`revolution_nets`) have the maps ``umap`` and ``vmap`` (:class:`.arcs.CircleMap`
+    or None), and its closed form's points ``X`` ``(n, 3)`` at a grid of parameters ``u, v``
+    ``(n,)``, which the caller checks against the surface's own evaluator (for several faces in
+    one batch); None when it is not one with ``rho >= 0`` on its domain."""
     if umap is None or vmap is None:
         return None
+    (u0, u1), (v0, v1) = surface.domain
     c, pc = umap.circle, vmap.circle
     r = Revolution()
     r.umap, r.vmap = umap, vmap
@@ -77,14 +74,11 @@ def revolution_of(surface, batch, f, scale) -> Revolution | None:
         return None
     u = np.repeat(np.linspace(u0, u1, CHECK), CHECK)
     v = np.tile(np.linspace(v0, v1, CHECK), CHECK)
-    rho = r.rho_c + r.p * (np.cos(vmap.angle(v)) * r.g1[0] + np.sin(vmap.angle(v)) * r.g2[0])
+    psi = vmap.angle(v)
+    rho = r.rho_c + r.p * (np.cos(psi) * r.g1[0] + np.sin(psi) * r.g2[0])
     if rho.min() < -REL * scale:
         return None
-    got = point(r, umap.angle(u), vmap.angle(v))
-    want = batch.evaluate(np.full(u.size, f), u, v)
-    if np.abs(got - want).max() > REL * scale:
-        return None
-    return r
+    return r, u, v, point(r, umap.angle(u), psi)
 
 
 def point(r, phi, psi):
@@ -109,6 +103,34 @@ class Revolutions:
         for name in ("rho_c", "z_c", "p"):
             setattr(self, name, np.array([getattr(r, name) for r in revs], dtype=np.float64))
         self.kappa_u, self.kappa_v = self.umaps.kappa, self.vmaps.kappa
+
+    def uv_of(self, q, X, uv0, uv1, arc):
+        """``(n, k, 2)`` parameters of the points ``X`` ``(n, k, 3)`` of ``n`` edge uses on faces
+        ``q`` ``(n,)``, each from ``uv0`` to ``uv1`` ``(n, 2)``: along a parallel (``v`` constant)
+        ``u`` from the angle about the axis, along a meridian (``u`` constant) ``v`` from the angle
+        on the profile circle; a pole (``arc`` ``(n,)`` False) runs straight from ``uv0`` to
+        ``uv1``. The ends are ``uv0`` and ``uv1``."""
+        k = X.shape[1]
+        out = np.linspace(uv0, uv1, k, axis=1)
+        d = X - self.O[q][:, None]
+        parallel = arc & (np.abs(uv1[:, 1] - uv0[:, 1]) <= np.abs(uv1[:, 0] - uv0[:, 0]))
+        i = np.flatnonzero(parallel)
+        if i.size:
+            qi = q[i]
+            phi = np.arctan2(_dot(d[i], self.e2[qi][:, None]), _dot(d[i], self.e1[qi][:, None]))
+            out[i, :, 0] = self.umaps.param(np.repeat(qi, k), phi.ravel()).reshape(-1, k)
+        i = np.flatnonzero(arc & ~parallel)
+        if i.size:
+            qi = q[i]
+            a = self.a[qi][:, None]
+            z = _dot(d[i], a)
+            rho = np.linalg.norm(d[i] - z[..., None] * a, axis=2) - self.rho_c[qi][:, None]
+            dz = z - self.z_c[qi][:, None]
+            g1, g2 = self.g1[qi][:, None], self.g2[qi][:, None]
+            psi = np.arctan2(rho * g2[..., 0] + dz * g2[..., 1], rho * g1[..., 0] + dz * g1[..., 1])
+            out[i, :, 1] = self.vmaps.param(np.repeat(qi, k), psi.ravel()).reshape(-1, k)
+        out[arc, 0], out[arc, -1] = uv0[arc], uv1[arc]
+        return out
 
     def profile(self, q, psi):
         """``(rho, z, rho', z', rho'', z'')`` at profile angles ``psi`` of faces ``q`` (derivatives in ``psi``)."""

@@ -6,7 +6,9 @@ of planes, right circular cylinders and sphere or torus pieces bounded by parall
 and poles, with straight segments and circle arcs for edges (boxes, plates with holes, chamfered
 blocks, cylinders, filleted boxes and cylinders: most machined parts) take a fast path
 (:mod:`.fast_plan`, :mod:`.fast_mesh`, :mod:`.latitude`): a tolerance-independent plan, built once
-per face set after the general path below has checked it on the first call, and per call only
+per face set on its first call with its loops checked on their exact shapes (:mod:`.plan_checks`;
+loops it does not accept go through the general path below first, which raises on bad ones),
+and per call only
 the circles' counts in closed form, ear clipping of the planes' boundary polygons, strips on the
 cylinders and latitude strips on the spheres and tori, with the same guarantees and the same
 ``max_deviation`` yardstick. Every other face
@@ -227,14 +229,14 @@ class _Prepared:
     the groups of uses that are one edge, their loops' indices, which faces are affine and the
     tolerance-independent memo of the edge sampler and the grids."""
 
-    __slots__ = ("faces", "size", "batch", "bounds", "edge_tol", "uses", "pcurves", "groups", "table", "affine",
+    __slots__ = ("faces", "size", "batch", "_bounds", "edge_tol", "uses", "pcurves", "groups", "table", "affine",
                  "partials", "reversed", "memo", "index", "natural", "rest")
 
     def __init__(self, faces, size, index=None):
         self.faces, self.size = tuple(faces), size
         self.index = np.arange(len(faces)) if index is None else index  # the faces' numbers in messages
         self.batch = SurfaceBatch([face.surface for face in faces])
-        self.bounds = [second_derivative_bounds(cs) for cs in self.batch.cellsets]
+        self._bounds = None  # the general path's second-derivative bounds: on first use (:attr:`bounds`)
         self.edge_tol = max((e.tolerance for face in faces for e in face.edges), default=0.0)
         self.uses = edge_uses(faces)
         self.pcurves = CurveBatch([u.edge.pcurve for u in self.uses])
@@ -257,6 +259,14 @@ class _Prepared:
             if not natural.all():
                 k = np.flatnonzero(~natural)
                 self.rest = _Prepared([faces[i] for i in k], size, k)
+
+    @property
+    def bounds(self):
+        """Per face the second-derivative bounds of its Bézier cells (the general path's grids;
+        the fast path never needs them)."""
+        if self._bounds is None:
+            self._bounds = [second_derivative_bounds(cs) for cs in self.batch.cellsets]
+        return self._bounds
 
     @classmethod
     def of(cls, faces, size):
@@ -282,20 +292,22 @@ def tessellate_faces(faces, tol: float, angle_tol, size: float) -> Tessellation:
             return mesh
         return concatenate([(mesh, k), (_tessellate_trimmed(prep.rest, tol, angle_tol), prep.rest.index)], tol)
     plan = prep.memo.get("fast", False)  # False: not decided yet for this face set
+    if plan is False:
+        plan = build_plan(prep)
+        if plan is None or not plan.checked:
+            # loops the plan's own checks do not accept (.plan_checks) go through the general
+            # path first, which raises on bad loops (or repairs a sloppy file's crossings), so
+            # both paths refuse the same input; the fast mesh is still the result where there is one
+            mesh = _tessellate_trimmed(prep, tol, angle_tol)
+            prep.memo["fast"] = plan
+            fast = fast_tessellation(plan, tol, angle_tol) if plan is not None else None
+            return mesh if fast is None else fast
+        prep.memo["fast"] = plan
     if plan:
         mesh = fast_tessellation(plan, tol, angle_tol)
         if mesh is not None:
             return mesh
-    mesh = _tessellate_trimmed(prep, tol, angle_tol)
-    if plan is False:
-        # decided after the general path has checked the face set (it raises on bad loops), so
-        # both paths refuse the same input; the first call already returns the fast mesh, so
-        # every call on a face set gives the same kind of mesh
-        plan = prep.memo["fast"] = build_plan(prep)
-        fast = fast_tessellation(plan, tol, angle_tol) if plan is not None else None
-        if fast is not None:
-            return fast
-    return mesh
+    return _tessellate_trimmed(prep, tol, angle_tol)
 
 
 def _tessellate_trimmed(prep, tol: float, angle_tol) -> Tessellation:
