@@ -80,3 +80,21 @@ def test_bad_input():
         CurveBatch([line, sk.BSplineCurve(1, [0, 0, 1, 1], [[0.0, 0.0, 0.0], [1.0, 1.0, 1.0]])])
     with pytest.raises(ParameterError):
         CurveBatch([])
+
+
+@settings(max_examples=30, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1))
+def test_refine_snaps_like_one_knot_at_a_time(seed):
+    """``refine`` snaps its knots onto existing ones all at once (``_knot_values``): the same
+    values as snapping one at a time (``_knot_value``), including values a hair off a knot."""
+    rng = np.random.default_rng(seed)
+    curve = _random_curves(rng, 1, 2)[0]
+    curve = curve.to_bspline() if isinstance(curve, sk.BezierCurve) else curve
+    a, b = curve.domain
+    knots = np.asarray(curve.knots)
+    values = np.concatenate([rng.uniform(a, b, 20), knots + rng.normal(scale=1e-13, size=knots.size) * (b - a)])
+    values = np.clip(values, a, b)
+    expected = np.array([curve._knot_value(x, "knots") for x in values])
+    np.testing.assert_array_equal(curve._knot_values(values), expected)
+    refined = curve.refine(values[:5])
+    np.testing.assert_allclose(refined.evaluate(np.linspace(a, b, 50)), curve.evaluate(np.linspace(a, b, 50)), atol=1e-12)
