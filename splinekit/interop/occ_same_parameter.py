@@ -166,24 +166,38 @@ def _onto_curve_parameters(surface, uses, extents, pieces: int) -> list:
     return out
 
 
-def _samples(pcurve, curve, per_span: int = 17) -> np.ndarray:
-    """Parameters of an edge use (``pcurve`` and its 3-D ``curve``): ``per_span`` in each Bézier
-    span of either."""
-    a, b = pcurve.domain
-    br = np.union1d(pcurve.bezier_breakpoints(), curve.bezier_breakpoints())
-    br = np.union1d(br[(br > a) & (br < b)], [a, b])
-    return (br[:-1, None] + (br[1:] - br[:-1])[:, None] * np.linspace(0.0, 1.0, per_span)[None]).ravel()
+def _samples(pcurves, curves, per_span: int = 17):
+    """``(rows, t)``: parameters of many edge uses (``pcurves[i]`` with its 3-D ``curves[i]``),
+    use ``i``'s ``per_span`` in each Bézier span of either curve, on the pcurve's domain, use by
+    use (``rows``: the use of each parameter)."""
+    ends = np.array([pc.domain for pc in pcurves], dtype=np.float64)
+    knots, owner, lo, hi = [], [], [], []
+    for i, c in enumerate(pcurves + curves):  # each curve's knots inside its own domain...
+        k = np.asarray(c.knots)
+        a, b = c.domain
+        knots.append(k[(k >= a) & (k <= b)])
+        owner.append(np.full(knots[-1].size, i % len(pcurves)))
+    value, row = np.concatenate(knots), np.concatenate(owner)
+    inside = (value > ends[row, 0]) & (value < ends[row, 1])  # ...and strictly inside the pcurve's
+    value = np.concatenate([value[inside], ends.ravel()])
+    row = np.concatenate([row[inside], np.repeat(np.arange(len(pcurves)), 2)])
+    order = np.lexsort((value, row))
+    value, row = value[order], row[order]
+    first = np.ones(value.size, dtype=bool)
+    first[1:] = (row[1:] != row[:-1]) | (value[1:] != value[:-1])
+    br, row = value[first], row[first]
+    span = np.flatnonzero(row[1:] == row[:-1])  # consecutive breakpoints of one use
+    t = (br[span, None] + (br[span + 1] - br[span])[:, None] * np.linspace(0.0, 1.0, per_span)[None]).ravel()
+    return np.repeat(row[span], per_span), t
 
 
 def _deviations(surface, pcurves, curves):
     """Largest distance between ``surface(pcurve(t))`` and ``curve(t)`` of each pair, over the
     parameters :func:`_samples` gives it; and the traces' points ``(list of (n_i, 3))``."""
-    samples = [_samples(pc, cv) for pc, cv in zip(pcurves, curves)]
-    counts = np.array([t.size for t in samples])
-    rows, t = np.repeat(np.arange(len(samples)), counts), np.concatenate(samples)
+    rows, t = _samples(list(pcurves), list(curves))
     on = surface.evaluate(*_uv_clipped(surface, CurveBatch(pcurves).evaluate(rows, t)))
     gap = np.linalg.norm(on - CurveBatch(curves).evaluate(rows, t), axis=1)
-    starts = np.concatenate([[0], np.cumsum(counts)[:-1]])
+    starts = np.flatnonzero(np.r_[True, rows[1:] != rows[:-1]])
     return np.maximum.reduceat(gap, starts), np.split(on, starts[1:])
 
 
