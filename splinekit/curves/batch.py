@@ -16,7 +16,7 @@ from __future__ import annotations
 import numpy as np
 
 from .._validate import as_order
-from ..basis.bspline import basis_ders_t, basis_funs_t, combine, span_bounds
+from ..basis.bspline import basis_ders_t, basis_funs_t, combine
 from ..basis.rational import rational_curve_derivatives
 from ..errors import DomainError, ParameterError
 from ..tolerances import DEFAULT
@@ -44,8 +44,15 @@ class _Group:
         self.keys = np.empty(self.knots.size, dtype=np.complex128)
         self.keys.real = np.repeat(np.arange(len(curves)), n_knots)
         self.keys.imag = self.knots
-        bounds = np.array([span_bounds(degree, k) for k in knots], dtype=np.intp).reshape(-1, 2)
-        self.span_lo, self.span_hi = bounds[:, 0], bounds[:, 1]
+        # span_bounds of every member at once: its non-empty spans p <= i < n (local indices)
+        member = np.repeat(np.arange(len(curves)), n_knots)
+        local = np.arange(self.knots.size) - self.knot_offset[member]
+        nonempty = np.zeros(self.knots.size, dtype=bool)
+        nonempty[:-1] = self.knots[:-1] < self.knots[1:]
+        nonempty &= (local >= degree) & (local < (n_knots - degree - 1)[member])
+        big = np.iinfo(np.intp).max
+        self.span_lo = np.minimum.reduceat(np.where(nonempty, local, big), self.knot_offset)
+        self.span_hi = np.maximum.reduceat(np.where(nonempty, local, -1), self.knot_offset)
 
     def spans(self, member, t):
         """``(global knot span, global coefficient span)`` of each ``t`` on its ``member`` curve."""
