@@ -23,6 +23,7 @@ import numpy as np
 from ..brep import Edge
 from ..closest import project
 from ..closest.newton import _newton
+from ..closest.parametric import LARGE, _crease_breaks
 from ..curves import BSplineCurve, NurbsCurve
 from ..curves.batch import CurveBatch
 from ..tolerances import DEFAULT, GEOMETRIC_CONFUSION
@@ -193,12 +194,76 @@ def _samples(pcurves, curves, per_span: int = 17):
 
 def _deviations(surface, pcurves, curves):
     """Largest distance between ``surface(pcurve(t))`` and ``curve(t)`` of each pair, over the
-    parameters :func:`_samples` gives it; and the traces' points ``(list of (n_i, 3))``."""
+    parameters ``t`` :func:`_samples` gives it; and, per pair, those ``t`` ``(n_i,)``, the trace's
+    points and the curve's ``(n_i, 3)`` (lists)."""
     rows, t = _samples(list(pcurves), list(curves))
     on = surface.evaluate(*_uv_clipped(surface, CurveBatch(pcurves).evaluate(rows, t)))
-    gap = np.linalg.norm(on - CurveBatch(curves).evaluate(rows, t), axis=1)
+    xyz = CurveBatch(curves).evaluate(rows, t)
+    gap = np.linalg.norm(on - xyz, axis=1)
     starts = np.flatnonzero(np.r_[True, rows[1:] != rows[:-1]])
-    return np.maximum.reduceat(gap, starts), np.split(on, starts[1:])
+    return np.maximum.reduceat(gap, starts), np.split(t, starts[1:]), np.split(on, starts[1:]), np.split(xyz, starts[1:])
+
+
+class _Curves:
+    """Many curves as the batched Newton search sees them with ``rows`` (row ``i``: curve ``i``
+    of the :class:`~splinekit.curves.batch.CurveBatch`); ``size`` per seed."""
+
+    def __init__(self, batch: CurveBatch, size):
+        self.batch, self.size = batch, size
+        self.hi = batch.domains[:, 1:]
+
+    def derivs(self, x, rows):
+        d = self.batch.derivatives(rows, x[:, 0], 2)
+        return d[0], d[1][..., None], d[2][..., None, None]
+
+    def evaluate(self, x, rows):
+        return self.batch.evaluate(rows, x[:, 0])
+
+
+def _smooth(curve) -> bool:
+    """Whether ``curve`` has no interior knot of multiplicity >= its degree (no crease: the
+    projection searches its whole domain as one piece) and a size the search takes unscaled."""
+    k, p = np.asarray(curve.knots), curve.degree
+    a, b = curve.domain
+    return _crease_breaks(k, p, a, b).size == 2 and 1.0 / LARGE < float(np.abs(curve.control_points).max()) < LARGE
+
+
+def _aparts(uses, t, on, xyz) -> list:
+    """Per use, the largest distance from the points ``on[i]`` (its trace at the parameters
+    ``t[i]``) to its 3-D curve (``xyz[i]``: the curve's points there): ``project(use.curve,
+    on[i]).distances.max()``, for all uses with one batched Newton search.
+
+    Each point gets two seeds, its own parameter and that of the curve sample nearest to it; a
+    smooth curve is searched as one piece, stopping at ``GEOMETRIC_CONFUSION`` times its size (its
+    samples' largest absolute coordinate), as :func:`splinekit.project` does. A use whose curve
+    has creases, or whose search does not converge, goes through ``project`` itself."""
+    out = [None] * len(uses)
+    batched = [i for i, use in enumerate(uses) if _smooth(use.curve)]
+    if batched:
+        x0, counts = [], []
+        for i in batched:  # two seeds per point: its own parameter, its nearest sample's
+            d2 = ((on[i][:, None, :] - xyz[i][None, :, :]) ** 2).sum(axis=-1)
+            x0.append(np.column_stack([t[i], t[i][d2.argmin(axis=1)]]).ravel())
+            counts.append(2 * len(t[i]))
+        rows = np.repeat(np.arange(len(batched)), counts)
+        batch = CurveBatch([uses[i].curve for i in batched])
+        x0 = np.clip(np.concatenate(x0), batch.domains[rows, 0], batch.domains[rows, 1])
+        P = np.repeat(np.concatenate([on[i] for i in batched]), 2, axis=0)
+        size = np.maximum(1.0, np.array([float(np.abs(xyz[i]).max()) for i in batched]))[rows]
+        tol = GEOMETRIC_CONFUSION * size
+        _, _, dist, _, converged, stationary = _newton(
+            _Curves(batch, size), P, x0[:, None], batch.domains[rows, :1], batch.domains[rows, 1:], tol, rows)
+        pair = dist.reshape(-1, 2)
+        best = pair.argmin(axis=1)  # the first seed on a tie, as project's nearest-first order
+        m = np.arange(best.size)
+        ok = ((converged | stationary).reshape(-1, 2)[m, best] | (pair[m, best] <= tol[::2]))
+        point_use = rows[::2]
+        for j, i in enumerate(batched):
+            mine = point_use == j
+            if ok[mine].all():
+                out[i] = float(pair[mine, best[mine]].max())
+    return [float(project(use.curve, on[i]).distances.max()) if got is None else got
+            for i, (use, got) in enumerate(zip(uses, out))]
 
 
 def _reparametrized(surface, uses, devs, aparts, extents) -> list:
@@ -216,7 +281,7 @@ def _reparametrized(surface, uses, devs, aparts, extents) -> list:
         done = {i for i, pc in zip(active, moved) if pc is None}
         pairs = [(i, pc) for i, pc in zip(active, moved) if pc is not None]
         if pairs:
-            got, _ = _deviations(surface, [pc for _, pc in pairs], [uses[i].curve for i, _ in pairs])
+            got = _deviations(surface, [pc for _, pc in pairs], [uses[i].curve for i, _ in pairs])[0]
             for (i, pc), g in zip(pairs, got.tolist()):
                 if best[i] is not None and g > 0.5 * best[i][1]:  # no longer the map's resolution that limits it
                     done.add(i)
@@ -243,16 +308,15 @@ def same_parameter(surface, loops) -> list:
     uses = [use for lp in loops for use in lp if use.curve is not None and not use.degenerate]
     if not uses:
         return loops
-    devs, on_surface = _deviations(surface, [use.pcurve for use in uses], [use.curve for use in uses])
+    devs, t, on, xyz = _deviations(surface, [use.pcurve for use in uses], [use.curve for use in uses])
+    off = [i for i, (use, dev) in enumerate(zip(uses, devs.tolist())) if dev > use.tolerance]
     fixed, lagging = {}, []
-    for use, dev, on in zip(uses, devs.tolist(), on_surface):
-        if dev <= use.tolerance:
-            continue
-        apart = float(project(use.curve, on).distances.max())
+    for i, apart in zip(off, _aparts([uses[i] for i in off], *([x[i] for i in off] for x in (t, on, xyz)))):
+        use, dev = uses[i], float(devs[i])
         if apart >= 0.5 * dev:  # the curves differ in shape, not only in parameter
             fixed[id(use)] = Edge(use.pcurve, use.curve, key=use.key, tolerance=MARGIN * dev)
             continue
-        lagging.append((use, dev, apart, float(np.abs(on).max())))
+        lagging.append((use, dev, apart, float(np.abs(on[i]).max())))
     if lagging:
         moved = _reparametrized(surface, *map(list, zip(*lagging)))
         for (use, dev, _, _), got in zip(lagging, moved):
