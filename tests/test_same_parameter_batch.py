@@ -3,7 +3,8 @@ against the one-use route through ``splinekit.project`` they replace, and agains
 
 * ``_onto_curve_parameters`` (all uses of a face at once) gives the same composed pcurves as
   ``_onto_curve_parameter`` (one use through ``project``) to 1e-12 in parameter;
-* ``_aparts`` gives the same largest trace-to-curve distances as ``project(...).distances.max()``;
+* ``_aparts`` (all uses at once) gives the same largest trace-to-curve distances as
+  ``project(...).distances.max()`` (one use at a time);
 * on a plane, a unit-circle pcurve and a 3-D circle of radius 1 + d about the same centre: every
   breakpoint lands on the foot point ``P / |P|`` and the distance is ``d`` (closed forms).
 """
@@ -57,7 +58,7 @@ def _face(rng, count):
 def test_batched_search_matches_one_use_at_a_time(seed, pieces):
     rng = np.random.default_rng(seed)
     surface, uses = _face(rng, int(rng.integers(1, 5)))
-    _, t, on, xyz = _deviations(surface, [u.pcurve for u in uses], [u.curve for u in uses])
+    _, on = _deviations(surface, [u.pcurve for u in uses], [u.curve for u in uses])
     extents = [float(np.abs(x).max()) for x in on]
     got = _onto_curve_parameters(surface, uses, extents, pieces)
     for use, new in zip(uses, got):
@@ -67,7 +68,7 @@ def test_batched_search_matches_one_use_at_a_time(seed, pieces):
             assert np.asarray(new.knots).shape == np.asarray(old.knots).shape
             np.testing.assert_allclose(new.knots, old.knots, rtol=0, atol=1e-12)
             np.testing.assert_array_equal(new.control_points, old.control_points)
-    aparts = _aparts(uses, t, on, xyz)
+    aparts = _aparts(uses, on)
     for use, pts, apart in zip(uses, on, aparts):
         assert apart == pytest.approx(float(sk.project(use.curve, pts).distances.max()), rel=1e-10, abs=1e-13)
 
@@ -94,6 +95,6 @@ def test_circle_closed_forms(d):
     P = use.curve.evaluate(t)
     foot = P / np.linalg.norm(P, axis=1)[:, None]  # the unit circle's point nearest to P
     np.testing.assert_allclose(pc.evaluate(t), foot[:, :2], rtol=0, atol=1e-12)
-    _, ts, on, xyz = _deviations(plane, [use.pcurve], [use.curve])
-    [apart] = _aparts([use], ts, on, xyz)
+    _, on = _deviations(plane, [use.pcurve], [use.curve])
+    [apart] = _aparts([use], on)
     assert apart == pytest.approx(d, rel=1e-9, abs=1e-14)

@@ -22,8 +22,8 @@ import numpy as np
 
 from ..brep import Edge
 from ..closest import project
-from ..closest.newton import _newton
-from ..closest.parametric import LARGE, _crease_breaks
+from ..closest.newton import _best_per_owner, _newton
+from ..closest.parametric import _Curve
 from ..curves import BSplineCurve, NurbsCurve
 from ..curves.batch import CurveBatch
 from ..tolerances import DEFAULT, GEOMETRIC_CONFUSION
@@ -194,14 +194,12 @@ def _samples(pcurves, curves, per_span: int = 17):
 
 def _deviations(surface, pcurves, curves):
     """Largest distance between ``surface(pcurve(t))`` and ``curve(t)`` of each pair, over the
-    parameters ``t`` :func:`_samples` gives it; and, per pair, those ``t`` ``(n_i,)``, the trace's
-    points and the curve's ``(n_i, 3)`` (lists)."""
+    parameters :func:`_samples` gives it; and the traces' points ``(list of (n_i, 3))``."""
     rows, t = _samples(list(pcurves), list(curves))
     on = surface.evaluate(*_uv_clipped(surface, CurveBatch(pcurves).evaluate(rows, t)))
-    xyz = CurveBatch(curves).evaluate(rows, t)
-    gap = np.linalg.norm(on - xyz, axis=1)
+    gap = np.linalg.norm(on - CurveBatch(curves).evaluate(rows, t), axis=1)
     starts = np.flatnonzero(np.r_[True, rows[1:] != rows[:-1]])
-    return np.maximum.reduceat(gap, starts), np.split(t, starts[1:]), np.split(on, starts[1:]), np.split(xyz, starts[1:])
+    return np.maximum.reduceat(gap, starts), np.split(on, starts[1:])
 
 
 class _Curves:
@@ -220,48 +218,57 @@ class _Curves:
         return self.batch.evaluate(rows, x[:, 0])
 
 
-def _smooth(curve) -> bool:
-    """Whether ``curve`` has no interior knot of multiplicity >= its degree (no crease: the
-    projection searches its whole domain as one piece) and a size the search takes unscaled."""
-    k, p = np.asarray(curve.knots), curve.degree
-    a, b = curve.domain
-    return _crease_breaks(k, p, a, b).size == 2 and 1.0 / LARGE < float(np.abs(curve.control_points).max()) < LARGE
+def _piece_seeds(breaks, x0, owner):
+    """``(seeds, owner, lo, hi, first, last)``: the seeds ``x0`` (of the points ``owner``) in the
+    boxes of the smooth pieces between ``breaks`` (a curve's ends and creases) that hold them; a
+    seed on a crease starts in both pieces beside it, as :func:`splinekit.project` does.
+    ``first``, ``last``: whether the box is the curve's first / last piece."""
+    piece = np.clip(np.searchsorted(breaks, x0, side="right") - 1, 0, breaks.size - 2)
+    on = np.isin(x0, breaks[1:-1])
+    x0, owner = np.concatenate([x0, x0[on]]), np.concatenate([owner, owner[on]])
+    piece = np.concatenate([piece, piece[on] - 1])
+    return x0, owner, breaks[piece], breaks[piece + 1], piece == 0, piece == breaks.size - 2
 
 
-def _aparts(uses, t, on, xyz) -> list:
-    """Per use, the largest distance from the points ``on[i]`` (its trace at the parameters
-    ``t[i]``) to its 3-D curve (``xyz[i]``: the curve's points there): ``project(use.curve,
-    on[i]).distances.max()``, for all uses with one batched Newton search.
+def _aparts(uses, on) -> list:
+    """Per use, the largest distance from the points ``on[i]`` (its trace) to its 3-D curve:
+    ``project(use.curve, on[i]).distances.max()``, the Newton searches of all uses as one batch.
 
-    Each point gets two seeds, its own parameter and that of the curve sample nearest to it; a
-    smooth curve is searched as one piece, stopping at ``GEOMETRIC_CONFUSION`` times its size (its
-    samples' largest absolute coordinate), as :func:`splinekit.project` does. A use whose curve
-    has creases, or whose search does not converge, goes through ``project`` itself."""
+    Everything else is ``project``'s own: each curve's samples and seeds
+    (:class:`splinekit.closest.parametric._Curve`), the smooth pieces the seeds search in
+    (:func:`_piece_seeds`), the stopping distance. A use goes through ``project`` itself when a
+    point's best search does not converge, or stops on a crease with the distance still falling
+    across it (``project`` would search on in the next piece), or ``project`` rescales the curve."""
     out = [None] * len(uses)
-    batched = [i for i, use in enumerate(uses) if _smooth(use.curve)]
+    targets = [_Curve(use.curve, use.curve.domain) for use in uses]
+    batched = [i for i, tg in enumerate(targets) if tg.unit == 1.0]
     if batched:
-        x0, counts = [], []
-        for i in batched:  # two seeds per point: its own parameter, its nearest sample's
-            d2 = ((on[i][:, None, :] - xyz[i][None, :, :]) ** 2).sum(axis=-1)
-            x0.append(np.column_stack([t[i], t[i][d2.argmin(axis=1)]]).ravel())
-            counts.append(2 * len(t[i]))
+        x0, owner, lo, hi, first, last, counts, start = [], [], [], [], [], [], [], 0
+        for i in batched:
+            point, seeds = targets[i].seeds(on[i])
+            got = _piece_seeds(targets[i].breaks[0], seeds[:, 0], start + point)
+            for acc, x in zip((x0, owner, lo, hi, first, last), got):
+                acc.append(x)
+            counts.append(got[0].size)
+            start += len(on[i])
+        x0, owner, lo, hi, first, last = (np.concatenate(a) for a in (x0, owner, lo, hi, first, last))
         rows = np.repeat(np.arange(len(batched)), counts)
-        batch = CurveBatch([uses[i].curve for i in batched])
-        x0 = np.clip(np.concatenate(x0), batch.domains[rows, 0], batch.domains[rows, 1])
-        P = np.repeat(np.concatenate([on[i] for i in batched]), 2, axis=0)
-        size = np.maximum(1.0, np.array([float(np.abs(xyz[i]).max()) for i in batched]))[rows]
-        tol = GEOMETRIC_CONFUSION * size
-        _, _, dist, _, converged, stationary = _newton(
-            _Curves(batch, size), P, x0[:, None], batch.domains[rows, :1], batch.domains[rows, 1:], tol, rows)
-        pair = dist.reshape(-1, 2)
-        best = pair.argmin(axis=1)  # the first seed on a tie, as project's nearest-first order
-        m = np.arange(best.size)
-        ok = ((converged | stationary).reshape(-1, 2)[m, best] | (pair[m, best] <= tol[::2]))
-        point_use = rows[::2]
+        size = np.array([targets[i].size for i in batched])[rows]
+        tol = np.array([targets[i].tolerance(None) for i in batched])[rows]
+        x, _, dist, g, converged, stationary = _newton(
+            _Curves(CurveBatch([uses[i].curve for i in batched]), size),
+            np.concatenate([on[i] for i in batched])[owner], x0[:, None], lo[:, None], hi[:, None], tol, rows)
+        across = ((x[:, 0] <= lo) & (g[:, 0] > 0) & ~first) | ((x[:, 0] >= hi) & (g[:, 0] < 0) & ~last)
+        ok = ((converged | stationary) | (dist <= tol)) & ~across
+        best = _best_per_owner(owner, dist, start)
+        point_use = np.repeat(np.arange(len(batched)), [len(on[i]) for i in batched])
+        bad = np.zeros(len(batched), dtype=bool)
+        np.logical_or.at(bad, point_use, ~ok[best])
+        apart = np.zeros(len(batched))
+        np.maximum.at(apart, point_use, dist[best])
         for j, i in enumerate(batched):
-            mine = point_use == j
-            if ok[mine].all():
-                out[i] = float(pair[mine, best[mine]].max())
+            if not bad[j]:
+                out[i] = float(apart[j])
     return [float(project(use.curve, on[i]).distances.max()) if got is None else got
             for i, (use, got) in enumerate(zip(uses, out))]
 
@@ -308,10 +315,10 @@ def same_parameter(surface, loops) -> list:
     uses = [use for lp in loops for use in lp if use.curve is not None and not use.degenerate]
     if not uses:
         return loops
-    devs, t, on, xyz = _deviations(surface, [use.pcurve for use in uses], [use.curve for use in uses])
+    devs, on = _deviations(surface, [use.pcurve for use in uses], [use.curve for use in uses])
     off = [i for i, (use, dev) in enumerate(zip(uses, devs.tolist())) if dev > use.tolerance]
     fixed, lagging = {}, []
-    for i, apart in zip(off, _aparts([uses[i] for i in off], *([x[i] for i in off] for x in (t, on, xyz)))):
+    for i, apart in zip(off, _aparts([uses[i] for i in off], [on[i] for i in off])):
         use, dev = uses[i], float(devs[i])
         if apart >= 0.5 * dev:  # the curves differ in shape, not only in parameter
             fixed[id(use)] = Edge(use.pcurve, use.curve, key=use.key, tolerance=MARGIN * dev)
