@@ -172,7 +172,7 @@ def _samples(pcurves, curves, per_span: int = 17):
     use ``i``'s ``per_span`` in each Bézier span of either curve, on the pcurve's domain, use by
     use (``rows``: the use of each parameter)."""
     ends = np.array([pc.domain for pc in pcurves], dtype=np.float64)
-    knots, owner, lo, hi = [], [], [], []
+    knots, owner = [], []
     for i, c in enumerate(pcurves + curves):  # each curve's knots inside its own domain...
         k = np.asarray(c.knots)
         a, b = c.domain
