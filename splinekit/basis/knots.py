@@ -70,7 +70,9 @@ def validate_knots(knots, degree: int, n_ctrl: int, name: str = "knots") -> np.n
         raise KnotVectorError(
             f"{name} gives an empty domain [{name}[{degree}], {name}[{n_ctrl}]] = [{float(a)!r}, {float(b)!r}]"
         )
-    values, counts = np.unique(U, return_counts=True)
+    # the distinct knots and their multiplicities, as runs of the (now known sorted) vector
+    starts = np.flatnonzero(np.concatenate([[True], gaps != 0]))
+    values, counts = U[starts], np.diff(np.append(starts, U.size))
     over = np.flatnonzero(counts > degree + 1)
     if over.size:
         v = float(values[over[0]])

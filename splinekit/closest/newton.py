@@ -51,27 +51,34 @@ def _gradients(S, J, H2, P):
     return r, g, G, H
 
 
-def _derivs_inside(target, x, hi):
+def _derivs_inside(target, x, hi, rows=None):
     """``target.derivs(x)`` with the derivatives of the piece ``x`` belongs to.
 
     At a crease the derivatives jump, and evaluation takes the piece on the
     right of a knot; a point on the upper end of its box is evaluated one ulp
-    to the left so that it gets the derivatives of its own piece."""
-    inner = (x >= hi) & (hi < target.hi)
+    to the left so that it gets the derivatives of its own piece. ``rows``: see
+    :func:`_newton`."""
+    inner = (x >= hi) & (hi < (target.hi if rows is None else target.hi[rows]))
     if inner.any():
         x = np.where(inner, np.nextafter(hi, -np.inf), x)
-    return target.derivs(x)
+    return target.derivs(x) if rows is None else target.derivs(x, rows)
 
 
-def _newton(target, P, x0, lo, hi, tol):
+def _newton(target, P, x0, lo, hi, tol, rows=None):
     """Minimise ``|S(x) - P|`` from each seed ``x0`` ``(m, k)`` inside the boxes ``[lo, hi]`` ``(m, k)``.
 
     Returns ``(x, S(x), distances, g, converged, stationary)`` with ``g`` the
     gradient of ``|S - P|^2 / 2``; every accepted step does not increase the
     distance, so ``distances`` never exceed the seeds'.
+
+    ``tol`` is one stopping distance or one per seed ``(m,)``. ``rows`` ``(m,)``: for a target
+    that holds many geometries (one per row of its own, e.g. the edge uses of a face), the row
+    of each seed; it is passed on as ``target.derivs(x, rows)`` / ``target.evaluate(x, rows)``,
+    ``target.hi`` is then per row and ``target.size`` per seed.
     """
+    tol = np.broadcast_to(np.asarray(tol, dtype=np.float64), x0.shape[:1])
     x = np.clip(x0, lo, hi)
-    S, J, H2 = _derivs_inside(target, x, hi)
+    S, J, H2 = _derivs_inside(target, x, hi, rows)
     dist = np.linalg.norm(S - P, axis=1)
     scale = target.size + np.abs(P).max(axis=1)
     slack = 16 * np.finfo(float).eps * scale  # distances compare equal within rounding
@@ -90,7 +97,7 @@ def _newton(target, P, x0, lo, hi, tol):
         moved = np.linalg.norm(np.einsum("mdk,mk->md", J[active], xt - xa), axis=1)
         # a step shorter than tol ends the search: it needs the new point only, not its
         # derivatives, so it is evaluated in one batch at the end
-        small = moved <= tol
+        small = moved <= tol[active]
         if small.any():
             converged[active[small]] = True
             last.append(active[small])
@@ -99,19 +106,19 @@ def _newton(target, P, x0, lo, hi, tol):
             moved = moved[~small]
             if active.size == 0:
                 break
-        St, Jt, H2t = _derivs_inside(target, xt, ha)
+        St, Jt, H2t = _derivs_inside(target, xt, ha, None if rows is None else rows[active])
         dt = np.linalg.norm(St - Pa, axis=1)
         accept = dt <= dist[active] + slack[active]
         acc = active[accept]
         x[acc], S[acc], J[acc], H2[acc], dist[acc] = xt[accept], St[accept], Jt[accept], H2t[accept], dt[accept]
         alpha[acc] = np.minimum(1.0, 4.0 * alpha[acc])
         alpha[active[~accept]] *= 0.25
-        done = (moved <= tol) | (dt == 0)
+        done = (moved <= tol[active]) | (dt == 0)
         converged[active[done]] = True
         active = active[~done]
     if last:
         idx, xt = np.concatenate(last), np.concatenate(last_x)
-        St = target.evaluate(xt)
+        St = target.evaluate(xt) if rows is None else target.evaluate(xt, rows[idx])
         dt = np.linalg.norm(St - P[idx], axis=1)
         ok = dt <= dist[idx] + slack[idx]
         x[idx[ok]], S[idx[ok]], dist[idx[ok]] = xt[ok], St[ok], dt[ok]

@@ -46,6 +46,20 @@ class CurveKnotAlgebra:
         near = np.abs(self._knots - u) <= DEFAULT.knot * (b - a)
         return float(self._knots[near][0]) if near.any() else u
 
+    def _knot_values(self, values, name="knots") -> np.ndarray:
+        """:meth:`_knot_value` of every entry of the 1-D ``values`` at once: the first knot
+        within the knot tolerance of each (the near knots are consecutive, and rounding in the
+        search may leave the first of them one place early)."""
+        a, b = self.domain
+        u = as_params(values, (a, b), name)
+        U, tol = self._knots, DEFAULT.knot * (b - a)
+        i = np.searchsorted(U, u - tol, side="left")
+        out = u.copy()
+        for j in (np.minimum(i, U.size - 1), np.maximum(i - 1, 0)):  # the earlier candidate wins
+            near = np.abs(U[j] - u) <= tol
+            out[near] = U[j][near]
+        return out
+
     def elevation_matrix(self, by: int = 1):
         """Sparse ``(n_new, n)`` matrix mapping control coefficients onto the
         degree-elevated curve's (see :meth:`elevate_degree`)."""
@@ -61,7 +75,7 @@ class CurveKnotAlgebra:
         extra = as_float_array(knots, "knots", KnotVectorError).ravel()
         if extra.size == 0:
             return self
-        extra = np.array([self._knot_value(x, "knots") for x in extra])
+        extra = self._knot_values(extra)
         tau = np.sort(np.concatenate([self._knots, extra]), kind="stable")
         tau = validate_knots(tau, self._degree, tau.size - self._degree - 1, "refined knots")
         coefs = algebra.refine(self._degree, self._knots, self._coefs, tau)

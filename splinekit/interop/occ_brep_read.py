@@ -20,6 +20,7 @@ import numpy as np
 
 from ..brep import Edge, Shell, Solid, TrimmedFace
 from ..curves import BSplineCurve, NurbsCurve
+from ..curves.batch import CurveBatch
 from ..errors import BackendError, ParameterError
 from .occ_backend import _ocp, _occ_call, require_ocp
 from .occ_geometry import _curve2d_from_occ, _curve3d_from_occ, _edge_to_curve, _from_geom, _same_domain
@@ -195,8 +196,12 @@ def _add_loop(loops: list, edges: list, outer: bool) -> None:
 
 
 def _loop_samples(loops) -> np.ndarray:
-    """``(n, 2)`` points of every pcurve of a face's ``loops``."""
-    return np.concatenate([e.pcurve.evaluate(np.linspace(*e.domain, 17)) for lp in loops for e in lp])
+    """``(n, 2)`` points of every pcurve of a face's ``loops``: 17 each, evenly spread over its
+    domain (the pcurves evaluated as one :class:`~splinekit.curves.batch.CurveBatch`)."""
+    pcurves = [e.pcurve for lp in loops for e in lp]
+    batch = CurveBatch(pcurves)
+    t = np.linspace(batch.domains[:, 0], batch.domains[:, 1], 17, axis=1).ravel()
+    return batch.evaluate(np.repeat(np.arange(len(pcurves)), 17), t)
 
 
 def _isoline_pcurve(edge, fwd, cedge, cfwd, pcurve):

@@ -16,6 +16,7 @@ import numpy as np
 
 from ..brep import Shell, Solid, TrimmedFace
 from ..brep.topology import pair_by_samples
+from ..curves.batch import CurveBatch
 from ..errors import BackendError, ParameterError
 from ..tolerances import OCC_CONFUSION
 from .occ_backend import _ocp
@@ -25,11 +26,14 @@ from .occ_shapes import _compound
 __all__ = ["brep_to_shape", "brep_list_to_shape"]
 
 
+_FRACTIONS = np.array([0.0, 0.25, 0.5, 0.75, 1.0])
+
+
 def _use_points(face, use) -> np.ndarray:
     """``(5, 3)`` points of an edge use at parameter fractions 0, 0.25, 0.5, 0.75, 1 (3-D curve if
     there is one, else the surface at the pcurve)."""
     a, b = use.domain
-    t = a + (b - a) * np.array([0.0, 0.25, 0.5, 0.75, 1.0])
+    t = a + (b - a) * _FRACTIONS
     if use.curve is not None:
         return use.curve.evaluate(t)
     return _on_surface(face, use.pcurve.evaluate(t))
@@ -67,6 +71,25 @@ def _vertex_points(centers, owner, P, T):
     np.add.at(r, owner, T * np.einsum("ij,ij->i", T, P - centers[owner])[:, None])
     # M's eigenvalues are the squared singular values of the rows
     return centers + np.einsum("nij,nj->ni", np.linalg.pinv(M, rcond=_RCOND**2, hermitian=True), r)
+
+
+def _all_use_points(faces, uses) -> list:
+    """:func:`_use_points` of every ``(face index, Edge)`` in ``uses``: the 3-D curves evaluated
+    as one :class:`~splinekit.curves.batch.CurveBatch`, the uses without one face by face."""
+    with_curve = [k for k, (_, e) in enumerate(uses) if e.curve is not None]
+    out = [None] * len(uses)
+    if with_curve:
+        curves = [uses[k][1].curve for k in with_curve]
+        ends = np.array([uses[k][1].domain for k in with_curve], dtype=np.float64)  # the pcurve's, as one use
+        t = (ends[:, :1] + (ends[:, 1:] - ends[:, :1]) * _FRACTIONS[None]).ravel()
+        rows = np.repeat(np.arange(len(curves)), _FRACTIONS.size)
+        points = CurveBatch(curves).evaluate(rows, t).reshape(len(curves), _FRACTIONS.size, -1)
+        for k, P in zip(with_curve, points):
+            out[k] = P
+    for k, (i, e) in enumerate(uses):
+        if out[k] is None:
+            out[k] = _use_points(faces[i], e)
+    return out
 
 
 class _UnionFind:
@@ -177,11 +200,10 @@ def brep_to_shape(obj, *, tolerance: float = OCC_CONFUSION):
     faces = _faces_of(obj)
 
     # every edge use: [face, loop, position, Edge, key, (5, 3) points]
-    uses = []
-    for i, f in enumerate(faces):
-        for j, loop in enumerate(f.boundary_loops()):
-            for k, e in enumerate(loop):
-                uses.append([i, j, k, e, e.key, _use_points(f, e)])
+    uses = [[i, j, k, e, e.key] for i, f in enumerate(faces) for j, loop in enumerate(f.boundary_loops())
+            for k, e in enumerate(loop)]
+    for r, P in zip(uses, _all_use_points(faces, [(r[0], r[3]) for r in uses])):
+        r.append(P)
     _pair_keyless(faces, uses)
 
     # group uses by key; the first use fixes the edge's direction and parameter

@@ -22,8 +22,11 @@ import numpy as np
 
 from ..brep import Edge
 from ..closest import project
+from ..closest.newton import _best_per_owner, _newton
+from ..closest.parametric import _Curve
 from ..curves import BSplineCurve, NurbsCurve
-from ..tolerances import DEFAULT
+from ..curves.batch import CurveBatch
+from ..tolerances import DEFAULT, GEOMETRIC_CONFUSION
 
 __all__ = ["same_parameter", "compose_piecewise_linear"]
 
@@ -64,6 +67,21 @@ def compose_piecewise_linear(curve, t_breaks, s_breaks):
     return NurbsCurve(p, new_knots, refined.control_points, refined.weights)
 
 
+def _uv_clipped(surface, uv):
+    """The ``(n, 2)`` parameters ``uv`` clamped onto the surface's domain, as ``(u, v)``: a file's
+    pcurve may overshoot the domain by a rounding."""
+    (u0, u1), (v0, v1) = surface.domain
+    return np.clip(uv[..., 0], u0, u1), np.clip(uv[..., 1], v0, v1)
+
+
+def _chain(S, c):
+    """``Q, Q', Q''`` ``(3, n, 3)`` of ``Q(s) = S(c(s))`` from the surface's derivatives ``S``
+    ``(3, 3, n, 3)`` at ``c(s)`` and the pcurve's ``c`` ``(3, n, 2)`` (the chain rule)."""
+    du, dv, ddu, ddv = c[1][:, :1], c[1][:, 1:], c[2][:, :1], c[2][:, 1:]
+    return np.stack([S[0, 0], S[1, 0] * du + S[0, 1] * dv,
+                     S[2, 0] * du ** 2 + 2.0 * S[1, 1] * du * dv + S[0, 2] * dv ** 2 + S[1, 0] * ddu + S[0, 1] * ddv])
+
+
 class _CurveOnSurface:
     """``Q(s) = surface(pcurve(s))``: the 3-D trace of a pcurve, with the evaluate / derivatives /
     domain that :func:`splinekit.project` needs (derivatives up to order 2, by the chain rule)."""
@@ -71,69 +89,215 @@ class _CurveOnSurface:
     def __init__(self, surface, pcurve):
         self.surface, self.pcurve = surface, pcurve
         self.domain = pcurve.domain
-        (self._u0, self._u1), (self._v0, self._v1) = surface.domain
-
-    def _uv(self, uv):
-        # a file's pcurve may overshoot the surface's domain by a rounding
-        return np.clip(uv[..., 0], self._u0, self._u1), np.clip(uv[..., 1], self._v0, self._v1)
 
     def evaluate(self, s):
-        return self.surface.evaluate(*self._uv(np.atleast_2d(self.pcurve.evaluate(np.atleast_1d(s)))))
+        return self.surface.evaluate(*_uv_clipped(self.surface, np.atleast_2d(self.pcurve.evaluate(np.atleast_1d(s)))))
 
     def derivatives(self, s, order):
         s = np.atleast_1d(np.asarray(s, dtype=np.float64))
         c = self.pcurve.derivatives(s, 2)  # (3, n, 2): pcurve, its first and second derivatives
-        S = self.surface.derivatives(*self._uv(c[0]), 2)  # (3, 3, n, 3)
-        du, dv, ddu, ddv = c[1][:, :1], c[1][:, 1:], c[2][:, :1], c[2][:, 1:]
-        out = [S[0, 0], S[1, 0] * du + S[0, 1] * dv,
-               S[2, 0] * du ** 2 + 2.0 * S[1, 1] * du * dv + S[0, 2] * dv ** 2 + S[1, 0] * ddu + S[0, 1] * ddv]
-        return np.stack(out[:order + 1])
+        return _chain(self.surface.derivatives(*_uv_clipped(self.surface, c[0]), 2), c)[:order + 1]
+
+
+class _TracesOnSurface:
+    """The traces ``surface(pcurve_i(s))`` of many pcurves on one surface, as the batched Newton
+    search of :func:`splinekit.closest.newton._newton` sees them with ``rows`` (row ``i``: use
+    ``i``): ``derivs(x, rows)`` and ``evaluate(x, rows)`` for ``x`` ``(m, 1)``, ``hi`` per row
+    ``(n, 1)``, ``size`` per seed (what :func:`splinekit.project` takes for one trace)."""
+
+    def __init__(self, surface, pcurves: CurveBatch, size):
+        self.surface, self.pcurves, self.size = surface, pcurves, size
+        self.hi = pcurves.domains[:, 1:]
+
+    def derivs(self, x, rows):
+        c = self.pcurves.derivatives(rows, x[:, 0], 2)
+        d = _chain(self.surface.derivatives(*_uv_clipped(self.surface, c[0]), 2), c)
+        return d[0], d[1][..., None], d[2][..., None, None]
+
+    def evaluate(self, x, rows):
+        return self.surface.evaluate(*_uv_clipped(self.surface, self.pcurves.evaluate(rows, x[:, 0])))
 
 
 def _onto_curve_parameter(surface, use, pieces: int):
     """The use's pcurve composed with the piecewise-linear map (``pieces`` pieces, breakpoints at
     equal steps of the 3-D curve's parameter) that sends each breakpoint to the parameter of the
-    trace's point closest to the 3-D curve's point there, or None if that map is not increasing."""
+    trace's point closest to the 3-D curve's point there, or None if that map is not increasing.
+
+    One use at a time through :func:`splinekit.project`: the reference that
+    :func:`_onto_curve_parameters` (all uses at once) is tested against, and its fallback."""
     a, b = use.domain
     t = np.linspace(a, b, pieces + 1)
     trace = _CurveOnSurface(surface, use.pcurve)
     s = np.array(project(trace, use.curve.evaluate(t[1:-1]), seeds=t[1:-1]).parameters, dtype=np.float64).ravel()
-    s = np.concatenate([[a], s, [b]])
+    return _composed(use.pcurve, t, np.concatenate([[a], s, [b]]))
+
+
+def _composed(pcurve, t, s):
+    """``pcurve`` composed with the map ``t -> s`` (:func:`compose_piecewise_linear`), or None
+    when ``s`` is not increasing."""
+    a, b = t[0], t[-1]
     if not (np.diff(s) > 1e-12 * (b - a)).all():
         return None
-    return compose_piecewise_linear(use.pcurve, t, s)
+    return compose_piecewise_linear(pcurve, t, s)
 
 
-def _deviation(surface, pcurve, curve, t) -> float:
-    """Largest distance between ``surface(pcurve(t))`` and ``curve(t)`` over the parameters ``t``."""
-    return float(np.linalg.norm(_CurveOnSurface(surface, pcurve).evaluate(t) - curve.evaluate(t), axis=1).max())
+def _onto_curve_parameters(surface, uses, extents, pieces: int) -> list:
+    """:func:`_onto_curve_parameter` of every use in ``uses`` (their traces' largest absolute
+    coordinates in ``extents``) with one batched Newton search: each breakpoint seeded at its
+    own parameter, inside its use's domain, stopping at ``GEOMETRIC_CONFUSION`` times its
+    trace's size, as :func:`splinekit.project` does for one use. A use whose search fails to
+    converge goes through :func:`_onto_curve_parameter` (which raises what ``project`` raises)."""
+    domains = np.array([use.domain for use in uses], dtype=np.float64)
+    t = np.linspace(domains[:, 0], domains[:, 1], pieces + 1, axis=1)  # (n, pieces + 1)
+    rows = np.repeat(np.arange(len(uses)), pieces - 1)
+    seeds = t[:, 1:-1].ravel()
+    points = CurveBatch([use.curve for use in uses]).evaluate(rows, seeds)
+    size = np.maximum(1.0, np.asarray(extents, dtype=np.float64))[rows]
+    target = _TracesOnSurface(surface, CurveBatch([use.pcurve for use in uses]), size)
+    x, _, dist, _, converged, stationary = _newton(
+        target, points, seeds[:, None], domains[rows, :1], domains[rows, 1:], GEOMETRIC_CONFUSION * size, rows)
+    failed = (~(converged | stationary) & (dist > GEOMETRIC_CONFUSION * size)).reshape(len(uses), pieces - 1).any(axis=1)
+    s = x[:, 0].reshape(len(uses), pieces - 1)
+    out = []
+    for i, use in enumerate(uses):
+        if failed[i]:
+            out.append(_onto_curve_parameter(surface, use, pieces))
+        else:
+            out.append(_composed(use.pcurve, t[i], np.concatenate([[t[i, 0]], s[i], [t[i, -1]]])))
+    return out
 
 
-def _samples(use, per_span: int = 17) -> np.ndarray:
-    """Parameters of ``use``: ``per_span`` in each Bézier span of its pcurve and of its 3-D curve."""
-    a, b = use.domain
-    br = np.union1d(use.pcurve.bezier_breakpoints(), use.curve.bezier_breakpoints())
-    br = np.union1d(br[(br > a) & (br < b)], [a, b])
-    return (br[:-1, None] + (br[1:] - br[:-1])[:, None] * np.linspace(0.0, 1.0, per_span)[None]).ravel()
+def _samples(pcurves, curves, per_span: int = 17):
+    """``(rows, t)``: parameters of many edge uses (``pcurves[i]`` with its 3-D ``curves[i]``),
+    use ``i``'s ``per_span`` in each Bézier span of either curve, on the pcurve's domain, use by
+    use (``rows``: the use of each parameter)."""
+    ends = np.array([pc.domain for pc in pcurves], dtype=np.float64)
+    knots, owner = [], []
+    for i, c in enumerate(pcurves + curves):  # each curve's knots inside its own domain...
+        k = np.asarray(c.knots)
+        a, b = c.domain
+        knots.append(k[(k >= a) & (k <= b)])
+        owner.append(np.full(knots[-1].size, i % len(pcurves)))
+    value, row = np.concatenate(knots), np.concatenate(owner)
+    inside = (value > ends[row, 0]) & (value < ends[row, 1])  # ...and strictly inside the pcurve's
+    value = np.concatenate([value[inside], ends.ravel()])
+    row = np.concatenate([row[inside], np.repeat(np.arange(len(pcurves)), 2)])
+    order = np.lexsort((value, row))
+    value, row = value[order], row[order]
+    first = np.ones(value.size, dtype=bool)
+    first[1:] = (row[1:] != row[:-1]) | (value[1:] != value[:-1])
+    br, row = value[first], row[first]
+    span = np.flatnonzero(row[1:] == row[:-1])  # consecutive breakpoints of one use
+    t = (br[span, None] + (br[span + 1] - br[span])[:, None] * np.linspace(0.0, 1.0, per_span)[None]).ravel()
+    return np.repeat(row[span], per_span), t
 
 
-def _reparametrized(surface, use, dev: float, apart: float):
-    """``(pcurve, deviation left)``: the use's pcurve on its 3-D curve's parameter, with 16 to 256
-    pieces (four times more while that halves the deviation left and it exceeds twice ``apart``,
-    the distance between the two point sets, which no parameter can undo); None when no
-    increasing map is found or the best one does not halve ``dev``."""
-    best = None
+def _deviations(surface, pcurves, curves):
+    """Largest distance between ``surface(pcurve(t))`` and ``curve(t)`` of each pair, over the
+    parameters :func:`_samples` gives it; and the traces' points ``(list of (n_i, 3))``."""
+    rows, t = _samples(list(pcurves), list(curves))
+    on = surface.evaluate(*_uv_clipped(surface, CurveBatch(pcurves).evaluate(rows, t)))
+    gap = np.linalg.norm(on - CurveBatch(curves).evaluate(rows, t), axis=1)
+    starts = np.flatnonzero(np.r_[True, rows[1:] != rows[:-1]])
+    return np.maximum.reduceat(gap, starts), np.split(on, starts[1:])
+
+
+class _Curves:
+    """Many curves as the batched Newton search sees them with ``rows`` (row ``i``: curve ``i``
+    of the :class:`~splinekit.curves.batch.CurveBatch`); ``size`` per seed."""
+
+    def __init__(self, batch: CurveBatch, size):
+        self.batch, self.size = batch, size
+        self.hi = batch.domains[:, 1:]
+
+    def derivs(self, x, rows):
+        d = self.batch.derivatives(rows, x[:, 0], 2)
+        return d[0], d[1][..., None], d[2][..., None, None]
+
+    def evaluate(self, x, rows):
+        return self.batch.evaluate(rows, x[:, 0])
+
+
+def _piece_seeds(breaks, x0, owner):
+    """``(seeds, owner, lo, hi, first, last)``: the seeds ``x0`` (of the points ``owner``) in the
+    boxes of the smooth pieces between ``breaks`` (a curve's ends and creases) that hold them; a
+    seed on a crease starts in both pieces beside it, as :func:`splinekit.project` does.
+    ``first``, ``last``: whether the box is the curve's first / last piece."""
+    piece = np.clip(np.searchsorted(breaks, x0, side="right") - 1, 0, breaks.size - 2)
+    on = np.isin(x0, breaks[1:-1])
+    x0, owner = np.concatenate([x0, x0[on]]), np.concatenate([owner, owner[on]])
+    piece = np.concatenate([piece, piece[on] - 1])
+    return x0, owner, breaks[piece], breaks[piece + 1], piece == 0, piece == breaks.size - 2
+
+
+def _aparts(uses, on) -> list:
+    """Per use, the largest distance from the points ``on[i]`` (its trace) to its 3-D curve:
+    ``project(use.curve, on[i]).distances.max()``, the Newton searches of all uses as one batch.
+
+    Everything else is ``project``'s own: each curve's samples and seeds
+    (:class:`splinekit.closest.parametric._Curve`), the smooth pieces the seeds search in
+    (:func:`_piece_seeds`), the stopping distance. A use goes through ``project`` itself when a
+    point's best search does not converge, or stops on a crease with the distance still falling
+    across it (``project`` would search on in the next piece), or ``project`` rescales the curve."""
+    out = [None] * len(uses)
+    targets = [_Curve(use.curve, use.curve.domain) for use in uses]
+    batched = [i for i, tg in enumerate(targets) if tg.unit == 1.0]
+    if batched:
+        x0, owner, lo, hi, first, last, counts, start = [], [], [], [], [], [], [], 0
+        for i in batched:
+            point, seeds = targets[i].seeds(on[i])
+            got = _piece_seeds(targets[i].breaks[0], seeds[:, 0], start + point)
+            for acc, x in zip((x0, owner, lo, hi, first, last), got):
+                acc.append(x)
+            counts.append(got[0].size)
+            start += len(on[i])
+        x0, owner, lo, hi, first, last = (np.concatenate(a) for a in (x0, owner, lo, hi, first, last))
+        rows = np.repeat(np.arange(len(batched)), counts)
+        size = np.array([targets[i].size for i in batched])[rows]
+        tol = np.array([targets[i].tolerance(None) for i in batched])[rows]
+        x, _, dist, g, converged, stationary = _newton(
+            _Curves(CurveBatch([uses[i].curve for i in batched]), size),
+            np.concatenate([on[i] for i in batched])[owner], x0[:, None], lo[:, None], hi[:, None], tol, rows)
+        across = ((x[:, 0] <= lo) & (g[:, 0] > 0) & ~first) | ((x[:, 0] >= hi) & (g[:, 0] < 0) & ~last)
+        ok = ((converged | stationary) | (dist <= tol)) & ~across
+        best = _best_per_owner(owner, dist, start)
+        point_use = np.repeat(np.arange(len(batched)), [len(on[i]) for i in batched])
+        bad = np.zeros(len(batched), dtype=bool)
+        np.logical_or.at(bad, point_use, ~ok[best])
+        apart = np.zeros(len(batched))
+        np.maximum.at(apart, point_use, dist[best])
+        for j, i in enumerate(batched):
+            if not bad[j]:
+                out[i] = float(apart[j])
+    return [float(project(use.curve, on[i]).distances.max()) if got is None else got
+            for i, (use, got) in enumerate(zip(uses, out))]
+
+
+def _reparametrized(surface, uses, devs, aparts, extents) -> list:
+    """Per use: ``(pcurve, deviation left)``, the use's pcurve on its 3-D curve's parameter, with
+    16 to 256 pieces (four times more while that halves the deviation left and it exceeds twice
+    its ``apart``, the distance between the two point sets, which no parameter can undo); None
+    when no increasing map is found or the best one does not halve its ``dev``. All uses advance
+    together, one batched search per piece count."""
+    best = [None] * len(uses)
+    active = list(range(len(uses)))
     for pieces in (16, 64, 256):
-        pc = _onto_curve_parameter(surface, use, pieces)
-        if pc is None:
+        if not active:
             break
-        got = _deviation(surface, pc, use.curve, _samples(Edge(pc, use.curve)))
-        if best is not None and got > 0.5 * best[1]:  # no longer the map's resolution that limits it
-            break
-        best = (pc, got)
-        if got <= 2.0 * apart:
-            break
-    return best if best is not None and best[1] < 0.5 * dev else None
+        moved = _onto_curve_parameters(surface, [uses[i] for i in active], [extents[i] for i in active], pieces)
+        done = {i for i, pc in zip(active, moved) if pc is None}
+        pairs = [(i, pc) for i, pc in zip(active, moved) if pc is not None]
+        if pairs:
+            got = _deviations(surface, [pc for _, pc in pairs], [uses[i].curve for i, _ in pairs])[0]
+            for (i, pc), g in zip(pairs, got.tolist()):
+                if best[i] is not None and g > 0.5 * best[i][1]:  # no longer the map's resolution that limits it
+                    done.add(i)
+                    continue
+                best[i] = (pc, g)
+                if g <= 2.0 * aparts[i]:
+                    done.add(i)
+        active = [i for i in active if i not in done]
+    return [b if b is not None and b[1] < 0.5 * dev else None for b, dev in zip(best, devs)]
 
 
 def same_parameter(surface, loops) -> list:
@@ -151,24 +315,21 @@ def same_parameter(surface, loops) -> list:
     uses = [use for lp in loops for use in lp if use.curve is not None and not use.degenerate]
     if not uses:
         return loops
-    samples = [_samples(use) for use in uses]
-    uv = np.concatenate([use.pcurve.evaluate(t) for use, t in zip(uses, samples)])
-    (u0, u1), (v0, v1) = surface.domain
-    on_surface = np.split(surface.evaluate(np.clip(uv[:, 0], u0, u1), np.clip(uv[:, 1], v0, v1)),
-                          np.cumsum([len(t) for t in samples])[:-1])
-    fixed = {}
-    for use, t, on in zip(uses, samples, on_surface):
-        dev = float(np.linalg.norm(on - use.curve.evaluate(t), axis=1).max())
-        if dev <= use.tolerance:
-            continue
-        apart = float(project(use.curve, on).distances.max())
+    devs, on = _deviations(surface, [use.pcurve for use in uses], [use.curve for use in uses])
+    off = [i for i, (use, dev) in enumerate(zip(uses, devs.tolist())) if dev > use.tolerance]
+    fixed, lagging = {}, []
+    for i, apart in zip(off, _aparts([uses[i] for i in off], [on[i] for i in off])):
+        use, dev = uses[i], float(devs[i])
         if apart >= 0.5 * dev:  # the curves differ in shape, not only in parameter
             fixed[id(use)] = Edge(use.pcurve, use.curve, key=use.key, tolerance=MARGIN * dev)
             continue
-        moved = _reparametrized(surface, use, dev, apart)
-        if moved is not None:
-            pc, left = moved
-            fixed[id(use)] = Edge(pc, use.curve, key=use.key, tolerance=max(use.tolerance, MARGIN * left))
-        else:  # the curve is kept (a use without one leaves the edge to the other face's pcurve)
-            fixed[id(use)] = Edge(use.pcurve, use.curve, key=use.key, tolerance=MARGIN * dev)
+        lagging.append((use, dev, apart, float(np.abs(on[i]).max())))
+    if lagging:
+        moved = _reparametrized(surface, *map(list, zip(*lagging)))
+        for (use, dev, _, _), got in zip(lagging, moved):
+            if got is not None:
+                pc, left = got
+                fixed[id(use)] = Edge(pc, use.curve, key=use.key, tolerance=max(use.tolerance, MARGIN * left))
+            else:  # the curve is kept (a use without one leaves the edge to the other face's pcurve)
+                fixed[id(use)] = Edge(use.pcurve, use.curve, key=use.key, tolerance=MARGIN * dev)
     return [[fixed.get(id(use), use) for use in lp] for lp in loops]
