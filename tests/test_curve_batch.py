@@ -7,8 +7,10 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import splinekit as sk
+from splinekit.basis.knots import snapped_to_knots
 from splinekit.curves.batch import CurveBatch
 from splinekit.errors import DomainError, ParameterError
+from splinekit.tolerances import DEFAULT
 
 
 def _random_curves(rng, count, dim):
@@ -85,8 +87,9 @@ def test_bad_input():
 @settings(max_examples=30, deadline=None)
 @given(seed=st.integers(0, 2**32 - 1))
 def test_refine_snaps_like_one_knot_at_a_time(seed):
-    """``refine`` snaps its knots onto existing ones all at once (``_knot_values``): the same
-    values as snapping one at a time (``_knot_value``), including values a hair off a knot."""
+    """``snapped_to_knots`` (which ``refine`` applies to all its knots at once) gives, for every
+    value, the first knot within the tolerance, or the value itself: the definition, applied one
+    value at a time here, including values a hair off a knot."""
     rng = np.random.default_rng(seed)
     curve = _random_curves(rng, 1, 2)[0]
     curve = curve.to_bspline() if isinstance(curve, sk.BezierCurve) else curve
@@ -94,7 +97,8 @@ def test_refine_snaps_like_one_knot_at_a_time(seed):
     knots = np.asarray(curve.knots)
     values = np.concatenate([rng.uniform(a, b, 20), knots + rng.normal(scale=1e-13, size=knots.size) * (b - a)])
     values = np.clip(values, a, b)
-    expected = np.array([curve._knot_value(x, "knots") for x in values])
-    np.testing.assert_array_equal(curve._knot_values(values), expected)
+    tol = DEFAULT.knot * (b - a)
+    expected = np.array([knots[np.abs(knots - x) <= tol][0] if (np.abs(knots - x) <= tol).any() else x for x in values])
+    np.testing.assert_array_equal(snapped_to_knots(knots, values, tol), expected)
     refined = curve.refine(values[:5])
     np.testing.assert_allclose(refined.evaluate(np.linspace(a, b, 50)), curve.evaluate(np.linspace(a, b, 50)), atol=1e-12)

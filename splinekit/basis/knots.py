@@ -18,6 +18,7 @@ __all__ = [
     "domain",
     "distinct",
     "multiplicity",
+    "snapped_to_knots",
     "clamped_uniform",
     "is_clamped",
     "reparametrized",
@@ -120,6 +121,22 @@ def distinct(knots: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 def multiplicity(knots: np.ndarray, u: float, tol: float = 0.0) -> int:
     """How many knots lie within ``tol`` of ``u``."""
     return int(np.count_nonzero(np.abs(knots - u) <= tol))
+
+
+def snapped_to_knots(knots: np.ndarray, u: np.ndarray, tol: float) -> np.ndarray:
+    """``u`` (any shape) with every value that lies within ``tol`` of a knot replaced by the first
+    such knot of the nondecreasing ``knots``; the others unchanged.
+
+    The knots within ``tol`` of a value are consecutive, so the first is at the search position
+    of ``u - tol`` or, where rounding in that subtraction puts the position one place late, just
+    before it (the earlier candidate wins)."""
+    u = np.asarray(u, dtype=np.float64)
+    i = np.searchsorted(knots, u - tol, side="left")
+    out = u.copy()
+    for j in (np.minimum(i, knots.size - 1), np.maximum(i - 1, 0)):
+        near = np.abs(knots[j] - u) <= tol
+        out[near] = knots[j][near]
+    return out
 
 
 def is_clamped(degree: int, knots: np.ndarray) -> bool:

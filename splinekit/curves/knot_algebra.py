@@ -14,7 +14,7 @@ import scipy.sparse as sp
 
 from .._validate import MAX_DEGREE, as_affine, as_float_array, as_int, as_params, finite_points, homogeneous
 from ..basis import algebra
-from ..basis.knots import is_clamped, reparametrized, validate_knots
+from ..basis.knots import is_clamped, reparametrized, snapped_to_knots, validate_knots
 from ..errors import DegreeError, DomainError, KnotRemovalError, KnotVectorError, ParameterError
 from ..tolerances import DEFAULT, geometric_tolerance
 
@@ -42,23 +42,7 @@ class CurveKnotAlgebra:
         value = as_params(u, (a, b), name)
         if value.ndim != 0:
             raise ParameterError(f"{name} must be a single number, got an array of shape {value.shape}")
-        u = float(value)
-        near = np.abs(self._knots - u) <= DEFAULT.knot * (b - a)
-        return float(self._knots[near][0]) if near.any() else u
-
-    def _knot_values(self, values, name="knots") -> np.ndarray:
-        """:meth:`_knot_value` of every entry of the 1-D ``values`` at once: the first knot
-        within the knot tolerance of each (the near knots are consecutive, and rounding in the
-        search may leave the first of them one place early)."""
-        a, b = self.domain
-        u = as_params(values, (a, b), name)
-        U, tol = self._knots, DEFAULT.knot * (b - a)
-        i = np.searchsorted(U, u - tol, side="left")
-        out = u.copy()
-        for j in (np.minimum(i, U.size - 1), np.maximum(i - 1, 0)):  # the earlier candidate wins
-            near = np.abs(U[j] - u) <= tol
-            out[near] = U[j][near]
-        return out
+        return float(snapped_to_knots(self._knots, value, DEFAULT.knot * (b - a)))
 
     def elevation_matrix(self, by: int = 1):
         """Sparse ``(n_new, n)`` matrix mapping control coefficients onto the
@@ -75,7 +59,8 @@ class CurveKnotAlgebra:
         extra = as_float_array(knots, "knots", KnotVectorError).ravel()
         if extra.size == 0:
             return self
-        extra = self._knot_values(extra)
+        a, b = self.domain
+        extra = snapped_to_knots(self._knots, as_params(extra, (a, b), "knots"), DEFAULT.knot * (b - a))
         tau = np.sort(np.concatenate([self._knots, extra]), kind="stable")
         tau = validate_knots(tau, self._degree, tau.size - self._degree - 1, "refined knots")
         coefs = algebra.refine(self._degree, self._knots, self._coefs, tau)

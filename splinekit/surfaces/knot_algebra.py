@@ -16,7 +16,7 @@ import numpy as np
 from .._validate import as_affine, as_direction, as_float_array, as_int, as_params, finite_points, homogeneous
 from ..basis import algebra
 from ..basis.bspline import basis_funs_t, find_span
-from ..basis.knots import domain, is_clamped, reparametrized, validate_knots
+from ..basis.knots import domain, is_clamped, reparametrized, snapped_to_knots, validate_knots
 from ..curves import BSplineCurve
 from ..curves.knot_algebra import _elevation_step
 from ..errors import DomainError, KnotRemovalError, KnotVectorError, ParameterError
@@ -49,10 +49,7 @@ class SurfaceKnotAlgebra:
         value = as_params(u, (a, b), name)
         if value.ndim != 0:
             raise ParameterError(f"{name} must be a single number, got an array of shape {value.shape}")
-        u = float(value)
-        U = self._ku if d == 0 else self._kv
-        near = np.abs(U - u) <= DEFAULT.knot * (b - a)
-        return float(U[near][0]) if near.any() else u
+        return float(snapped_to_knots(self._ku if d == 0 else self._kv, value, DEFAULT.knot * (b - a)))
 
     def refine(self, knots, direction="u"):
         """Insert every value of ``knots`` in the given direction."""
@@ -60,7 +57,8 @@ class SurfaceKnotAlgebra:
         extra = as_float_array(knots, "knots", KnotVectorError).ravel()
         if extra.size == 0:
             return self
-        extra = np.array([self._knot_value(d, x, "knots") for x in extra])
+        a, b = self.domain[d]
+        extra = snapped_to_knots(U, as_params(extra, (a, b), "knots"), DEFAULT.knot * (b - a))
         tau = np.sort(np.concatenate([U, extra]), kind="stable")
         tau = validate_knots(tau, p, tau.size - p - 1, "refined knots")
         return self._rebuild(d, p, tau, algebra.refine(p, U, C, tau))
