@@ -80,8 +80,12 @@ class _Breaks:
 
 
 class CurveBatch:
-    """Many spline curves of one dimension, evaluated together: ``evaluate(k, t)`` gives the points
-    of curve ``k[i]`` at ``t[i]``."""
+    """Many spline curves of one dimension as a table of Bézier pieces, evaluated together:
+    ``evaluate(k, t)`` gives the points of curve ``k[i]`` at ``t[i]``.
+
+    Unlike :class:`splinekit.curves.batch.CurveBatch` (knot spans, results bitwise equal to each
+    curve's own evaluation), this one keeps the pieces themselves: the edge sampler walks them
+    (``breaks``, ``first_row``) and bounds each by its control polygon (``segs``)."""
 
     def __init__(self, curves):
         self.dim = curves[0].dim if curves else 0
