@@ -39,14 +39,22 @@ def _use_points(face, use) -> np.ndarray:
     return _on_surface(face, use.pcurve.evaluate(t))
 
 
-def _end_tangents(use):
-    """``(2, 3)`` unit tangents of the use's 3-D curve at its start and end, or None (no 3-D curve,
-    degenerate, or a zero derivative at an end)."""
-    if use.curve is None or use.degenerate:
-        return None
-    d = use.curve.derivatives(np.asarray(use.domain, dtype=float), 1)[1]
-    n = np.linalg.norm(d, axis=1, keepdims=True)
-    return d / n if np.all(n > 0.0) else None
+def _end_tangents(uses) -> list:
+    """For each Edge of ``uses``: the ``(2, 3)`` unit tangents of its 3-D curve at its start and
+    end, or None (no 3-D curve, degenerate, or a zero derivative at an end). The curves are
+    differentiated as one :class:`~splinekit.curves.batch.CurveBatch`."""
+    out = [None] * len(uses)
+    idx = [k for k, e in enumerate(uses) if e.curve is not None and not e.degenerate]
+    if not idx:
+        return out
+    t = np.array([uses[k].domain for k in idx], dtype=np.float64).ravel()
+    rows = np.repeat(np.arange(len(idx)), 2)
+    d = CurveBatch([uses[k].curve for k in idx]).derivatives(rows, t, 1)[1].reshape(len(idx), 2, -1)
+    n = np.linalg.norm(d, axis=2, keepdims=True)
+    for k, dk, nk in zip(idx, d, n):
+        if np.all(nk > 0.0):
+            out[k] = dk / nk
+    return out
 
 
 _RCOND = 1e-2
@@ -257,8 +265,7 @@ def brep_to_shape(obj, *, tolerance: float = OCC_CONFUSION):
     # each 3-D curve end at its vertex: the vertex goes where the STEP reader keeps the edges' ranges
     index = {root: i for i, root in enumerate(roots)}
     owner, end_points, end_tangents = [], [], []
-    for r in uses:
-        tangents = _end_tangents(r[3])
+    for r, tangents in zip(uses, _end_tangents([r[3] for r in uses])):
         if tangents is None:
             continue
         forward = same[id(r)]
