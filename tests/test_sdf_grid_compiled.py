@@ -271,9 +271,13 @@ def test_the_bounds_tangent_plane_stays_below_the_distance_and_touches_the_bound
         assert np.allclose(tg[:, 0], at_p[:, e], rtol=1e-12, atol=1e-14)
         slope = np.einsum("ij,ij->i", tg[:, 1:], U)
         gap = beside[:, :, e] - (tg[None, :, 0] + np.array([1.0, -1.0])[:, None] * eps * slope[None])
-        assert (gap >= -1e-12).all()  # convex: above its tangent plane
+        # convex: above its tangent plane on both sides (a gradient off by d leaves a gap of
+        # -eps |d . u| on one side, so this check catches it)
+        assert (gap >= -1e-12).all()
+        # and touching it to second order: on one side at least, as a step may cross a kink
+        # (where another edge line or the disk takes over) on the other
         smooth = tg[:, 0] > 1e-3  # away from the prism, where the bound has a kink at zero
-        assert (gap[:, smooth] <= 1e-9).all()  # second order only
+        assert (gap[:, smooth].min(axis=0) <= 1e-9).all()
 
 
 def test_samples_on_vertices_edges_and_far_blocks_at_every_level(compiled):
