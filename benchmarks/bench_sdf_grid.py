@@ -60,18 +60,49 @@ margin fixed the same way: 3.04, 3.18 against 3.25, 3.67. So the traversal saves
 the gain is 10-20 %, and the whole run (``--threads``, load 3.3-4.4) stays at 2.9-3.0 CPU seconds
 against pysdf's 4.1-4.5 (1.4-1.5x in CPU).
 
-What limits 3x pysdf (about 0.75 us of CPU per sample): the filters, not the search. At the 2^3
-level each block computes the bounds of its parent's 240 triangles twice (at its centre for its
-own nearest, 1.9 ns each, and the block test, 4 ns each) and copies the 44 it keeps (20
-coefficients each): 6.6 us a block, 0.84 us per sample; the 4^3 level 0.35 us per sample, the
-samples 0.13 us (44 bounds and 3.5 exact distances), the levels above 0.26. The list sizes follow
-from the block test: a far block of half size ``h`` keeps a cap of the surface of radius about
-``2 h`` whatever its distance (``pi (2 h)^2`` at about 4.3 triangles per square voxel here),
-and each of its eight parts scans it, so every level costs about ``8 N / block^3`` bounds per
-sample. Next steps, untried: float32 coefficients and bounds (twice the vector width, half the
-bytes; the margins need a rounding analysis), candidates stored in groups of 8 or 16 with their
-coefficients together instead of 20 rows 660 kB apart, and the 2^3 level's centre search from
-fewer candidates.
+Sixth session, the profile by cutting the traversal off (one thread, CPU seconds, best or median
+of interleaved runs at load 3.5-5): 16^3 0.02; 8^3 0.43-0.45 (4,080 blocks, about 110 us each:
+the far ones open the nodes their 16^3 block kept, into lists of 830 triangles); 4^3 0.59-0.63
+(29,667 blocks, 20 us each, filtering 860 triangles to 240); 2^3 and the samples 1.8-2.0, of
+which the 2^3 blocks under far 4^3 blocks (196,972 blocks, 1,575,776 samples) 1.25 (centre
+0.1-0.15, filter 0.25-0.4, samples 0.65-1.0) and the whole subtrees of the 4,596 near 4^3 blocks
+0.55 (1.9 us a sample). Unit costs (micro-benchmarks on this mesh): a bound in the vectorized loop
+1.8 ns (lists of 240) to 2.5 ns (44), the block test 4 ns, an exact closest point 18 ns on
+Morton-near triangles (75 ns on random ones); per sample 44 bounds and 3.5 exact distances (1.0
+improvements) besides the two seeds.
+
+Kept: one pass over a parent's triangles gives each bound and its gradient at the block centre
+(``tangent``); the centre search and the block test both read those four values, so the test no
+longer reads the 20 coefficients a second time (5.8 -> about 3.5 ns per triangle and block):
+2.78-3.03 against 2.85-3.29 CPU seconds, faster in each of six interleaved rounds (median 3 %).
+
+Tried, measured interleaved against the kernel, not kept (same answers, max difference 0):
+samples straight from the far 4^3 lists behind a tangent-plane test (the bound linearized at the
+4^3 centre, 4 coefficients, a vectorized pass at about 0.1 ns a candidate): of 281 candidates
+25.6 pass it and 4.5 need an exact distance, and the survivors (scalar, about 30 ns each) cost
+0.9 us a sample: 3.2-3.6 against 2.8-3.2, and 3.3 against 3.0-3.4 with a branch-free compaction
+of the survivors; samples straight from the far 4^3 lists with the full bound (240 a sample):
+3.1-3.3 against 2.9; the 2^3 centre bound by the parent's nearest triangle instead of its own
+(any triangle's distance bounds a far block from above, so the test stays valid): it saves 242
+bounds a block but the lists grow from 44 to 60 and the exact distances from 3.5 to 4.1 a sample,
+no gain; the least bound measured first instead of the two seeds: within the noise; candidates in
+groups of 8 with their 20 coefficients together (``[group, coefficient, lane]``, nested loops):
+numba 0.68 no longer vectorized the bounds, 6.3 against 2.8; FAR 1.25, 1.5, 3: 2.80, 2.64-2.76,
+3.2 against 2.80; OPENS 1: 3.2 against 2.8.
+
+What limits 3x pysdf (about 0.75 us of CPU per sample, 1.4 s in all): the levels above the leaf
+blocks alone take 1.05 s (0.57 us a sample), the near subtrees 0.55, the far leaf blocks and
+their samples 1.25. The hierarchy is balanced: each level costs about ``8 N / block^3`` bounds a
+sample (a far block of half size ``h`` keeps a cap of radius about ``2 h`` whatever its
+distance, ``pi (2 h)^2`` at about 4.3 triangles per square voxel, and each of its eight parts
+scans it), and dropping a level (both tries above) costs more than it saves. By the counts the
+vectorized bounds take about 0.7 s (2^3 blocks 233,740 x 242 x 5.8 ns before this session, 4^3
+29,667 x 860 x 5.8 ns, samples 1.85 M x 44 x 2.5 ns) and exact distances about 0.17 s; the rest,
+about 2 s, is the branchy per-candidate work, the copies of kept candidates (20 coefficients
+each: 44 x 233,740 + 240 x 29,667 candidates, 350 M values), node work and memory traffic.
+float32 bounds (16 lanes) would halve only the 0.7 s; 3x needs lists about half as long at every
+level (a block test nearer the true set: a flat cap of radius ``|h|``, not ``2 |h|``) or no
+copying (candidate indices only, with a layout the compiler still vectorizes), both untried.
 Machine noise: on this shared machine the same build measured 3.0 and 5.5 CPU seconds twenty
 minutes apart (load 4-5); compare only interleaved runs.
 

@@ -22,6 +22,9 @@ from splinekit.pointcloud import meshdistance
 from splinekit.pointcloud.meshdistance import MeshDistance
 
 pytest.importorskip("numba")
+from numba import njit  # noqa: E402
+
+from splinekit.pointcloud._gridsdf_bounds import tangent  # noqa: E402
 
 
 @contextlib.contextmanager
@@ -202,6 +205,14 @@ def test_the_kernels_triangle_bound_never_exceeds_the_distance(seed, thin, sprea
     # the bound only decides which triangles are measured: above the distance it would skip the
     # nearest one. Random triangles (some slivers, down to 1e-10 wide, which get no bound), points
     # near their vertices and edges, and far away, against the brute-force distance
+    md, P = random_triangles_and_points(seed, thin, spread)
+    bound = prism_bound(md._bvh_prisms, P)
+    assert (bound <= distances_to_each(md, P) * (1 + 1e-12) + 1e-15).all()
+
+
+def random_triangles_and_points(seed, thin, spread):
+    """Ten random triangles (half of them slivers ``thin`` wide, down to 1e-10, which get no
+    bound) and points near their vertices and edges and at random (scale ``spread``)."""
     rng = np.random.default_rng(seed)
     V = rng.normal(size=(30, 3))
     T = rng.integers(0, 30, (10, 3))
@@ -215,11 +226,58 @@ def test_the_kernels_triangle_bound_never_exceeds_the_distance(seed, thin, sprea
         0.5 * (corners + np.roll(corners, 1, axis=0)) + 1e-6 * rng.normal(size=corners.shape),
         rng.normal(size=(200, 3)) * spread,
     ])
-    bound = prism_bound(md._bvh_prisms, P)
+    return md, P
+
+
+def distances_to_each(md, P):
+    """Brute-force distances ``(n, T)`` from points ``P`` to each triangle of ``md`` (unit box)."""
+    T = len(md.bvh.tri)
     with np.errstate(divide="ignore", invalid="ignore"):
-        exact = np.stack([brute_distance(P, md.bvh.tri.reshape(-1, 3), np.arange(3 * len(T)).reshape(-1, 3)[[t]])
-                          for t in range(len(T))], axis=1)
-    assert (bound <= exact * (1 + 1e-12) + 1e-15).all()
+        return np.stack([brute_distance(P, md.bvh.tri.reshape(-1, 3), np.arange(3 * T).reshape(-1, 3)[[t]])
+                         for t in range(T)], axis=1)
+
+
+@njit
+def tangents_at(cv, e, P):
+    """The compiled bound of candidate ``e`` and its gradient at each point of ``P``: ``(n, 4)``."""
+    out = np.empty((len(P), 4))
+    for i in range(len(P)):
+        out[i, 0], out[i, 1], out[i, 2], out[i, 3] = tangent(cv, e, P[i, 0], P[i, 1], P[i, 2])
+    return out
+
+
+@settings(max_examples=20, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), thin=st.sampled_from([1.0, 1e-3, 1e-7]),
+       spread=st.sampled_from([1e-3, 0.1, 1.0]), step=st.sampled_from([1e-3, 0.05, 0.5]))
+def test_the_bounds_tangent_plane_stays_below_the_distance_and_touches_the_bound(seed, thin, spread, step):
+    # the block test linearizes each bound at a block's centre p (tangent): b + g . (x - p) must
+    # stay below the distance at every x (the bound is convex), b must be the bound at p and g
+    # its gradient (a wrong gradient leaves a first-order gap beside p, which the last check sees)
+    md, P = random_triangles_and_points(seed, thin, spread)
+    prism = md._bvh_prisms
+    cv = np.ascontiguousarray(prism.T)
+    rng = np.random.default_rng(seed + 1)
+    X = P + step * rng.normal(size=P.shape)
+    exact = distances_to_each(md, X)
+    at_p = prism_bound(prism, P)
+    eps = 1e-6
+    U = rng.normal(size=P.shape)
+    U /= np.linalg.norm(U, axis=1)[:, None]
+    beside = np.stack([prism_bound(prism, P + sgn * eps * U) for sgn in (1.0, -1.0)])
+    for e in range(len(prism)):
+        tg = tangents_at(cv, e, P)
+        lin = tg[:, 0] + np.einsum("ij,ij->i", tg[:, 1:], X - P)
+        assert (lin <= exact[:, e] * (1 + 1e-12) + 1e-12).all()
+        assert np.allclose(tg[:, 0], at_p[:, e], rtol=1e-12, atol=1e-14)
+        slope = np.einsum("ij,ij->i", tg[:, 1:], U)
+        gap = beside[:, :, e] - (tg[None, :, 0] + np.array([1.0, -1.0])[:, None] * eps * slope[None])
+        # convex: above its tangent plane on both sides (a gradient off by d leaves a gap of
+        # -eps |d . u| on one side, so this check catches it)
+        assert (gap >= -1e-12).all()
+        # and touching it to second order: on one side at least, as a step may cross a kink
+        # (where another edge line or the disk takes over) on the other
+        smooth = tg[:, 0] > 1e-3  # away from the prism, where the bound has a kink at zero
+        assert (gap[:, smooth].min(axis=0) <= 1e-9).all()
 
 
 def test_samples_on_vertices_edges_and_far_blocks_at_every_level(compiled):

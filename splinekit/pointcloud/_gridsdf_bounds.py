@@ -53,14 +53,13 @@ NB = 20
 
 
 @njit(cache=True, inline="always")
-def margin(cv, e, px, py, pz, hx, hy, hz, gx, gy, gz, top):
-    """The block test of candidate ``e`` for a block (centre ``p``, half extents ``h``, upper
-    bound's gradient ``g``, ``top`` = ``D + eps`` plus margin): positive when its bound,
-    linearized at ``p`` (it is convex in ``x``, so that bounds it from below), stays above the
-    upper bound all over the block (module notes). Branch-free (selects), so that the loop over
-    the candidates vectorizes: every coefficient is read once into a local (reading one twice
-    kept numba 0.68's loop from vectorizing; the caller compiles with ``error_model="numpy"``,
-    so that the divisions carry no zero check)."""
+def tangent(cv, e, px, py, pz):
+    """Candidate ``e``'s bound at ``p`` (unsquared; :func:`bound2` squared) and its gradient there:
+    ``(b, gx, gy, gz)``. The bound is convex in ``p`` (module notes), so ``b + g . (x - p)``
+    bounds it from below everywhere (the block test, :func:`block_test`); at a kink the selects
+    pick one active piece, whose gradient is a subgradient. Branch-free (selects), so that the
+    loop over the candidates vectorizes: every coefficient is read once into a local (reading
+    one twice kept numba 0.68's loop from vectorizing)."""
     n0, n1, n2 = cv[0, e], cv[1, e], cv[2, e]
     u0x, u0y, u0z = cv[4, e], cv[5, e], cv[6, e]
     u1x, u1y, u1z = cv[8, e], cv[9, e], cv[10, e]
@@ -87,12 +86,27 @@ def margin(cv, e, px, py, pz, hx, hy, hz, gx, gy, gz, top):
     ss = max(ss - TOL, 0.0)
     bl = np.sqrt(a * a + ss * ss)
     ib = 1.0 / max(bl, 1e-300)
-    tx = gx - (a * n0 + ss * ux) * ib
-    ty = gy - (a * n1 + ss * uy) * ib
-    tz = gz - (a * n2 + ss * uz) * ib
-    turn = hx * abs(tx) + hy * abs(ty) + hz * abs(tz)
-    # a zero bound (p on the triangle's prism) always passes
+    return bl, (a * n0 + ss * ux) * ib, (a * n1 + ss * uy) * ib, (a * n2 + ss * uz) * ib
+
+
+@njit(cache=True, inline="always")
+def block_test(bl, tx, ty, tz, hx, hy, hz, gx, gy, gz, top):
+    """The block test of a candidate whose bound at the block's centre is ``bl`` with gradient
+    ``t`` (:func:`tangent`), for a block of half extents ``h``, upper bound's gradient ``g`` and
+    ``top`` = ``D + eps`` plus margin: positive when the bound, linearized at the centre (it is
+    convex, so that bounds it from below), stays above the upper bound all over the block
+    (module notes of the grid kernel). A zero bound (the centre on the triangle's prism)
+    always passes."""
+    turn = hx * abs(gx - tx) + hy * abs(gy - ty) + hz * abs(gz - tz)
     return bl - top - turn * (1.0 + SLACK) if bl > 0.0 else -1.0
+
+
+@njit(cache=True, inline="always")
+def margin(cv, e, px, py, pz, hx, hy, hz, gx, gy, gz, top):
+    """The block test of candidate ``e`` for a block with centre ``p`` (:func:`block_test` of its
+    :func:`tangent`); branch-free, so that the loop over the candidates vectorizes."""
+    bl, tx, ty, tz = tangent(cv, e, px, py, pz)
+    return block_test(bl, tx, ty, tz, hx, hy, hz, gx, gy, gz, top)
 
 
 @njit(cache=True, inline="always")

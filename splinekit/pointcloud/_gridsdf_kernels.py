@@ -31,10 +31,12 @@ block, level by level down to ``2^3``,
 
 1. finds its centre's exact nearest triangle among its parent's items (the parent's nearest
    first, then the triangles whose bound beats the best so far, then a walk below each node
-   whose box does): :func:`_centre`;
-2. keeps the parent's triangles that pass its test, by their bound (:mod:`._gridsdf_bounds`:
-   plane, edge lines and bounding disk, 20 coefficients each) linearized at its centre
-   (:func:`~._gridsdf_bounds.margin`; no exact distance), in one branch-free loop the compiler
+   whose box does): :func:`_centre`; the one pass over the parent's triangles that gives their
+   bounds at the centre (:mod:`._gridsdf_bounds`: plane, edge lines and bounding disk, 20
+   coefficients each) keeps each bound's gradient there too (:func:`~._gridsdf_bounds.tangent`);
+2. keeps the parent's triangles that pass its test, by their bound linearized at its centre
+   (:func:`~._gridsdf_bounds.block_test` on the values of step 1, four a triangle; no exact
+   distance, no second pass over the 20 coefficients), in one branch-free loop the compiler
    vectorizes;
 3. tests the parent's hierarchy nodes, a whole frontier at a time (the block test on each
    node's bounding ball, with its box's distance as the flat bound: ``may_hold``): a node that
@@ -67,7 +69,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit, prange
 
-from ._gridsdf_bounds import FAR, NB, SLACK, bound2, margin, may_hold
+from ._gridsdf_bounds import FAR, NB, SLACK, block_test, bound2, margin, may_hold, tangent
 from ._meshdistance_kernels import box_d2, closest_on_triangle, walk
 
 CHUNKS = 256
@@ -96,11 +98,13 @@ def _signed(px, py, pz, d2, t, region, cp, fn, en, vn):
 
 
 @njit(cache=True)
-def _centre(cx, cy, cz, seed, climit, nn, nodes, nt, ct, cv, lb, lo, hi, tlo, thi, tri, L, m, stack, q, cp):
+def _centre(cx, cy, cz, seed, climit, nn, nodes, nt, ct, cv, tg, lo, hi, tlo, thi, tri, L, m, stack, q, cp):
     """The exact nearest triangle of the point ``c`` among a block's items (module notes): the
     ``nt`` triangles ``ct`` (bound coefficients ``cv``) and every triangle below the ``nn``
     hierarchy nodes ``nodes``, triangle ``seed`` (-1: none) measured first and the others only
-    where their bound beats the best so far; their bounds at ``c`` are left in ``lb``. Returns
+    where their bound beats the best so far; their bounds at ``c`` and the bounds' gradients
+    there (:func:`~._gridsdf_bounds.tangent`) are left in ``tg`` (4 rows), for the block test
+    of :func:`_filter`, which so needs no second pass over the coefficients. Returns
     ``(squared distance, triangle)``, triangle -1 when nothing lies within ``climit`` (squared);
     the closest point in ``cp``."""
     best, bt = climit, -1
@@ -112,9 +116,10 @@ def _centre(cx, cy, cz, seed, climit, nn, nodes, nt, ct, cv, lb, lo, hi, tlo, th
             best, bt = d2, seed
             cp[0], cp[1], cp[2] = q[0], q[1], q[2]
     for e in range(nt):
-        lb[e] = bound2(cv, e, cx, cy, cz)
+        bl, gx, gy, gz = tangent(cv, e, cx, cy, cz)
+        tg[0, e], tg[1, e], tg[2, e], tg[3, e] = bl, gx, gy, gz
     for e in range(nt):
-        if lb[e] > best or ct[e] == bt:
+        if tg[0, e] * tg[0, e] > best or ct[e] == bt:
             continue
         closest_on_triangle(cx, cy, cz, tri, ct[e], q)
         dx, dy, dz = cx - q[0], cy - q[1], cz - q[2]
@@ -153,11 +158,12 @@ def _node_far(cx, cy, cz, lo, hi, nd, R2, D, eps, gx, gy, gz, hn):
 
 
 @njit(cache=True)
-def _filter(pn, pnodes, pt, pct, pcv, nodes, ct, cv, lb, cx, cy, cz, hx, hy, hz, r, D, cp, last, opens_far, open_at,
+def _filter(pn, pnodes, pt, pct, pcv, nodes, ct, cv, lb, tg, cx, cy, cz, hx, hy, hz, r, D, cp, last, opens_far, open_at,
             lo, hi, L, m, prism_t, front, nxt, gap):
     """A block's items from its parent's (module notes): the block has centre ``c``, half
     extents ``h``, half-diagonal ``r``, exact nearest distance ``D`` at ``c`` (closest point
-    ``cp``); the parent's ``pt`` triangles ``pct``, ``pcv`` (their bounds at ``c`` in ``lb``)
+    ``cp``); the parent's ``pt`` triangles ``pct``, ``pcv`` (their bounds at ``c`` and the
+    bounds' gradients in ``tg``, from :func:`_centre`; ``lb`` is scratch)
     and ``pn`` nodes ``pnodes``. A node that passes the block test is kept when its bounding
     radius is at most ``open_at``, else opened (its children tested in turn, a leaf's triangles
     by their own bounds); ``last``, or ``opens_far`` for a far block: every node is opened.
@@ -177,14 +183,14 @@ def _filter(pn, pnodes, pt, pct, pcv, nodes, ct, cv, lb, cx, cy, cz, hx, hy, hz,
     nt = 0
     if near:
         for e in range(pt):
-            if lb[e] <= R2:
+            if tg[0, e] * tg[0, e] <= R2:
                 ct[nt] = pct[e]
                 for a in range(NB):
                     cv[a, nt] = pcv[a, e]
                 nt += 1
     else:
         for e in range(pt):
-            lb[e] = margin(pcv, e, cx, cy, cz, hx, hy, hz, gx, gy, gz, top)
+            lb[e] = block_test(tg[0, e], tg[1, e], tg[2, e], tg[3, e], hx, hy, hz, gx, gy, gz, top)
         for e in range(pt):
             if lb[e] > 0.0:
                 continue
@@ -343,6 +349,7 @@ def grid_signed(origin, spacing, shape, limit, block, open_ratio, lo, hi, tlo, t
         ct = np.empty((nlev + 1, stride), dtype=np.int64)
         cv = np.empty((nlev + 1, NB, stride))
         lb = np.empty(stride)
+        tg = np.empty((4, stride))  # the parent's candidates' bounds and gradients at a centre
         front = np.empty(2 * L + 8, dtype=np.int64)
         nxt = np.empty(2 * L + 8, dtype=np.int64)
         gap = np.empty(2 * L + 8)
@@ -375,7 +382,7 @@ def grid_signed(origin, spacing, shape, limit, block, open_ratio, lo, hi, tlo, t
                 climit = (reach + r) ** 2 if reach < np.inf else np.inf
                 p = lev - 1
                 # the centre's exact nearest triangle; none within reach + r: no sample is in the band
-                best, tc = _centre(cx, cy, cz, tlist[p], climit, nnod[p], nodes[p], ntri[p], ct[p], cv[p], lb, lo,
+                best, tc = _centre(cx, cy, cz, tlist[p], climit, nnod[p], nodes[p], ntri[p], ct[p], cv[p], tg, lo,
                                    hi, tlo, thi, tri, L, m, stack, q, cp)
                 if tc < 0:
                     _fill_inf(a0, a1, b0, b1, c0, c1, ny, nz, out)
@@ -385,7 +392,7 @@ def grid_signed(origin, spacing, shape, limit, block, open_ratio, lo, hi, tlo, t
                 last = lev == nlev
                 far_end = lev >= nlev - OPENS
                 nnod[lev], ntri[lev] = _filter(nnod[p], nodes[p], ntri[p], ct[p], cv[p], nodes[lev], ct[lev], cv[lev],
-                                               lb, cx, cy, cz, hx, hy, hz, r, np.sqrt(best), cp, last, far_end,
+                                               lb, tg, cx, cy, cz, hx, hy, hz, r, np.sqrt(best), cp, last, far_end,
                                                open_ratio * r, lo, hi, L, m, prism_t, front, nxt, gap)
                 tlist[lev] = tc
                 if not last:
