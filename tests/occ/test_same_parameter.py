@@ -148,10 +148,17 @@ def test_the_writer_covers_a_use_without_a_3d_curve_within_the_uses_tolerances()
                  for lp in face.loops]
         faces = list(lagging.faces)
         faces[i] = TrimmedFace(face.surface, loops, reversed=face.reversed, tolerance=face.tolerance)
-        # the other use of the edge carries the same tolerance
-        for j, g in enumerate(faces):
-            if j != i and any(e.key == before.key for lp in g.loops for e in lp):
-                faces[j] = TrimmedFace(g.surface, [[Edge(e.pcurve, e.curve, key=e.key, tolerance=tolerance)
-                                                    if e.key == before.key else e for e in lp] for lp in g.loops],
-                                       reversed=g.reversed, tolerance=g.tolerance)
+        faces = with_edge_tolerance(faces, before.key, tolerance, but=i)  # the edge's other use too
         assert _exactly_valid(brep_to_shape(Solid([Shell(faces)]))) == valid
+
+
+def with_edge_tolerance(faces, key, tolerance, but):
+    """``faces`` (a list of TrimmedFace) with every use of the edge ``key`` on a face other than
+    ``faces[but]`` given ``tolerance``: both uses of a loosened edge carry one tolerance."""
+    out = list(faces)
+    for j, g in enumerate(faces):
+        if j != but and any(e.key == key for lp in g.loops for e in lp):
+            out[j] = TrimmedFace(g.surface, [[Edge(e.pcurve, e.curve, key=e.key, tolerance=tolerance)
+                                              if e.key == key else e for e in lp] for lp in g.loops],
+                                 reversed=g.reversed, tolerance=g.tolerance)
+    return out

@@ -40,6 +40,7 @@ from splinekit.interop import occ_brep_write  # noqa: E402
 from splinekit.interop.occ_brep import brep_to_shape  # noqa: E402
 from splinekit.interop.occ_shapes import _sub_shapes  # noqa: E402
 from splinekit.surfaces import BSplineSurface  # noqa: E402
+from test_same_parameter import with_edge_tolerance  # noqa: E402
 
 LOOSE = 0.05
 """How far the loosened curve ends and pcurves lie from where the exact part has them (mm); NX
@@ -134,13 +135,7 @@ def _bulged_pcurve(solid, bulge):
                 loops = [list(lp) for lp in f.loops]
                 loops[j][k] = Edge(pcurve, use.curve, key=use.key, tolerance=bulge)
                 faces[i] = TrimmedFace(f.surface, loops, reversed=f.reversed, tolerance=f.tolerance)
-                # the edge's other use carries the same tolerance
-                for n, g in enumerate(faces):
-                    if n != i and any(e.key == use.key for lp in g.loops for e in lp):
-                        faces[n] = TrimmedFace(g.surface, [[Edge(e.pcurve, e.curve, key=e.key, tolerance=bulge)
-                                                            if e.key == use.key else e for e in lp] for lp in g.loops],
-                                               reversed=g.reversed, tolerance=g.tolerance)
-                return Solid([Shell(faces)])
+                return Solid([Shell(with_edge_tolerance(faces, use.key, bulge, but=i))])  # the other use too
     raise AssertionError("the part has no straight edge")
 
 
