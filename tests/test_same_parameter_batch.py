@@ -67,7 +67,7 @@ def test_batched_search_matches_one_use_at_a_time(seed, pieces):
         if old is not None:
             assert np.asarray(new.knots).shape == np.asarray(old.knots).shape
             np.testing.assert_allclose(new.knots, old.knots, rtol=0, atol=1e-12)
-            np.testing.assert_array_equal(new.control_points, old.control_points)
+            np.testing.assert_allclose(new.control_points, old.control_points, rtol=0, atol=1e-12)
     aparts = _aparts(uses, on)
     for use, pts, apart in zip(uses, on, aparts):
         assert apart == pytest.approx(float(sk.project(use.curve, pts).distances.max()), rel=1e-10, abs=1e-13)
