@@ -110,9 +110,11 @@ def loops_valid(plan, table, pred, uv0, uv1, plane, arc_use) -> bool:
     with np.errstate(divide="ignore", invalid="ignore"):
         x = a[:, 0] + (p[:, 1] - a[:, 1]) * (b[:, 0] - a[:, 0]) / (b[:, 1] - a[:, 1])
     hit = up & (x > p[:, 0])
-    pair = h * loops.size + loop_of[s]
-    inside = np.bincount(pair[hit], minlength=loops.size * loops.size).reshape(loops.size, loops.size) % 2 == 1
-    want = np.zeros((loops.size, loops.size), dtype=bool)
-    same = lface[:, None] == lface[None, :]
-    want[:, :] = same & outer[None, :]  # inside its own face's outer loop only
-    return bool((inside[holes] == want[holes]).all())
+    # the (hole, loop) pairs crossed an odd number of times: the loops the hole's point lies inside,
+    # which must be exactly its own face's outer loop (pairs as sorted codes, not a loops x loops table)
+    pair = h.astype(np.int64) * loops.size + loop_of[s]
+    codes, hits = np.unique(pair[hit], return_counts=True)
+    outer_of_face = np.full(F, -1, dtype=np.int64)
+    outer_of_face[lface[outer]] = np.flatnonzero(outer)
+    want = np.sort(holes.astype(np.int64) * loops.size + outer_of_face[lface[holes]])
+    return bool(np.array_equal(codes[hits % 2 == 1], want))
