@@ -40,7 +40,7 @@ queried the triangle hierarchy from its root for every far 8^3 block (2,721), fo
 part of a near 8^3 block (6,276) and for every 2^3 part of a near 4^3 block (36,768): 1.5-1.6 CPU
 seconds of queries (470 nodes and 280 exact distances each), 1.4-1.5 of filters and leaves.
 
-This session: a dual-tree traversal (the kernel's notes): top blocks of 16^3 start from the root
+The fifth session: a dual-tree traversal (the kernel's notes): top blocks of 16^3 start from the root
 of the hierarchy and every block hands its items, hierarchy nodes and triangles, down to its eight
 parts, which test them against their own block test and open the nodes that are large against
 them; no block queries from the root. Far blocks of 8^3 and smaller hold triangles only.
@@ -54,7 +54,7 @@ a local (the leaf bound, 1.7-1.9 ns, was vectorized all along).
 
 One-thread CPU seconds by level (the kernel alone, levels cut off one at a time, load 3.5-4):
 16^3 and 8^3 0.48, 4^3 0.64, 2^3 1.55, the samples 0.25: 2.9 in all. Interleaved with the kernel
-before this session (same load): 2.97, 3.11, 3.46 against 3.36, 4.10, 3.48; with that kernel's
+before the fifth session (same load): 2.97, 3.11, 3.46 against 3.36, 4.10, 3.48; with that kernel's
 margin fixed the same way: 3.04, 3.18 against 3.25, 3.67. So the traversal saves the queries
 (about 1.5 s) but its node work and the opening of nodes into triangles cost most of it again;
 the gain is 10-20 %, and the whole run (``--threads``, load 3.3-4.4) stays at 2.9-3.0 CPU seconds
@@ -96,7 +96,7 @@ their samples 1.25. The hierarchy is balanced: each level costs about ``8 N / bl
 sample (a far block of half size ``h`` keeps a cap of radius about ``2 h`` whatever its
 distance, ``pi (2 h)^2`` at about 4.3 triangles per square voxel, and each of its eight parts
 scans it), and dropping a level (both tries above) costs more than it saves. By the counts the
-vectorized bounds take about 0.7 s (2^3 blocks 233,740 x 242 x 5.8 ns before this session, 4^3
+vectorized bounds take about 0.7 s (2^3 blocks 233,740 x 242 x 5.8 ns before the sixth session's change, 4^3
 29,667 x 860 x 5.8 ns, samples 1.85 M x 44 x 2.5 ns) and exact distances about 0.17 s; the rest,
 about 2 s, is the branchy per-candidate work, the copies of kept candidates (20 coefficients
 each: 44 x 233,740 + 240 x 29,667 candidates, 350 M values), node work and memory traffic.
