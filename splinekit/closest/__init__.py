@@ -40,12 +40,14 @@ geometry nearest to it, all points at once:
 
 The work is split by what it holds: :mod:`.projection` (``project``,
 ``distance``), :mod:`.parametric` (sampling and seeds of curves and surfaces),
-:mod:`.newton` (the batch search), :mod:`.implicit` and :mod:`.queries` (the
-result type and input checks). The tuning constants live beside the code that
+:mod:`.newton` (the batch search), :mod:`.batch` (``curve_distances``: many point
+sets, each to its own curve, in one search), :mod:`.implicit` and :mod:`.queries`
+(the result type and input checks). The tuning constants live beside the code that
 reads them.
 """
 
+from .batch import curve_distances
 from .projection import distance, project
 from .queries import Projection
 
-__all__ = ["Projection", "distance", "project"]
+__all__ = ["Projection", "curve_distances", "distance", "project"]

@@ -57,15 +57,19 @@ def _derivs_inside(target, x, hi, rows=None):
     At a crease the derivatives jump, and evaluation takes the piece on the
     right of a knot; a point on the upper end of its box is evaluated one ulp
     to the left so that it gets the derivatives of its own piece. ``rows``: see
-    :func:`_newton`."""
+    :func:`newton_search`."""
     inner = (x >= hi) & (hi < (target.hi if rows is None else target.hi[rows]))
     if inner.any():
         x = np.where(inner, np.nextafter(hi, -np.inf), x)
     return target.derivs(x) if rows is None else target.derivs(x, rows)
 
 
-def _newton(target, P, x0, lo, hi, tol, rows=None):
+def newton_search(target, P, x0, lo, hi, tol, rows=None):
     """Minimise ``|S(x) - P|`` from each seed ``x0`` ``(m, k)`` inside the boxes ``[lo, hi]`` ``(m, k)``.
+
+    ``target`` is what is searched on, in search units: ``derivs(x)`` -> ``(S (m, dim), J (m,
+    dim, k), second derivatives (m, dim, k, k))``, ``evaluate(x)`` -> ``(m, dim)``, ``hi`` (the
+    domain's upper ends) and ``size`` (its largest absolute coordinate, for the rounding slack).
 
     Returns ``(x, S(x), distances, g, converged, stationary)`` with ``g`` the
     gradient of ``|S - P|^2 / 2``; every accepted step does not increase the
@@ -154,7 +158,7 @@ def _search(target, P, owner, x0, tol):
     for j, br in enumerate(target.breaks):
         piece[:, j] = np.clip(np.searchsorted(br, x0[:, j], side="right") - 1 - left[:, j], 0, br.size - 2)
     lo, hi = target.boxes(piece)
-    x, S, dist, g, converged, stationary = _newton(target, P, x0, lo, hi, tol)
+    x, S, dist, g, converged, stationary = newton_search(target, P, x0, lo, hi, tol)
     rounds = 0
     while rounds < MAX_PIECE_CROSSINGS:
         down = (x <= lo) & (g > 0) & (piece > 0)
@@ -164,14 +168,14 @@ def _search(target, P, owner, x0, tol):
             break
         piece[move] += up[move].astype(np.intp) - down[move].astype(np.intp)
         lo, hi = target.boxes(piece)
-        res = _newton(target, P[move], x[move], lo[move], hi[move], tol)
+        res = newton_search(target, P[move], x[move], lo[move], hi[move], tol)
         for arr, new in zip((x, S, dist, g, converged, stationary), res):
             arr[move] = new
         rounds += 1
     return owner, x, S, dist, converged, stationary
 
 
-def _best_per_owner(owner, dist, n):
+def nearest_per_point(owner, dist, n):
     """Index (into the seeds) of the nearest result of each of the ``n`` points."""
     order = np.lexsort((dist, owner))
     first = np.ones(order.size, dtype=bool)

@@ -11,7 +11,7 @@ from ..errors import ConvergenceError, ParameterError
 from ..surfaces import BezierSurface, SplineSurface
 from .implicit import _Implicit
 from . import newton
-from .newton import _best_per_owner, _search
+from .newton import _search, nearest_per_point
 from .parametric import _Curve, _Surface
 from .queries import Projection, _as_query_points, _readonly
 
@@ -93,7 +93,7 @@ def project(geometry, points, *, tolerance=None, seeds=None) -> Projection:
             sel = (owner >= start) & (owner < stop)
             own, xs = owner[sel] - start, x0[sel]
         own, x, S, dist, converged, stationary = _search(target, P[start:stop][own], own, xs, tol)
-        best = _best_per_owner(own, dist, stop - start)
+        best = nearest_per_point(own, dist, stop - start)
         bad = ~(converged[best] | stationary[best]) & (dist[best] > tol)
         if bad.any():
             i = start + int(np.flatnonzero(bad)[0])

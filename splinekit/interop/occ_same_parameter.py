@@ -21,9 +21,8 @@ from __future__ import annotations
 import numpy as np
 
 from ..brep import Edge
-from ..closest import project
-from ..closest.newton import _best_per_owner, _newton
-from ..closest.parametric import _Curve
+from ..closest import curve_distances, project
+from ..closest.newton import newton_search
 from ..curves import BSplineCurve, NurbsCurve
 from ..curves.batch import CurveBatch
 from ..tolerances import DEFAULT, GEOMETRIC_CONFUSION
@@ -101,7 +100,7 @@ class _CurveOnSurface:
 
 class _TracesOnSurface:
     """The traces ``surface(pcurve_i(s))`` of many pcurves on one surface, as the batched Newton
-    search of :func:`splinekit.closest.newton._newton` sees them with ``rows`` (row ``i``: use
+    search of :func:`splinekit.closest.newton.newton_search` sees them with ``rows`` (row ``i``: use
     ``i``): ``derivs(x, rows)`` and ``evaluate(x, rows)`` for ``x`` ``(m, 1)``, ``hi`` per row
     ``(n, 1)``, ``size`` per seed (what :func:`splinekit.project` takes for one trace)."""
 
@@ -154,7 +153,7 @@ def _onto_curve_parameters(surface, uses, extents, pieces: int) -> list:
     points = CurveBatch([use.curve for use in uses]).evaluate(rows, seeds)
     size = np.maximum(1.0, np.asarray(extents, dtype=np.float64))[rows]
     target = _TracesOnSurface(surface, CurveBatch([use.pcurve for use in uses]), size)
-    x, _, dist, _, converged, stationary = _newton(
+    x, _, dist, _, converged, stationary = newton_search(
         target, points, seeds[:, None], domains[rows, :1], domains[rows, 1:], GEOMETRIC_CONFUSION * size, rows)
     failed = (~(converged | stationary) & (dist > GEOMETRIC_CONFUSION * size)).reshape(len(uses), pieces - 1).any(axis=1)
     s = x[:, 0].reshape(len(uses), pieces - 1)
@@ -202,75 +201,11 @@ def _deviations(surface, pcurves, curves):
     return np.maximum.reduceat(gap, starts), np.split(on, starts[1:])
 
 
-class _Curves:
-    """Many curves as the batched Newton search sees them with ``rows`` (row ``i``: curve ``i``
-    of the :class:`~splinekit.curves.batch.CurveBatch`); ``size`` per seed."""
-
-    def __init__(self, batch: CurveBatch, size):
-        self.batch, self.size = batch, size
-        self.hi = batch.domains[:, 1:]
-
-    def derivs(self, x, rows):
-        d = self.batch.derivatives(rows, x[:, 0], 2)
-        return d[0], d[1][..., None], d[2][..., None, None]
-
-    def evaluate(self, x, rows):
-        return self.batch.evaluate(rows, x[:, 0])
-
-
-def _piece_seeds(breaks, x0, owner):
-    """``(seeds, owner, lo, hi, first, last)``: the seeds ``x0`` (of the points ``owner``) in the
-    boxes of the smooth pieces between ``breaks`` (a curve's ends and creases) that hold them; a
-    seed on a crease starts in both pieces beside it, as :func:`splinekit.project` does.
-    ``first``, ``last``: whether the box is the curve's first / last piece."""
-    piece = np.clip(np.searchsorted(breaks, x0, side="right") - 1, 0, breaks.size - 2)
-    on = np.isin(x0, breaks[1:-1])
-    x0, owner = np.concatenate([x0, x0[on]]), np.concatenate([owner, owner[on]])
-    piece = np.concatenate([piece, piece[on] - 1])
-    return x0, owner, breaks[piece], breaks[piece + 1], piece == 0, piece == breaks.size - 2
-
-
 def _aparts(uses, on) -> list:
     """Per use, the largest distance from the points ``on[i]`` (its trace) to its 3-D curve:
-    ``project(use.curve, on[i]).distances.max()``, the Newton searches of all uses as one batch.
-
-    Everything else is ``project``'s own: each curve's samples and seeds
-    (:class:`splinekit.closest.parametric._Curve`), the smooth pieces the seeds search in
-    (:func:`_piece_seeds`), the stopping distance. A use goes through ``project`` itself when a
-    point's best search does not converge, or stops on a crease with the distance still falling
-    across it (``project`` would search on in the next piece), or ``project`` rescales the curve."""
-    out = [None] * len(uses)
-    targets = [_Curve(use.curve, use.curve.domain) for use in uses]
-    batched = [i for i, tg in enumerate(targets) if tg.unit == 1.0]
-    if batched:
-        x0, owner, lo, hi, first, last, counts, start = [], [], [], [], [], [], [], 0
-        for i in batched:
-            point, seeds = targets[i].seeds(on[i])
-            got = _piece_seeds(targets[i].breaks[0], seeds[:, 0], start + point)
-            for acc, x in zip((x0, owner, lo, hi, first, last), got):
-                acc.append(x)
-            counts.append(got[0].size)
-            start += len(on[i])
-        x0, owner, lo, hi, first, last = (np.concatenate(a) for a in (x0, owner, lo, hi, first, last))
-        rows = np.repeat(np.arange(len(batched)), counts)
-        size = np.array([targets[i].size for i in batched])[rows]
-        tol = np.array([targets[i].tolerance(None) for i in batched])[rows]
-        x, _, dist, g, converged, stationary = _newton(
-            _Curves(CurveBatch([uses[i].curve for i in batched]), size),
-            np.concatenate([on[i] for i in batched])[owner], x0[:, None], lo[:, None], hi[:, None], tol, rows)
-        across = ((x[:, 0] <= lo) & (g[:, 0] > 0) & ~first) | ((x[:, 0] >= hi) & (g[:, 0] < 0) & ~last)
-        ok = ((converged | stationary) | (dist <= tol)) & ~across
-        best = _best_per_owner(owner, dist, start)
-        point_use = np.repeat(np.arange(len(batched)), [len(on[i]) for i in batched])
-        bad = np.zeros(len(batched), dtype=bool)
-        np.logical_or.at(bad, point_use, ~ok[best])
-        apart = np.zeros(len(batched))
-        np.maximum.at(apart, point_use, dist[best])
-        for j, i in enumerate(batched):
-            if not bad[j]:
-                out[i] = float(apart[j])
-    return [float(project(use.curve, on[i]).distances.max()) if got is None else got
-            for i, (use, got) in enumerate(zip(uses, out))]
+    ``project(use.curve, on[i]).distances.max()``, the searches of all uses as one batch
+    (:func:`splinekit.closest.curve_distances`)."""
+    return [float(d.max()) for d in curve_distances([use.curve for use in uses], on)]
 
 
 def _reparametrized(surface, uses, devs, aparts, extents) -> list:
