@@ -1,170 +1,286 @@
-"""The characteristic regions of a closed mesh's faces, edges and vertices, cut to a grid, for
-the region-scanning grid kernel :mod:`splinekit.pointcloud._gridsdf_scan` (whose module notes
-give the argument). Whole-array numpy, except the compiled per-region cut and vertex cones.
+"""The characteristic regions of a closed mesh's faces, edges and vertices as convex polytopes,
+cut where they can no longer hold a nearest point: compiled (numba) helpers of the
+region-scanning grid kernel :mod:`splinekit.pointcloud._gridsdf_scan`, whose module notes give
+the argument, inlined there.
 
-Each region is returned as half-spaces ``a . x <= b`` (``(n, H, 4)``, unused rows ``0 <= 1``),
-their count, the box of sample indices its corners span and the triangle that owns it.
+Regions are numbered: ``[0, m)`` the faces' prisms on the side their normal points to,
+``[m, 2m)`` on the other side, then one wedge per edge, then one cone per vertex. All in the
+unit box of :class:`~splinekit.pointcloud.meshdistance.MeshDistance`; triangles in the
+hierarchy's order. :func:`geometry` gives a region's cone (centre, axis, spread);
+:func:`polytope` its half-spaces and corners once its cut radius is known.
 """
 
 from __future__ import annotations
 
 import numpy as np
+from numba import njit
 
-CUT_NODES = 4
-"""Samples between the coarse grid's nodes whose exact distances bound the field from above
-(:func:`~._gridsdf_scan.cut`)."""
+DELTA = 1e-9
+"""Absolute widening of every region's half-spaces (unit box): rounding moves a computed
+plane by about ``1e-16`` of the mesh's size, so a sample whose nearest point lies on a feature
+is inside its computed region; a wider region only measures more."""
+
+FLAT = 1e-12
+"""An edge whose two inward edge normals cancel to this (coplanar triangles) or a vertex whose
+cone's extreme rays cancel to ``FLAT_RAYS`` per ray gets no region: its points lie in its
+triangles' prisms, widened by :data:`DELTA` (the mesh spans at most the unit box)."""
+
+FLAT_RAYS = 1e-6
 
 WIDE = 0.02
-"""A wedge or cone whose extreme directions come within ``acos(WIDE)`` of perpendicular to its
-axis gets the whole grid as its box (rare: knife edges, spike tips)."""
+"""A wedge or cone with an extreme direction within ``acos(WIDE)`` of perpendicular to its axis
+is not cut and spans the whole grid (knife edges, spike tips: rare)."""
 
 RAYS = 32
-"""Extreme rays kept per vertex cone (more: the whole grid as its box)."""
+"""Extreme rays of a vertex cone kept (more: the cone spans the whole grid)."""
+
+VALENCE = 64
+"""Edges at a vertex whose cone is computed (more: the cone spans the whole grid)."""
+
+MAXH = 16
+"""Half-spaces of a vertex cone at most: its first ``MAXH - 1`` edges and the cut (fewer
+constraints only widen it)."""
 
 
-def _unit(v):
-    ln = np.linalg.norm(v, axis=-1, keepdims=True)
-    return v / np.where(ln > 0, ln, 1.0), ln[..., 0]
+@njit(cache=True, inline="always")
+def _upper(cx, cy, cz, G, go, gh):
+    """An upper bound of the distance at ``c``: the nearest coarse node's exact distance plus
+    the way there."""
+    i = min(max(int(np.floor((cx - go[0]) / gh[0] + 0.5)), 0), G.shape[0] - 1)
+    j = min(max(int(np.floor((cy - go[1]) / gh[1] + 0.5)), 0), G.shape[1] - 1)
+    k = min(max(int(np.floor((cz - go[2]) / gh[2] + 0.5)), 0), G.shape[2] - 1)
+    dx, dy, dz = cx - (go[0] + i * gh[0]), cy - (go[1] + j * gh[1]), cz - (go[2] + k * gh[2])
+    return G[i, j, k] + np.sqrt(dx * dx + dy * dy + dz * dz)
 
 
-def edges(T):
-    """Undirected edges of a closed, consistently oriented triangle list ``T (m, 3)``:
-    ``(a, b, t1, k1, t2, k2)`` with ``a -> b`` edge ``k1`` of triangle ``t1`` and ``b -> a`` edge
-    ``k2`` of ``t2``; None unless every edge has exactly these two uses."""
+@njit(cache=True, inline="always")
+def _beaten(R, geo, G, go, gh):
+    """True when every point at distance ``R`` from a region's feature (inside the ball of
+    radius ``rho + R spread`` about ``m + R a``, ``geo`` as :func:`geometry` fills it) has
+    something nearer than ``R``."""
+    u = _upper(geo[0] + R * geo[3], geo[1] + R * geo[4], geo[2] + R * geo[5], G, go, gh) + geo[6] + R * geo[7]
+    return u * (1.0 + 1e-9) + 1e-12 < R
+
+
+@njit(cache=True)
+def cut(geo, rmax, step, G, go, gh):
+    """A radius beyond which a region holds no nearest point, at most ``rmax``: doubling from
+    ``step``, then four halvings of the last interval. The distance is 1-Lipschitz and a region
+    is a cone over its feature, so a radius that :func:`_beaten` accepts holds for every larger
+    one (module notes of the scan kernel)."""
+    R = step
+    while R < rmax and not _beaten(R, geo, G, go, gh):
+        R *= 2.0
+    if R >= rmax:
+        return rmax
+    lo, hi = 0.5 * R, R
+    for _ in range(4):
+        mid = 0.5 * (lo + hi)
+        if _beaten(mid, geo, G, go, gh):
+            hi = mid
+        else:
+            lo = mid
+    return hi
+
+
+@njit(cache=True, inline="always")
+def _unit3(x, y, z):
+    ln = np.sqrt(x * x + y * y + z * z)
+    return x / ln, y / ln, z / ln, ln
+
+
+@njit(cache=True)
+def _rays(v, V, ptr, nbr, e, rays):
+    """The extreme rays of vertex ``v``'s cone ``{y : y . e_j <= 0}`` (``e_j`` its unit edge
+    directions, written to ``e``): unit normals of planes through two edges that satisfy every
+    constraint (to ``1e-12``) into ``rays``; returns their count, -1 when there are more than
+    it holds or the vertex has more than :data:`VALENCE` edges."""
+    a, b = ptr[v], ptr[v + 1]
+    k = b - a
+    if k > VALENCE:
+        return -1
+    for j in range(k):
+        w = nbr[a + j]
+        e[j, 0], e[j, 1], e[j, 2], _ = _unit3(V[w, 0] - V[v, 0], V[w, 1] - V[v, 1], V[w, 2] - V[v, 2])
+    n = 0
+    for i in range(k):
+        for j in range(i + 1, k):
+            cx = e[i, 1] * e[j, 2] - e[i, 2] * e[j, 1]
+            cy = e[i, 2] * e[j, 0] - e[i, 0] * e[j, 2]
+            cz = e[i, 0] * e[j, 1] - e[i, 1] * e[j, 0]
+            ln = np.sqrt(cx * cx + cy * cy + cz * cz)
+            if ln < 1e-9:
+                continue
+            cx, cy, cz = cx / ln, cy / ln, cz / ln
+            for s in (1.0, -1.0):
+                ok = True
+                for q in range(k):
+                    if s * (cx * e[q, 0] + cy * e[q, 1] + cz * e[q, 2]) > 1e-12:
+                        ok = False
+                        break
+                if ok:
+                    if n == rays.shape[0]:
+                        return -1
+                    rays[n, 0], rays[n, 1], rays[n, 2] = s * cx, s * cy, s * cz
+                    n += 1
+    return n
+
+
+@njit(cache=True)
+def geometry(r, V, T, tri, plane, prism, ea, eb, eh, ptr, nbr, vown, geo, e, rays):
+    """Region ``r``'s cone into ``geo``: centre ``m`` (0-2), unit axis ``a`` (3-5), the radius
+    ``rho`` of its feature about ``m`` (6), the spread (7: every point at distance ``R`` from
+    the feature lies within ``rho + R spread`` of ``m + R a``), the least cosine between ``a``
+    and an extreme direction (8). Returns ``(owner, kind)``: kind 0 none (a flat edge or
+    vertex), 1 cut by a radius, 2 wide (spans the grid); for a vertex its rays stay in
+    ``rays`` (count in ``geo[9]``), its unit edge directions in ``e``."""
     m = len(T)
-    a = T.ravel()
-    b = T[:, [1, 2, 0]].ravel()
-    t = np.repeat(np.arange(m), 3)
-    k = np.tile(np.arange(3), m)
-    lo, hi = np.minimum(a, b), np.maximum(a, b)
-    key = lo * (int(T.max()) + 1) + hi
-    order = np.lexsort((a > b, key))
-    key_s = key[order]
-    if len(key_s) % 2 or not (np.all(key_s[0::2] == key_s[1::2]) and np.all(np.diff(key_s[0::2]) > 0)):
-        return None
-    first, second = order[0::2], order[1::2]
-    if not np.all((a[first] < b[first]) & (a[second] > b[second])):
-        return None
-    return a[first], b[first], t[first], k[first], t[second], k[second]
+    ne = len(ea)
+    if r < 2 * m:
+        t = r % m
+        s = 1.0 if r < m else -1.0
+        geo[0] = (tri[t, 0, 0] + tri[t, 1, 0] + tri[t, 2, 0]) / 3.0
+        geo[1] = (tri[t, 0, 1] + tri[t, 1, 1] + tri[t, 2, 1]) / 3.0
+        geo[2] = (tri[t, 0, 2] + tri[t, 1, 2] + tri[t, 2, 2]) / 3.0
+        geo[3], geo[4], geo[5] = s * plane[t, 0], s * plane[t, 1], s * plane[t, 2]
+        rho = 0.0
+        for c in range(3):
+            dx, dy, dz = tri[t, c, 0] - geo[0], tri[t, c, 1] - geo[1], tri[t, c, 2] - geo[2]
+            rho = max(rho, np.sqrt(dx * dx + dy * dy + dz * dz))
+        geo[6], geo[7], geo[8] = rho * (1.0 + 1e-12), 0.0, 1.0
+        return t, 1
+    if r < 2 * m + ne:
+        i = r - 2 * m
+        h1, h2 = eh[i, 0], eh[i, 1]
+        t1, k1, t2, k2 = h1 // 3, h1 % 3, h2 // 3, h2 % 3
+        a, b = ea[i], eb[i]
+        ex, ey, ez, le = _unit3(V[b, 0] - V[a, 0], V[b, 1] - V[a, 1], V[b, 2] - V[a, 2])
+        w1x, w1y, w1z = -prism[t1, 4 + 4 * k1], -prism[t1, 5 + 4 * k1], -prism[t1, 6 + 4 * k1]
+        w2x, w2y, w2z = -prism[t2, 4 + 4 * k2], -prism[t2, 5 + 4 * k2], -prism[t2, 6 + 4 * k2]
+        sx, sy, sz = w1x + w2x, w1y + w2y, w1z + w2z
+        if sx * sx + sy * sy + sz * sz < FLAT * FLAT:
+            return t1, 0
+        # the wedge's extreme directions: perpendicular to the edge and to one inward normal,
+        # on the outer side of the other
+        d1x, d1y, d1z = ey * w1z - ez * w1y, ez * w1x - ex * w1z, ex * w1y - ey * w1x
+        if d1x * w2x + d1y * w2y + d1z * w2z > 0.0:
+            d1x, d1y, d1z = -d1x, -d1y, -d1z
+        d2x, d2y, d2z = ey * w2z - ez * w2y, ez * w2x - ex * w2z, ex * w2y - ey * w2x
+        if d2x * w1x + d2y * w1y + d2z * w1z > 0.0:
+            d2x, d2y, d2z = -d2x, -d2y, -d2z
+        ax, ay, az, la = _unit3(d1x + d2x, d1y + d2y, d1z + d2z)
+        c1 = min(d1x * ax + d1y * ay + d1z * az, d2x * ax + d2y * ay + d2z * az)
+        geo[0], geo[1], geo[2] = 0.5 * (V[a, 0] + V[b, 0]), 0.5 * (V[a, 1] + V[b, 1]), 0.5 * (V[a, 2] + V[b, 2])
+        geo[3], geo[4], geo[5] = ax, ay, az
+        geo[6] = 0.5 * le * (1.0 + 1e-12)
+        geo[8] = c1
+        e[0, 0], e[0, 1], e[0, 2] = d1x, d1y, d1z
+        e[1, 0], e[1, 1], e[1, 2] = d2x, d2y, d2z
+        e[2, 0], e[2, 1], e[2, 2] = w1x, w1y, w1z
+        e[3, 0], e[3, 1], e[3, 2] = w2x, w2y, w2z
+        e[4, 0], e[4, 1], e[4, 2] = ex, ey, ez
+        if not la > 1e-9 or c1 < WIDE:
+            geo[7] = 2.0
+            return t1, 2
+        geo[7] = 2.0 * np.sqrt(max(0.5 * (1.0 - c1), 0.0))
+        return t1, 1
+    v = r - 2 * m - ne
+    owner = vown[v]
+    geo[0], geo[1], geo[2], geo[6] = V[v, 0], V[v, 1], V[v, 2], 0.0
+    n = _rays(v, V, ptr, nbr, e, rays)
+    geo[9] = n
+    if n == 0:
+        return owner, 0
+    if n < 0:
+        geo[3], geo[4], geo[5], geo[7], geo[8] = 1.0, 0.0, 0.0, 2.0, 0.0
+        return owner, 2
+    sx, sy, sz = 0.0, 0.0, 0.0
+    for j in range(n):
+        sx, sy, sz = sx + rays[j, 0], sy + rays[j, 1], sz + rays[j, 2]
+    ln = np.sqrt(sx * sx + sy * sy + sz * sz)
+    if ln < FLAT_RAYS * n:
+        return owner, 0
+    geo[3], geo[4], geo[5] = sx / ln, sy / ln, sz / ln
+    c1 = 1.0
+    for j in range(n):
+        c1 = min(c1, rays[j, 0] * geo[3] + rays[j, 1] * geo[4] + rays[j, 2] * geo[5])
+    geo[8] = c1
+    if c1 < WIDE:
+        geo[7] = 2.0
+        return owner, 2
+    geo[7] = 2.0 * np.sqrt(max(0.5 * (1.0 - c1), 0.0))
+    return owner, 1
 
 
-def build(kern, V, T, tri, plane, prism, origin, spacing, shape, G, gorigin, gspacing, reach, H):
-    """Regions of the mesh (unit box; ``V`` vertices, ``T`` triangles in the hierarchy's order,
-    ``tri`` their corners, ``plane`` unit normals, ``prism`` the bound coefficients of
-    :mod:`._gridsdf_bounds`, whose rows 4-15 are the outward in-plane edge normals and offsets)
-    for the grid ``origin + (i, j, k) * spacing`` of ``shape``, cut with the coarse exact
-    distances ``G`` (nodes ``gorigin + index * gspacing``) and at ``reach`` (the band).
-    ``kern``: the compiled module. Returns ``(hs, nh, box, owner)``, or None when the mesh is
-    not a closed 2-manifold with every triangle's plane defined."""
-    ed = edges(T)
-    if ed is None or not plane.any(axis=1).all():
-        return None
-    delta = kern.DELTA
-    shape = np.asarray(shape)
-    glo, ghi = origin, origin + (shape - 1) * spacing
-    corners = np.array([[glo[0] if i & 4 else ghi[0], glo[1] if i & 2 else ghi[1], glo[2] if i & 1 else ghi[2]]
-                        for i in range(8)])
-    gn = np.array(G.shape, dtype=np.int64)
-    step = float(spacing.max())
+@njit(cache=True, inline="always")
+def _row(hs, n, x, y, z, b):
+    hs[n, 0], hs[n, 1], hs[n, 2], hs[n, 3] = x, y, z, b
+    return n + 1
 
-    def cuts(m, A, rho, spread):
-        rmax = np.max((corners[None] - m[:, None]) @ A[:, :, None], axis=1)[:, 0] + rho + step
-        R = kern.cuts(m, A, rho, spread, rmax, step, G, gorigin, gspacing, gn)
-        return np.minimum(R, reach * (1.0 + 1e-9) + rho + step)
 
-    out = []
-    # faces: one prism per side of the plane
-    u = prism[:, 4:16].reshape(-1, 3, 4)  # (m, 3 edges, (u, u . a))
-    cen = tri.mean(axis=1)
-    rho_t = np.linalg.norm(tri - cen[:, None], axis=2).max(axis=1)
-    off = np.einsum("ij,ij->i", plane, tri[:, 0])
-    for s in (1.0, -1.0):
-        A = s * plane
-        R = cuts(cen, A, rho_t, np.zeros(len(tri)))
-        hs = np.zeros((len(tri), 5, 4))
-        hs[:, :3] = u
-        hs[:, :3, 3] += delta
-        hs[:, 3, :3], hs[:, 3, 3] = -A, -s * off + delta
-        hs[:, 4, :3], hs[:, 4, 3] = A, s * off + R + delta
-        pts = np.concatenate([tri, tri + R[:, None, None] * A[:, None, :]], axis=1)
-        out.append((hs, np.ones(hs.shape[:2], dtype=bool), pts, np.ones(pts.shape[:2], dtype=bool), np.arange(len(tri)),
-                    np.zeros(len(tri), dtype=bool)))
-    # edges: a wedge between the two triangles' inward edge normals
-    a, b, t1, k1, t2, k2 = ed
-    pa, pb = V[a], V[b]
-    e, le = _unit(pb - pa)
-    w1, w2 = -u[t1, k1, :3], -u[t2, k2, :3]
-    flat = np.linalg.norm(w1 + w2, axis=1) < 1e-12  # in the two prisms' widened sides
-    d1 = np.cross(e, w1)
-    d1 *= np.where(np.einsum("ij,ij->i", d1, w2) <= 0, 1.0, -1.0)[:, None]
-    d2 = np.cross(e, w2)
-    d2 *= np.where(np.einsum("ij,ij->i", d2, w1) <= 0, 1.0, -1.0)[:, None]
-    A, la = _unit(d1 + d2)
-    keep = ~flat
-    c1 = np.minimum(np.einsum("ij,ij->i", d1, A), np.einsum("ij,ij->i", d2, A))
-    wide = (la < 1e-9) | (c1 < WIDE)
-    mid = 0.5 * (pa + pb)
-    spread = 2.0 * np.sqrt(np.maximum(0.5 * (1.0 - c1), 0.0))
-    R = cuts(mid, A, 0.5 * le, np.where(wide, 2.0, spread))
-    hs = np.zeros((len(a), 5, 4))
-    hs[:, 0, :3], hs[:, 0, 3] = -e, -np.einsum("ij,ij->i", e, pa) + delta
-    hs[:, 1, :3], hs[:, 1, 3] = e, np.einsum("ij,ij->i", e, pb) + delta
-    hs[:, 2, :3], hs[:, 2, 3] = w1, np.einsum("ij,ij->i", w1, pa) + delta
-    hs[:, 3, :3], hs[:, 3, 3] = w2, np.einsum("ij,ij->i", w2, pa) + delta
-    hs[:, 4, :3], hs[:, 4, 3] = A, np.einsum("ij,ij->i", A, pa) + R + delta
-    live = np.ones(hs.shape[:2], dtype=bool)
-    live[wide, 4] = False
-    ends = (R / np.maximum(c1, WIDE))[:, None, None]
-    pts = np.concatenate([pa[:, None], pb[:, None], pa[:, None] + ends * d1[:, None], pb[:, None] + ends * d1[:, None],
-                          pa[:, None] + ends * d2[:, None], pb[:, None] + ends * d2[:, None]], axis=1)
-    out.append((hs[keep], live[keep], pts[keep], np.ones(pts[keep].shape[:2], dtype=bool), t1[keep], wide[keep]))
-    # vertices: the cone of directions making an obtuse angle with every edge
-    nv = len(V)
-    src = np.concatenate([a, b])
-    dst = np.concatenate([b, a])
-    order = np.argsort(src, kind="stable")
-    nbr = dst[order]
-    ptr = np.concatenate([[0], np.cumsum(np.bincount(src, minlength=nv))])
-    rays = np.zeros((nv, RAYS, 3))
-    nray = np.zeros(nv, dtype=np.int64)
-    kern.vertex_rays(V, ptr, nbr, rays, nray)
-    used = ptr[1:] > ptr[:-1]
-    ray_ok = np.arange(RAYS)[None, :] < np.maximum(nray, 0)[:, None]
-    A, la = _unit(np.where(ray_ok[:, :, None], rays, 0.0).sum(axis=1))
-    cosr = np.where(ray_ok, np.einsum("vrj,vj->vr", rays, A), 1.0)
-    c1 = cosr.min(axis=1)
-    cone = used & (nray != 0) & ~((nray > 0) & (la < 1e-6 * np.maximum(nray, 1)))  # no cone, or a line
-    wide = (nray < 0) | (c1 < WIDE)
-    spread = np.where(wide, 2.0, 2.0 * np.sqrt(np.maximum(0.5 * (1.0 - c1), 0.0)))
-    R = cuts(V, A, np.zeros(nv), spread)
-    val = np.minimum(ptr[1:] - ptr[:-1], H - 1)
-    hv = np.zeros((nv, H, 4))
-    slot = np.arange(H - 1)[None, :]
-    pick = np.minimum(ptr[:-1, None] + slot, len(nbr) - 1)
-    ev, _ = _unit(V[nbr[pick]] - V[:, None])
-    hv[:, :H - 1, :3] = ev
-    hv[:, :H - 1, 3] = np.einsum("vsj,vj->vs", ev, V) + delta
-    hv[:, H - 1, :3], hv[:, H - 1, 3] = A, np.einsum("ij,ij->i", A, V) + R + delta
-    live = np.zeros((nv, H), dtype=bool)
-    live[:, :H - 1] = slot < val[:, None]
-    live[:, H - 1] = ~wide
-    ends = np.where(ray_ok, R[:, None] / np.maximum(cosr, WIDE), 0.0)
-    pts = np.concatenate([V[:, None], V[:, None] + ends[:, :, None] * rays], axis=1)
-    pl = np.concatenate([np.ones((nv, 1), dtype=bool), ray_ok], axis=1)
-    owner_v = np.zeros(nv, dtype=np.int64)
-    for c in range(3):
-        owner_v[T[:, c]] = np.arange(len(T))  # any triangle at the vertex holds it
-    out.append((hv[cone], live[cone], pts[cone], pl[cone], owner_v[cone], wide[cone]))
+@njit(cache=True, inline="always")
+def _corner(cor, n, x, y, z, origin, spacing):
+    cor[n, 0] = (x - origin[0]) / spacing[0]
+    cor[n, 1] = (y - origin[1]) / spacing[1]
+    cor[n, 2] = (z - origin[2]) / spacing[2]
+    return n + 1
 
-    # compressed rows: region r's half-spaces hs[hptr[r]:hptr[r + 1]], corners likewise
-    hs_l, hn_l, pt_l, pn_l, own_l = [], [], [], [], []
-    for hs, live, pts, pl, own, wide in out:
-        hs_l.append(hs[live])
-        hn_l.append(live.sum(axis=1))
-        pl = pl & ~wide[:, None]
-        pt_l.append((pts[pl] - origin) / spacing)
-        pn_l.append(pl.sum(axis=1))
-        own_l.append(own)
-    hptr = np.concatenate([[0], np.cumsum(np.concatenate(hn_l))])
-    cptr = np.concatenate([[0], np.cumsum(np.concatenate(pn_l))])
-    return hptr, np.concatenate(hs_l), cptr, np.concatenate(pt_l), np.concatenate(own_l)
+
+@njit(cache=True)
+def polytope(r, kind, R, V, T, tri, plane, prism, ea, eb, ptr, nbr, geo, e, rays, origin, spacing, hs, cor):
+    """Region ``r`` (after :func:`geometry`, whose ``geo``, ``e``, ``rays`` it reads) cut at
+    radius ``R``: its half-spaces ``a . x <= b`` into ``hs`` and its corners in sample-index
+    units into ``cor`` (none when ``kind`` is 2: it spans the grid). Returns their counts."""
+    m = len(T)
+    ne = len(ea)
+    ax, ay, az = geo[3], geo[4], geo[5]
+    nh, nc = 0, 0
+    if r < 2 * m:
+        t = r % m
+        s = 1.0 if r < m else -1.0
+        for k in range(3):
+            nh = _row(hs, nh, prism[t, 4 + 4 * k], prism[t, 5 + 4 * k], prism[t, 6 + 4 * k],
+                      prism[t, 7 + 4 * k] + DELTA)
+        off = s * (plane[t, 0] * tri[t, 0, 0] + plane[t, 1] * tri[t, 0, 1] + plane[t, 2] * tri[t, 0, 2])
+        nh = _row(hs, nh, -ax, -ay, -az, -off + DELTA)
+        nh = _row(hs, nh, ax, ay, az, off + R + DELTA)
+        for c in range(3):
+            x, y, z = tri[t, c, 0], tri[t, c, 1], tri[t, c, 2]
+            nc = _corner(cor, nc, x, y, z, origin, spacing)
+            nc = _corner(cor, nc, x + R * ax, y + R * ay, z + R * az, origin, spacing)
+        return nh, nc
+    if r < 2 * m + ne:
+        i = r - 2 * m
+        a, b = ea[i], eb[i]
+        ex, ey, ez = e[4, 0], e[4, 1], e[4, 2]
+        nh = _row(hs, nh, -ex, -ey, -ez, -(ex * V[a, 0] + ey * V[a, 1] + ez * V[a, 2]) + DELTA)
+        nh = _row(hs, nh, ex, ey, ez, ex * V[b, 0] + ey * V[b, 1] + ez * V[b, 2] + DELTA)
+        for w in (2, 3):
+            nh = _row(hs, nh, e[w, 0], e[w, 1], e[w, 2], e[w, 0] * V[a, 0] + e[w, 1] * V[a, 1] + e[w, 2] * V[a, 2] + DELTA)
+        if kind == 2:
+            return nh, 0
+        nh = _row(hs, nh, ax, ay, az, ax * V[a, 0] + ay * V[a, 1] + az * V[a, 2] + R + DELTA)
+        for p in (a, b):
+            nc = _corner(cor, nc, V[p, 0], V[p, 1], V[p, 2], origin, spacing)
+            for d in (0, 1):
+                f = R / (e[d, 0] * ax + e[d, 1] * ay + e[d, 2] * az)
+                nc = _corner(cor, nc, V[p, 0] + f * e[d, 0], V[p, 1] + f * e[d, 1], V[p, 2] + f * e[d, 2], origin,
+                             spacing)
+        return nh, nc
+    v = r - 2 * m - ne
+    k = min(ptr[v + 1] - ptr[v], MAXH - 1)
+    if ptr[v + 1] - ptr[v] > VALENCE:  # no unit edge directions were made
+        for j in range(k):
+            w = nbr[ptr[v] + j]
+            e[j, 0], e[j, 1], e[j, 2], _ = _unit3(V[w, 0] - V[v, 0], V[w, 1] - V[v, 1], V[w, 2] - V[v, 2])
+    for j in range(k):
+        nh = _row(hs, nh, e[j, 0], e[j, 1], e[j, 2], e[j, 0] * V[v, 0] + e[j, 1] * V[v, 1] + e[j, 2] * V[v, 2] + DELTA)
+    if kind == 2:
+        return nh, 0
+    nh = _row(hs, nh, ax, ay, az, ax * V[v, 0] + ay * V[v, 1] + az * V[v, 2] + R + DELTA)
+    nc = _corner(cor, nc, V[v, 0], V[v, 1], V[v, 2], origin, spacing)
+    for j in range(int(geo[9])):
+        f = R / (rays[j, 0] * ax + rays[j, 1] * ay + rays[j, 2] * az)
+        nc = _corner(cor, nc, V[v, 0] + f * rays[j, 0], V[v, 1] + f * rays[j, 1], V[v, 2] + f * rays[j, 2], origin,
+                     spacing)
+    return nh, nc
