@@ -14,30 +14,39 @@ SCAN_KERNELS = "splinekit.pointcloud._gridsdf_scan"
 
 SEARCH_KERNELS = "splinekit.pointcloud._meshdistance_kernels"
 
-SAMPLE_BYTES = 16
-"""Bytes per grid sample besides the output: its least squared distance and triangle."""
+SAMPLE_BYTES = 8
+"""Bytes per grid sample besides the output: its least squared distance."""
 
 REGION_BYTES = 80
 """Bytes per region (two per triangle, one per edge and vertex): cut radius, kind, owner, box."""
 
 
-def adjacency(T, n_vertices):
+def adjacency(T, V):
     """What the regions need of a closed mesh's connectivity (triangles ``T`` in the hierarchy's
-    order): edges ``(a, b)``, their two half-edges ``(E, 2)`` (``3 t + k`` is edge ``k`` of
+    order, vertices ``V``), with the vertices renumbered in the order of the first triangle
+    at each (so that the regions of edges and vertices, numbered by vertex, come in the
+    hierarchy's spatial order, as the faces do, and the scan's writes stay local): vertices,
+    triangles, edges ``(a, b)``, their two half-edges ``(E, 2)`` (``3 t + k`` is edge ``k`` of
     triangle ``t``), vertex -> neighbour CSR ``(ptr, nbr)`` and a triangle at each vertex."""
-    m = len(T)
-    topo = Topology(n_vertices, T.ravel(), np.arange(m + 1, dtype=np.int64) * 3, check=False)
+    m, nv = len(T), len(V)
+    first = np.full(nv, m, dtype=np.int64)
+    np.minimum.at(first, T.ravel(), np.repeat(np.arange(m), 3))
+    order = np.argsort(first, kind="stable")
+    new = np.empty(nv, dtype=np.int64)
+    new[order] = np.arange(nv)
+    T = new[T]
+    topo = Topology(nv, T.ravel(), np.arange(m + 1, dtype=np.int64) * 3, check=False)
     edges = topo.edges
     eh = np.ascontiguousarray(topo.edge_halfedges)
     ptr, eid = topo.vertex_edges
-    owner_v = np.repeat(np.arange(n_vertices), np.diff(ptr))
+    at = np.repeat(np.arange(nv), np.diff(ptr))
     ends = edges[eid]
-    nbr = np.where(ends[:, 0] == owner_v, ends[:, 1], ends[:, 0])
-    vown = np.zeros(n_vertices, dtype=np.int64)
+    nbr = np.where(ends[:, 0] == at, ends[:, 1], ends[:, 0])
+    vown = np.zeros(nv, dtype=np.int64)
     for c in range(3):
         vown[T[:, c]] = np.arange(m)
-    return (np.ascontiguousarray(edges[:, 0]), np.ascontiguousarray(edges[:, 1]), eh,
-            np.ascontiguousarray(ptr, dtype=np.int64), np.ascontiguousarray(nbr, dtype=np.int64), vown)
+    return (np.ascontiguousarray(V[order]), T, np.ascontiguousarray(edges[:, 0]), np.ascontiguousarray(edges[:, 1]),
+            eh, np.ascontiguousarray(ptr, dtype=np.int64), np.ascontiguousarray(nbr, dtype=np.int64), vown)
 
 
 def coarse_upper(dist, origin, spacing, shape, every):
@@ -60,15 +69,13 @@ def scan_grid(dist, kern, origin, spacing, shape, limit, count=None):
     if not plane.any(axis=1).all():
         return None
     b = dist.bvh
-    V = dist.unit_vertices
-    T = np.ascontiguousarray(dist.tris[b.order])
     fn, en, vn = dist._bvh_normals  # NotManifoldError for an open mesh
     prism = dist._bvh_prisms
     total = int(np.prod(shape))
-    n_regions = 2 * len(T) + 3 * len(T) // 2 + len(V)
+    n_regions = 2 * len(dist.tris) + 3 * len(dist.tris) // 2 + len(dist.unit_vertices)
     limits.check(SAMPLE_BYTES * total + REGION_BYTES * n_regions,
                  f"the region scan's work arrays for {total:,} samples and {n_regions:,} regions")
-    ea, eb, eh, ptr, nbr, vown = adjacency(T, len(V))
+    V, T, ea, eb, eh, ptr, nbr, vown = adjacency(dist.tris[b.order], dist.unit_vertices)
     n = 2 * len(T) + len(ea) + len(V)
     shape = np.asarray(shape, dtype=np.int64)
     G, go, gh = coarse_upper(dist, origin, spacing, shape, kern.CUT_NODES)
@@ -80,12 +87,10 @@ def scan_grid(dist, kern, origin, spacing, shape, limit, count=None):
     kern.cut_all(V, T, b.tri, plane, prism, ea, eb, eh, ptr, nbr, vown, origin, spacing, shape, G, go, gh, reach, R, kind,
                  owner, box)
     best = np.full(total, np.inf)
-    who = np.full(total, -1, dtype=np.int64)
+    out = np.full(total, np.inf)
     parts = kern.parts()
     if count is None:
         count = np.zeros((parts, 2), dtype=np.int64)
-    kern.scan(V, T, b.tri, plane, prism, ea, eb, eh, ptr, nbr, vown, R, kind, box, origin, spacing, shape, limit, best,
-              who, parts, count)
-    out = np.empty(total)
-    kern.finish(origin, spacing, shape, best, who, b.tri, fn, en, vn, out)
+    kern.scan(V, T, b.tri, plane, prism, ea, eb, eh, ptr, nbr, vown, R, kind, box, origin, spacing, shape, limit, fn, en,
+              vn, best, out, parts, count)
     return out

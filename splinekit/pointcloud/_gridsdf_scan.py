@@ -89,28 +89,16 @@ def cut_all(V, T, tri, plane, prism, ea, eb, eh, ptr, nbr, vown, origin, spacing
 
 
 @njit(cache=True, inline="always")
-def _column_range(hs, h0, h1, ua, va, wa, xu, xv, ow, hw, w0, w1):
-    """The samples ``[lo, hi)`` along axis ``wa`` of the column at ``(xu, xv)`` (coordinates
-    along axes ``ua``, ``va``) inside the half-spaces ``hs[h0:h1]``, within ``[w0, w1)``."""
-    lo, hi = float(w0), float(w1 - 1)
-    for s in range(h0, h1):
-        a = hs[s, wa]
-        rest = hs[s, 3] - hs[s, ua] * xu - hs[s, va] * xv - a * ow
-        if a > 0.0:
-            hi = min(hi, np.floor(rest / (a * hw)))
-        elif a < 0.0:
-            lo = max(lo, np.ceil(rest / (a * hw)))
-        elif rest < 0.0:
-            return 0, 0
-    if hi < lo:
-        return 0, 0
-    return int(lo), int(hi) + 1
+def _stride(axis, ny, nz):
+    """Step in the flat (C order) sample index along ``axis``."""
+    return ny * nz if axis == 0 else (nz if axis == 1 else 1)
 
 
 @njit(cache=True, inline="always")
 def _hull(pu, pv, k, hu, hv):
     """Convex hull (monotone chain, counter-clockwise, closed: first point repeated) of the
-    ``k`` points ``(pu, pv)`` (sorted in place by ``u``) into ``hu``, ``hv``; returns its count."""
+    ``k`` points ``(pu, pv)`` (sorted in place by ``u``) into ``hu``, ``hv``; returns its count
+    and the count of its lower chain (``u`` increasing; the upper chain follows, decreasing)."""
     for i in range(1, k):  # insertion sort by (u, v): k is small
         a, b = pu[i], pv[i]
         j = i - 1
@@ -130,36 +118,35 @@ def _hull(pu, pv, k, hu, hv):
             n -= 1
         hu[n], hv[n] = pu[i], pv[i]
         n += 1
-    return n
+    return n, low - 1
 
 
 @njit(cache=True, inline="always")
-def _row_range(hu, hv, nh, u, pad):
-    """``[lo, hi]`` of ``v`` over the hull ``hu``, ``hv`` (closed, ``nh`` points) at ``u``,
-    widened by ``pad``; ``lo > hi`` when the line misses it."""
-    lo, hi = np.inf, -np.inf
-    for e in range(nh - 1):
-        u0, u1 = hu[e], hu[e + 1]
-        if (u0 - pad <= u <= u1 + pad) or (u1 - pad <= u <= u0 + pad):
-            if u1 != u0:
-                t = min(max((u - u0) / (u1 - u0), 0.0), 1.0)
-                v = hv[e] + t * (hv[e + 1] - hv[e])
-            else:
-                v = hv[e]
-                lo = min(lo, hv[e + 1])
-                hi = max(hi, hv[e + 1])
-            lo = min(lo, v)
-            hi = max(hi, v)
-    if nh == 1:
-        lo, hi = hv[0], hv[0]
-    return lo - pad, hi + pad
+def _chain_at(cu, cv, n, p, u, upper):
+    """``v`` at ``u`` (clamped to the chain's ends) on the chain ``cu``, ``cv`` of ``n`` points
+    (``u`` increasing), walking on from segment ``p`` (rows come in increasing ``u``); returns
+    ``(v, p)``. Where the chain runs straight along ``v`` (a vertical segment), the lower or the
+    higher end (``upper``)."""
+    u = min(max(u, cu[0]), cu[n - 1])
+    while p < n - 2 and cu[p + 1] < u:
+        p += 1
+    u0, u1 = cu[p], cu[p + 1]
+    if u1 > u0:
+        v = cv[p] + (min(u, u1) - u0) / (u1 - u0) * (cv[p + 1] - cv[p])
+    else:
+        v = max(cv[p], cv[p + 1]) if upper else min(cv[p], cv[p + 1])
+    # a vertical segment right after, at this u
+    if p < n - 2 and cu[p + 2] == cu[p + 1] and u == cu[p + 1]:
+        v = max(v, cv[p + 2]) if upper else min(v, cv[p + 2])
+    return v, p
 
 
 @njit(cache=True, parallel=True)
-def scan(V, T, tri, plane, prism, ea, eb, eh, ptr, nbr, vown, R, kind, box, origin, spacing, shape, limit, best, who,
-         parts, count):
-    """The least squared distance ``best`` (flat, C order, ``inf`` to start) and its triangle
-    ``who`` at every sample from the regions (:mod:`._gridsdf_regions`; cut radii ``R`` and
+def scan(V, T, tri, plane, prism, ea, eb, eh, ptr, nbr, vown, R, kind, box, origin, spacing, shape, limit, fn, en, vn,
+         best, out, parts, count):
+    """The least squared distance ``best`` (flat, C order, ``inf`` to start) and the signed
+    distance ``out`` (``inf`` to start; sign by the pseudo-normals ``fn``, ``en``, ``vn`` of the
+    nearest feature, as :func:`~._gridsdf_kernels.grid_signed` gives it) at every sample from the regions (:mod:`._gridsdf_regions`; cut radii ``R`` and
     kinds from :func:`cut_all`); distances beyond ``limit`` (squared) are not kept. ``parts``
     slabs along the first axis, one per parallel task, so that no two write one sample.
     ``count[part]``: columns and distances measured."""
@@ -181,6 +168,10 @@ def scan(V, T, tri, plane, prism, ea, eb, eh, ptr, nbr, vown, R, kind, box, orig
         pv = np.empty(2 * RAYS + 2)
         hu = np.empty(4 * RAYS + 6)
         hv = np.empty(4 * RAYS + 6)
+        uu = np.empty(4 * RAYS + 6)
+        uv = np.empty(4 * RAYS + 6)
+        aff = np.empty((MAXH, 4))
+        row = np.empty(MAXH)
         cols, evals = 0, 0
         for r in range(n):
             if kind[r] == 0:
@@ -202,23 +193,56 @@ def scan(V, T, tri, plane, prism, ea, eb, eh, ptr, nbr, vown, R, kind, box, orig
                 ua, va, wa = 0, 2, 1
             else:
                 ua, va, wa = 1, 2, 0
-            nhull = 0
+            nl, nu = 0, 0
             if c1 > 0:
                 for c in range(c1):
                     pu[c], pv[c] = cor[c, ua], cor[c, va]
-                nhull = _hull(pu, pv, c1, hu, hv)
+                nhull, nl = _hull(pu, pv, c1, hu, hv)
+                # the upper chain, turned to increasing u
+                nu = nhull - nl + 1
+                for c in range(nu):
+                    uu[c], uv[c] = hu[nhull - 1 - c], hv[nhull - 1 - c]
+            # each half-space as a bound on the sample index along w, affine in the column's
+            # (u, v): w <= base - cu * u - cv * v (or >=, by the sign of its w component)
+            for h in range(h1):
+                aw = hs[h, wa] * spacing[wa]
+                if aw == 0.0:  # a bound on the column itself
+                    aff[h, 0], aff[h, 3] = 0.0, hs[h, 3] - hs[h, ua] * origin[ua] - hs[h, va] * origin[va]
+                    aff[h, 1], aff[h, 2] = hs[h, ua] * spacing[ua], hs[h, va] * spacing[va]
+                    continue
+                inv = 1.0 / aw
+                aff[h, 0] = 1.0 if aw > 0.0 else -1.0
+                aff[h, 1] = hs[h, ua] * spacing[ua] * inv
+                aff[h, 2] = hs[h, va] * spacing[va] * inv
+                aff[h, 3] = (hs[h, 3] - hs[h, ua] * origin[ua] - hs[h, va] * origin[va] - hs[h, wa] * origin[wa]) * inv
+            stride_u, stride_v, stride_w = _stride(ua, ny, nz), _stride(va, ny, nz), _stride(wa, ny, nz)
+            pl, pw = 0, 0
             for iu in range(lo[ua], hi[ua]):
-                xu = origin[ua] + iu * spacing[ua]
                 v0, v1 = lo[va], hi[va]
-                if nhull > 0:
-                    a, b = _row_range(hu, hv, nhull, float(iu), pad)
-                    v0 = max(v0, int(np.ceil(a)))
-                    v1 = min(v1, int(np.floor(b)) + 1)
+                if nl > 0:
+                    a, pl = _chain_at(hu, hv, nl, pl, float(iu), False)
+                    b, pw = _chain_at(uu, uv, nu, pw, float(iu), True)
+                    v0 = max(v0, int(np.ceil(a - pad)))
+                    v1 = min(v1, int(np.floor(b + pad)) + 1)
+                for h in range(h1):
+                    row[h] = aff[h, 3] - aff[h, 1] * iu
                 for iv in range(v0, v1):
-                    xv = origin[va] + iv * spacing[va]
-                    w0, w1 = _column_range(hs, 0, h1, ua, va, wa, xu, xv, origin[wa], spacing[wa], lo[wa], hi[wa])
+                    wlo, whi = float(lo[wa]), float(hi[wa] - 1)
+                    for h in range(h1):
+                        x = row[h] - aff[h, 2] * iv
+                        g = aff[h, 0]
+                        if g > 0.0:
+                            whi = min(whi, x)
+                        elif g < 0.0:
+                            wlo = max(wlo, x)
+                        elif x < 0.0:
+                            whi = -1.0
+                    if whi < wlo:
+                        continue
+                    w0, w1 = int(np.ceil(wlo)), int(np.floor(whi)) + 1
                     cols += 1
                     evals += w1 - w0
+                    f = iu * stride_u + iv * stride_v + w0 * stride_w
                     for iw in range(w0, w1):
                         if wa == 2:
                             i, j, k = iu, iv, iw
@@ -229,33 +253,12 @@ def scan(V, T, tri, plane, prism, ea, eb, eh, ptr, nbr, vown, R, kind, box, orig
                         px = origin[0] + i * spacing[0]
                         py = origin[1] + j * spacing[1]
                         pz = origin[2] + k * spacing[2]
-                        closest_on_triangle(px, py, pz, tri, t, q)
+                        reg = closest_on_triangle(px, py, pz, tri, t, q)
                         dx, dy, dz = px - q[0], py - q[1], pz - q[2]
                         d2 = dx * dx + dy * dy + dz * dz
-                        f = (i * ny + j) * nz + k
                         if d2 < best[f] and d2 <= limit:
                             best[f] = d2
-                            who[f] = t
+                            out[f] = _signed(px, py, pz, d2, t, reg, q, fn, en, vn)
+                        f += stride_w
         count[part, 0] = cols
         count[part, 1] = evals
-
-
-@njit(cache=True, parallel=True)
-def finish(origin, spacing, shape, best, who, tri, fn, en, vn, out):
-    """Signed distances from the nearest triangles ``who`` (-1: none within the limit, ``inf``):
-    the sign by the pseudo-normal of the nearest feature, as the block kernel gives it."""
-    ny, nz = shape[1], shape[2]
-    for i in prange(shape[0]):
-        q = np.empty(3)
-        for j in range(ny):
-            for k in range(nz):
-                f = (i * ny + j) * nz + k
-                t = who[f]
-                if t < 0:
-                    out[f] = np.inf
-                    continue
-                px = origin[0] + i * spacing[0]
-                py = origin[1] + j * spacing[1]
-                pz = origin[2] + k * spacing[2]
-                reg = closest_on_triangle(px, py, pz, tri, t, q)
-                out[f] = _signed(px, py, pz, best[f], t, reg, q, fn, en, vn)
