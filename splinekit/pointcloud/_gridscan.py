@@ -60,37 +60,52 @@ def coarse_upper(dist, origin, spacing, shape, every):
     return d.reshape(tuple(gshape)), origin, gh
 
 
-def scan_grid(dist, kern, origin, spacing, shape, limit, count=None):
+def scan_grid(dist, kern, origin, spacing, shape, limit):
     """Signed distances (flat, unit box) at the samples ``origin + (i, j, k) * spacing`` of a
     grid of ``shape`` (unit box), ``inf`` beyond ``sqrt(limit)``; None when some triangle is too
-    thin for a plane (the block kernel serves). ``kern``: the compiled module. ``count``:
-    ``(parts, 2)`` int64 to receive the columns and distances measured per parallel part."""
+    thin for a plane (the block kernel serves). ``kern``: the compiled module."""
+    reg = regions(dist, kern, origin, spacing, shape, limit)
+    return None if reg is None else scan(dist, kern, reg, origin, spacing, shape, limit)
+
+
+def regions(dist, kern, origin, spacing, shape, limit):
+    """The mesh's regions for the grid (arguments of :func:`scan_grid`): ``(mesh, R, kind,
+    box)``, the mesh's arrays as the kernels take them, each region's cut radius, kind and box of
+    sample indices (:func:`~splinekit.pointcloud._gridsdf_scan.cut_all`); None when some
+    triangle is too thin for a plane."""
     plane, _ = dist._bvh_planes
     if not plane.any(axis=1).all():
         return None
     b = dist.bvh
-    fn, en, vn = dist._bvh_normals  # NotManifoldError for an open mesh
-    prism = dist._bvh_prisms
+    dist._bvh_normals  # noqa: B018 -- NotManifoldError for an open mesh, before any work
     total = int(np.prod(shape))
     n_regions = 2 * len(dist.tris) + 3 * len(dist.tris) // 2 + len(dist.unit_vertices)
     limits.check(SAMPLE_BYTES * total + REGION_BYTES * n_regions,
                  f"the region scan's work arrays for {total:,} samples and {n_regions:,} regions")
     V, T, ea, eb, eh, ptr, nbr, vown = adjacency(dist.tris[b.order], dist.unit_vertices)
+    mesh = (V, T, b.tri, plane, dist._bvh_prisms, ea, eb, eh, ptr, nbr, vown)
     n = 2 * len(T) + len(ea) + len(V)
     shape = np.asarray(shape, dtype=np.int64)
     G, go, gh = coarse_upper(dist, origin, spacing, shape, kern.CUT_NODES)
     R = np.empty(n)
     kind = np.empty(n, dtype=np.int64)
-    owner = np.empty(n, dtype=np.int64)
     box = np.empty((n, 6), dtype=np.int64)
-    reach = float(np.sqrt(limit))
-    kern.cut_all(V, T, b.tri, plane, prism, ea, eb, eh, ptr, nbr, vown, origin, spacing, shape, G, go, gh, reach, R, kind,
-                 owner, box)
+    kern.cut_all(*mesh, origin, spacing, shape, G, go, gh, float(np.sqrt(limit)), R, kind, box)
+    return mesh, R, kind, box
+
+
+def scan(dist, kern, reg, origin, spacing, shape, limit, count=None):
+    """Signed distances (flat, unit box) from the regions ``reg`` (:func:`regions`) of the same
+    grid. ``count``: ``(parts, 2)`` int64 to receive the columns and distances measured per
+    parallel part (:func:`~splinekit.pointcloud._gridsdf_scan.parts`)."""
+    mesh, R, kind, box = reg
+    fn, en, vn = dist._bvh_normals
+    total = int(np.prod(shape))
     best = np.full(total, np.inf)
     out = np.full(total, np.inf)
     parts = kern.parts()
     if count is None:
         count = np.zeros((parts, 2), dtype=np.int64)
-    kern.scan(V, T, b.tri, plane, prism, ea, eb, eh, ptr, nbr, vown, R, kind, box, origin, spacing, shape, limit, fn, en,
-              vn, best, out, parts, count)
+    kern.scan(*mesh, R, kind, box, origin, spacing, np.asarray(shape, dtype=np.int64), limit, fn, en, vn, best, out,
+              parts, count)
     return out

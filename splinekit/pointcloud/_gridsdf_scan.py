@@ -48,8 +48,8 @@ def parts():
 
 @njit(cache=True, parallel=True)
 def cut_all(V, T, tri, plane, prism, ea, eb, eh, ptr, nbr, vown, origin, spacing, shape, G, go, gh, reach, R, kind,
-            owner, box):
-    """Every region's cut radius ``R``, kind and owning triangle (:func:`~._gridsdf_regions.geometry`)
+            box):
+    """Every region's cut radius ``R`` and kind (:func:`~._gridsdf_regions.geometry`)
     and the box of sample indices its corners span (``box (n, 6)``: first and past-the-last
     index along each axis; the whole grid when it is wide), for the grid ``origin + (i, j, k) *
     spacing`` of ``shape``; a region is never cut beyond the grid's far corner along its axis
@@ -63,7 +63,7 @@ def cut_all(V, T, tri, plane, prism, ea, eb, eh, ptr, nbr, vown, origin, spacing
         rays = np.empty((RAYS, 3))
         hs = np.empty((MAXH, 4))
         cor = np.empty((2 * RAYS + 2, 3))
-        owner[r], kind[r] = geometry(r, V, T, tri, plane, prism, ea, eb, eh, ptr, nbr, vown, geo, e, rays)
+        _, kind[r] = geometry(r, V, T, tri, plane, prism, ea, eb, eh, ptr, nbr, vown, geo, e, rays)
         for a in range(3):
             box[r, a], box[r, 3 + a] = 0, shape[a]
         R[r] = np.inf

@@ -73,6 +73,10 @@ GRID_BLOCK = 16
 """Samples along each side of the top blocks :meth:`MeshDistance.grid_signed` shares its work
 over, halved level by level down to 2^3 (module notes of its kernels)."""
 
+GRID_SCAN = True
+"""Whether :meth:`MeshDistance.grid_signed` scans the regions of the mesh's features (False: the
+block kernel on every mesh, as it serves meshes with a triangle too thin for a plane)."""
+
 GRID_OPEN = 1.0
 """A block of the grid kernel keeps a hierarchy node (rather than opening it) when the node's
 bounding radius is at most this many of the block's half-diagonals (82k triangles at 128^3,
@@ -370,7 +374,7 @@ class MeshDistance:
         h = np.asarray(spacing, dtype=np.float64) / self._scale
         with np.errstate(over="ignore"):
             limit = float(max_distance / self._scale) ** 2
-        out = scan_grid(self, scan, o, h, shape, limit)
+        out = scan_grid(self, scan, o, h, shape, limit) if GRID_SCAN else None
         if out is None:  # a triangle too thin for a plane: the block kernel
             limits.check(GRID_WORK_BYTES * len(self.tris) * (os.cpu_count() or 1),
                          f"the grid distance kernel's work arrays for {len(self.tris):,} triangles")
