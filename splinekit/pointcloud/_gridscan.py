@@ -8,7 +8,7 @@ from __future__ import annotations
 import numpy as np
 
 from .. import _kernels, limits
-from ..mesh.topology import Topology
+from ..mesh.topology import ranges
 
 SCAN_KERNELS = "splinekit.pointcloud._gridsdf_scan"
 
@@ -21,32 +21,39 @@ REGION_BYTES = 80
 """Bytes per region (two per triangle, one per edge and vertex): cut radius, kind, owner, box."""
 
 
-def adjacency(T, V):
-    """What the regions need of a closed mesh's connectivity (triangles ``T`` in the hierarchy's
-    order, vertices ``V``), with the vertices renumbered in the order of the first triangle
-    at each (so that the regions of edges and vertices, numbered by vertex, come in the
-    hierarchy's spatial order, as the faces do, and the scan's writes stay local): vertices,
-    triangles, edges ``(a, b)``, their two half-edges ``(E, 2)`` (``3 t + k`` is edge ``k`` of
-    triangle ``t``), vertex -> neighbour CSR ``(ptr, nbr)`` and a triangle at each vertex."""
-    m, nv = len(T), len(V)
+def adjacency(dist):
+    """What the regions need of a closed mesh's connectivity (:class:`MeshDistance` ``dist``,
+    triangles in its hierarchy's order), with the vertices renumbered in the order of the first
+    triangle at each (so that the regions of edges and vertices come in the hierarchy's spatial
+    order, as the faces do, and the scan's writes stay local): vertices, triangles, edges
+    ``(a, b)``, their two half-edges ``(E, 2)`` (``3 t + k`` is edge ``k`` of triangle ``t``),
+    vertex -> neighbour CSR ``(ptr, nbr)`` and a triangle at each vertex."""
+    topo, order = dist.topology, dist.bvh.order
+    m, nv = len(order), len(dist.unit_vertices)
+    at = np.empty(m, dtype=np.int64)  # original triangle -> its place in the hierarchy
+    at[order] = np.arange(m)
+    T = dist.tris[order]
     first = np.full(nv, m, dtype=np.int64)
     np.minimum.at(first, T.ravel(), np.repeat(np.arange(m), 3))
-    order = np.argsort(first, kind="stable")
+    vorder = np.argsort(first, kind="stable")
     new = np.empty(nv, dtype=np.int64)
-    new[order] = np.arange(nv)
-    T = new[T]
-    topo = Topology(nv, T.ravel(), np.arange(m + 1, dtype=np.int64) * 3, check=False)
-    edges = topo.edges
-    eh = np.ascontiguousarray(topo.edge_halfedges)
+    new[vorder] = np.arange(nv)
+    eh = topo.edge_halfedges
+    eh = 3 * at[eh // 3] + eh % 3
+    eorder = np.argsort(np.minimum(eh[:, 0], eh[:, 1]), kind="stable")
+    edges = new[topo.edges[eorder]]
     ptr, eid = topo.vertex_edges
-    at = np.repeat(np.arange(nv), np.diff(ptr))
-    ends = edges[eid]
-    nbr = np.where(ends[:, 0] == at, ends[:, 1], ends[:, 0])
+    count = np.diff(ptr)[vorder]
+    pick = ranges(ptr[vorder], count)  # each vertex's edges, vertices in the new order
+    ends = topo.edges[eid[pick]]
+    centre = np.repeat(vorder, count)
+    nbr = new[np.where(ends[:, 0] == centre, ends[:, 1], ends[:, 0])]
     vown = np.zeros(nv, dtype=np.int64)
     for c in range(3):
-        vown[T[:, c]] = np.arange(m)
-    return (np.ascontiguousarray(V[order]), T, np.ascontiguousarray(edges[:, 0]), np.ascontiguousarray(edges[:, 1]),
-            eh, np.ascontiguousarray(ptr, dtype=np.int64), np.ascontiguousarray(nbr, dtype=np.int64), vown)
+        vown[new[T[:, c]]] = np.arange(m)
+    return (np.ascontiguousarray(dist.unit_vertices[vorder]), new[T], np.ascontiguousarray(edges[:, 0]),
+            np.ascontiguousarray(edges[:, 1]), np.ascontiguousarray(eh[eorder]),
+            np.concatenate([[0], np.cumsum(count)]), nbr, vown)
 
 
 def coarse_upper(dist, origin, spacing, shape, every):
@@ -82,7 +89,7 @@ def regions(dist, kern, origin, spacing, shape, limit):
     n_regions = 2 * len(dist.tris) + 3 * len(dist.tris) // 2 + len(dist.unit_vertices)
     limits.check(SAMPLE_BYTES * total + REGION_BYTES * n_regions,
                  f"the region scan's work arrays for {total:,} samples and {n_regions:,} regions")
-    V, T, ea, eb, eh, ptr, nbr, vown = adjacency(dist.tris[b.order], dist.unit_vertices)
+    V, T, ea, eb, eh, ptr, nbr, vown = adjacency(dist)
     mesh = (V, T, b.tri, plane, dist._bvh_prisms, ea, eb, eh, ptr, nbr, vown)
     n = 2 * len(T) + len(ea) + len(V)
     shape = np.asarray(shape, dtype=np.int64)

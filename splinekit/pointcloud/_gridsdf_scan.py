@@ -3,27 +3,43 @@ characteristic regions of its features: :meth:`splinekit.pointcloud.meshdistance
 
 Loaded through :func:`splinekit._kernels.load`. The nearest point ``q`` of the mesh to a sample
 ``x`` lies inside a face, inside an edge or at a vertex, and ``x - q`` then satisfies that
-feature's first-order condition (its normal cone):
+feature's first-order condition (it lies in the feature's normal cone):
 
 * face ``t``: ``x`` projects into ``t`` along its normal (a prism, one per side of the plane);
 * edge ``(a, b)`` between triangles with inward in-plane edge normals ``w1``, ``w2``: ``x``
-  projects into the edge and ``(x - a) . w1 <= 0``, ``(x - a) . w2 <= 0`` (a wedge);
-* vertex ``v`` with edge directions ``e_j``: ``(x - v) . e_j <= 0`` for all ``j`` (a cone).
+  projects into the edge and ``(x - a) . w1 <= 0``, ``(x - a) . w2 <= 0`` (a wedge; on the
+  outside of a convex edge, on the inside of a concave one);
+* vertex ``v`` with edge directions ``e_j``: ``(x - v) . e_j <= 0`` for all ``j`` (a convex
+  cone, whatever the vertex's shape; empty or a line at a saddle or a flat vertex).
 
 So ``x`` lies in the region of its nearest feature, and the least distance to the triangles
-owning the regions that contain ``x`` (an edge or vertex belongs to one of its triangles, which
-holds its nearest point) is its distance, exactly as the brute-force minimum over all triangles
-gives it (the same :func:`closest_on_triangle`). Every region is widened by :data:`DELTA`
-against rounding (a wider region only measures more), and cut where it can no longer hold a
-nearest point: at the radius ``R`` (distance from the feature, :func:`cut`) where an upper
-bound of the distance field over the region's points at that radius is below ``R``; the
-distance is 1-Lipschitz and a region is a cone over its feature, so beyond ``R`` every point
-has something nearer than the feature. The upper bound comes from exact distances on a coarse
-grid (``G``) plus the distance to the coarse node.
+owning the regions that contain ``x`` (an edge or a vertex belongs to one of its triangles,
+which holds its nearest point) is its distance: the true nearest triangle's, by the same
+:func:`closest_on_triangle` as the brute-force minimum (where two triangles share the nearest
+edge they may round it 1 ulp apart). A sample in no region (beyond the band) gets ``inf``.
+Every region is widened by :data:`~._gridsdf_regions.DELTA` against rounding (a wider region
+only measures more), and cut where it can no longer hold a nearest point: at a radius ``R``
+(distance from the feature, :func:`~._gridsdf_regions.cut`) where an upper bound of the distance
+over the region's points at that radius is below ``R``. The distance is 1-Lipschitz and a
+region is a cone over its feature (a prism: a translate), so beyond ``R`` every point of it has
+something nearer than the feature. The upper bound: exact distances on a coarse grid (every
+:data:`CUT_NODES`-th sample, by the hierarchy's nearest-triangle search) plus the way to the
+nearest node. Without the cut a face's inner prism would run through the solid and out of the
+other side.
 
-Each region is a convex polytope: half-spaces (:data:`H` at most) for the samples of each grid
-column, its corners (the feature's points and their ends along its extreme directions at the
-cut) for the box of columns to scan.
+Each region is a convex polytope (:mod:`._gridsdf_regions`): half-spaces for the samples of each
+grid column (bounds on the index along the column's axis, affine in the column), its corners
+(the feature's points and their ends along its extreme directions at the cut) for the rows and
+columns to visit (the convex hull of the corners projected along the column axis, the longest
+side of their box). The regions' order is the triangle hierarchy's (spatial), so the writes of
+one region after another stay in cache; the grid is shared among threads in slabs along its
+first axis (every thread visits the regions that reach its slab).
+
+Work (82k triangles at 128^3, 1,869,108 samples, 327,682 regions of which 311,507 non-empty):
+2.2 columns and 1.6 exact distances a sample (faces 0.8, edges 0.65, vertices 0.14). One
+thread, CPU seconds: connectivity 0.05, coarse grid 0.06, regions and their cuts 0.18, scan
+0.44 (faces 0.18, edges 0.20, vertices 0.06); the block kernel of :mod:`._gridsdf_kernels` took
+2.6-3.8 in the same runs.
 """
 
 from __future__ import annotations

@@ -169,17 +169,17 @@ MIN_QUERIES = 1000
 ones)."""
 
 
-def _pseudo_normals(V, T):
+def _pseudo_normals(V, T, topo):
     """Angle-weighted pseudo-normals ``(face (m, 3), edge (m, 3, 3), vertex (n, 3))`` of a closed
-    triangle mesh; the edge array holds, per triangle and local edge (01, 12, 20), the sum of the
-    unit normals of the edge's two triangles. NotManifoldError when an edge has not two triangles."""
+    triangle mesh (its :class:`Topology` ``topo``); the edge array holds, per triangle and local
+    edge (01, 12, 20), the sum of the unit normals of the edge's two triangles. NotManifoldError
+    when an edge has not two triangles."""
     a, b, c = V[T[:, 0]], V[T[:, 1]], V[T[:, 2]]
     n = np.cross(b - a, c - a)
     ln = np.linalg.norm(n, axis=1)
     fn = n / np.where(ln > 0, ln, 1.0)[:, None]
     # edges: corner k of triangle t is the half-edge T[t, k] -> T[t, k + 1]; the
     # topology's edge table gives the edge shared by the two triangles using it
-    topo = Topology(len(V), T.ravel(), np.arange(len(T) + 1, dtype=np.int64) * 3, check=False)
     inv = topo.halfedge_edge
     counts = np.bincount(inv, minlength=len(topo.edges))
     if (counts != 2).any():
@@ -263,9 +263,14 @@ class MeshDistance:
         return TriangleBVH(self.unit_vertices, self.tris)
 
     @cached_property
+    def topology(self) -> Topology:
+        """The triangles' connectivity: corner ``k`` of triangle ``t`` is half-edge ``3 t + k``."""
+        return Topology(len(self.V), self.tris.ravel(), np.arange(len(self.tris) + 1, dtype=np.int64) * 3, check=False)
+
+    @cached_property
     def pseudo_normals(self):
         """``(face, edge, vertex)`` pseudo-normals for :meth:`signed`; NotManifoldError when open."""
-        return _pseudo_normals(self.unit_vertices, self.tris)
+        return _pseudo_normals(self.unit_vertices, self.tris, self.topology)
 
     @cached_property
     def _bvh_normals(self):
