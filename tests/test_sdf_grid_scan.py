@@ -208,3 +208,21 @@ def test_the_scans_work_arrays_are_checked_against_the_memory_budget(kern):
         _gridscan.regions(*args)
     with limits.budget(need):
         assert _gridscan.regions(*args) is not None
+
+
+def test_the_scan_gives_the_block_kernels_values_to_the_last_bit(kern, monkeypatch):
+    # both measure the true nearest triangle with the same closest-point routine; an edge's two
+    # triangles may round the distance to it 1 ulp apart, and the scan measures both
+    from splinekit.pointcloud import meshdistance
+
+    if _kernels.load(meshdistance.GRID_KERNELS) is None:
+        pytest.skip("numba kernels unavailable")
+    monkeypatch.setattr(_kernels, "MIN_WORK", 0)
+    monkeypatch.setenv("SPLINEKIT_NUMBA", "1")
+    V, T = of(star_mesh())
+    dist = MeshDistance(V, T)
+    args = (np.array([-1.9, -1.8, -1.7]), np.full(3, 0.11), (35, 34, 33))
+    scan = dist.grid_signed(*args)
+    monkeypatch.setattr(meshdistance, "GRID_SCAN", False)
+    block = dist.grid_signed(*args)
+    assert np.array_equal(scan, block)

@@ -13,10 +13,11 @@ feature's first-order condition (it lies in the feature's normal cone):
   cone, whatever the vertex's shape; empty or a line at a saddle or a flat vertex).
 
 So ``x`` lies in the region of its nearest feature, and the least distance to the triangles
-owning the regions that contain ``x`` (an edge or a vertex belongs to one of its triangles,
-which holds its nearest point) is its distance: the true nearest triangle's, by the same
-:func:`closest_on_triangle` as the brute-force minimum (where two triangles share the nearest
-edge they may round it 1 ulp apart). A sample in no region (beyond the band) gets ``inf``.
+owning the regions that contain ``x`` (a vertex belongs to one of its triangles, an edge to
+both of its, which hold its nearest point) is its distance: the true nearest triangle's, by the
+same :func:`closest_on_triangle` as the brute-force minimum, so the same value to the last bit
+(an edge's two triangles may round the distance to it 1 ulp apart: both are measured). A sample
+in no region (beyond the band) gets ``inf``.
 Every region is widened by :data:`~._gridsdf_regions.DELTA` against rounding (a wider region
 only measures more), and cut where it can no longer hold a nearest point: at a radius ``R``
 (distance from the feature, :func:`~._gridsdf_regions.cut`) where an upper bound of the distance
@@ -168,6 +169,7 @@ def scan(V, T, tri, plane, prism, ea, eb, eh, ptr, nbr, vown, R, kind, box, orig
     ``count[part]``: columns and distances measured."""
     nx, ny, nz = shape[0], shape[1], shape[2]
     n = len(R)
+    m, ne = len(T), len(ea)
     per = (nx + parts - 1) // parts
     pad = 1e-3
     for part in prange(parts):
@@ -199,6 +201,9 @@ def scan(V, T, tri, plane, prism, ea, eb, eh, ptr, nbr, vown, R, kind, box, orig
             if lo[0] >= hi[0] or lo[1] >= hi[1] or lo[2] >= hi[2]:
                 continue
             t, _ = geometry(r, V, T, tri, plane, prism, ea, eb, eh, ptr, nbr, vown, geo, e, rays)
+            # an edge's other triangle too: the two may round the distance to the edge 1 ulp
+            # apart, and the brute-force minimum takes the lower
+            t2 = eh[r - 2 * m, 1] // 3 if 2 * m <= r < 2 * m + ne else -1
             h1, c1 = polytope(r, kind[r], R[r], V, T, tri, plane, prism, ea, eb, ptr, nbr, geo, e, rays, origin, spacing,
                               hs, cor)
             # the longest side innermost: fewest columns
@@ -275,6 +280,13 @@ def scan(V, T, tri, plane, prism, ea, eb, eh, ptr, nbr, vown, R, kind, box, orig
                         if d2 < best[f] and d2 <= limit:
                             best[f] = d2
                             out[f] = _signed(px, py, pz, d2, t, reg, q, fn, en, vn)
+                        if t2 >= 0:
+                            reg = closest_on_triangle(px, py, pz, tri, t2, q)
+                            dx, dy, dz = px - q[0], py - q[1], pz - q[2]
+                            d2 = dx * dx + dy * dy + dz * dz
+                            if d2 < best[f] and d2 <= limit:
+                                best[f] = d2
+                                out[f] = _signed(px, py, pz, d2, t2, reg, q, fn, en, vn)
                         f += stride_w
         count[part, 0] = cols
         count[part, 1] = evals
