@@ -64,10 +64,13 @@ def _beaten(R, geo, G, go, gh):
 
 @njit(cache=True)
 def cut(geo, rmax, step, G, go, gh):
-    """A radius beyond which a region holds no nearest point, at most ``rmax``: doubling from
-    ``step``, then four halvings of the last interval. The distance is 1-Lipschitz and a region
-    is a cone over its feature, so a radius that :func:`_beaten` accepts holds for every larger
-    one (module notes of the scan kernel)."""
+    """A radius beyond which a region holds no nearest point, at most ``rmax``: ``rmax`` when
+    :func:`_beaten` rejects it (a region running out of the grid unopposed: one test), else
+    doubling from ``step``, then four halvings of the last interval. The distance is
+    1-Lipschitz and a region is a cone over its feature, so a radius that :func:`_beaten`
+    accepts holds for every larger one (module notes of the scan kernel)."""
+    if not _beaten(rmax, geo, G, go, gh):
+        return rmax
     R = step
     while R < rmax and not _beaten(R, geo, G, go, gh):
         R *= 2.0

@@ -92,8 +92,8 @@ def cut_all(V, T, tri, plane, prism, ea, eb, eh, ptr, nbr, vown, origin, spacing
             y = origin[1] + (shape[1] - 1) * spacing[1] * ((c >> 1) & 1)
             z = origin[2] + (shape[2] - 1) * spacing[2] * (c & 1)
             rmax = max(rmax, (x - geo[0]) * geo[3] + (y - geo[1]) * geo[4] + (z - geo[2]) * geo[5])
-        rmax = rmax + geo[6] + step
-        R[r] = min(cut(geo, rmax, step, G, go, gh), reach * (1.0 + 1e-9) + 1e-300)
+        rmax = min(rmax + geo[6] + step, reach * (1.0 + 1e-9) + 1e-300)
+        R[r] = cut(geo, rmax, step, G, go, gh)
         _, nc = polytope(r, kind[r], R[r], V, T, tri, plane, prism, ea, eb, ptr, nbr, geo, e, rays, origin, spacing, hs,
                          cor)
         for a in range(3):
