@@ -18,7 +18,8 @@ SAMPLE_BYTES = 8
 """Bytes per grid sample besides the output: its least squared distance."""
 
 REGION_BYTES = 80
-"""Bytes per region (two per triangle, one per edge and vertex): cut radius, kind, owner, box."""
+"""Bytes per region (two per triangle, one per edge and vertex): cut radius, kind, box, and the
+mesh's connectivity and coarse grid shared out."""
 
 
 def adjacency(dist):
