@@ -31,7 +31,8 @@ def kern():
 
 
 def grid_points(origin, step, shape):
-    axes = [origin[k] + step * np.arange(shape[k]) for k in range(3)]
+    step = np.broadcast_to(np.asarray(step, dtype=float), (3,))
+    axes = [origin[k] + step[k] * np.arange(shape[k]) for k in range(3)]
     return np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, 3)
 
 
@@ -40,7 +41,7 @@ def scanned(kern, V, T, origin, step, shape, limit=np.inf, tamper=None):
     box)`` may change the regions first."""
     dist = MeshDistance(V, T)
     o = (np.asarray(origin, dtype=float) - dist._shift) / dist._scale
-    h = np.full(3, step) / dist._scale
+    h = np.broadcast_to(np.asarray(step, dtype=float), (3,)) / dist._scale
     reg = _gridscan.regions(dist, kern, o, h, shape, limit / dist._scale**2)
     assert reg is not None  # no triangle too thin for a plane here
     if tamper is not None:
@@ -92,6 +93,7 @@ CASES = {
     "box": (lambda: of(primitives.box(2.0)), np.full(3, -1.6), 0.16),
     "torus": (lambda: of(primitives.torus(24, 12, 1.0, 0.3)), np.array([-1.5, -1.5, -0.6]), 0.12),
     "star": (lambda: of(star_mesh()), np.full(3, -1.9), 0.17),
+    "star, steps unequal": (lambda: of(star_mesh()), np.array([-1.9, -1.6, -2.4]), np.array([0.17, 0.13, 0.2])),
 }
 
 
