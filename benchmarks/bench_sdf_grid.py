@@ -57,11 +57,14 @@ vertex order, wrote all over the grid: 0.26 -> 0.20), rows from the hull's two c
 half-spaces as affine bounds on the column (0.52 -> 0.49), coarse nodes every 8th sample (every
 4th: 0.3 s of queries for 7 % fewer distances; every 16th: 0.02 s, 9 % more distances). Whole
 ``from_mesh`` (``--threads``, load 3.9-4.3, where two threads ran no faster than one): 0.98-1.17
-CPU seconds against pysdf's 4.0-4.3 (3.5-4.2x in CPU). Distances: the true nearest triangle's,
-measured by the same closest-point routine as brute force; where two triangles share the
-nearest edge they may round it 1 ulp apart (max difference 1.1e-16 to the block kernel on the
-benchmark grid, signs identical). The block kernel stays for meshes with a triangle too thin
-for a plane (``MeshDistance.GRID_SCAN`` switches the scan off).
+CPU seconds against pysdf's 4.0-4.3 (3.5-4.2x in CPU). ``grid_signed`` alone on a fresh
+``MeshDistance`` (hierarchy, normals and connectivity included), one thread, interleaved at load
+7.5-8.2: scan 0.89-1.08 CPU s, block kernel 3.22-3.56 (3.1-3.9x). Distances: the true nearest
+triangle's, measured by the same closest-point routine as brute force, and both triangles of an
+edge (they may round the distance to it 1 ulp apart; with one, 1,253 of 110,160 samples of the
+quick case differed by 1.1e-16): the benchmark grid equals the block kernel's bit for bit,
+signs included. The block kernel stays for meshes with a triangle too thin for a plane
+(``MeshDistance.GRID_SCAN`` switches the scan off).
 
 Earlier sessions (the block kernel, ``splinekit/pointcloud/_gridsdf_kernels.py``): the kernel
 call took nearly all of ``from_mesh``; the component sign pass about 0.13 CPU seconds, the
