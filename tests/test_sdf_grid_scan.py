@@ -114,8 +114,17 @@ def test_knife_edges_get_regions_spanning_the_grid(kern):
     o = (np.array([-0.4, -0.4, -0.5]) - dist._shift) / dist._scale
     _, R, kind, box = _gridscan.regions(dist, kern, o, np.full(3, 0.09) / dist._scale, (25, 25, 25), np.inf)
     wide = kind == 2
-    assert wide.any()
+    assert 0 < wide.sum() <= _gridscan.WIDE_REGIONS  # so the scan serves it
     assert (box[wide, :3] == 0).all() and (box[wide, 3:] == 25).all()
+
+
+def test_many_knife_edges_go_to_the_block_kernel(kern, monkeypatch):
+    V, T = sharp_tetrahedron()
+    dist = MeshDistance(V, T)
+    args = (kern, np.zeros(3), np.full(3, 0.05), (9, 9, 9), np.inf)
+    assert _gridscan.scan_grid(dist, *args) is not None
+    monkeypatch.setattr(_gridscan, "WIDE_REGIONS", 0)
+    assert _gridscan.scan_grid(dist, *args) is None
 
 
 @settings(max_examples=12, deadline=None)

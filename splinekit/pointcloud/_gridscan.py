@@ -17,6 +17,10 @@ SEARCH_KERNELS = "splinekit.pointcloud._meshdistance_kernels"
 SAMPLE_BYTES = 8
 """Bytes per grid sample besides the output: its least squared distance."""
 
+WIDE_REGIONS = 32
+"""Most regions spanning the whole grid (knife edges, spike tips: not cut, each may hold half the
+grid) that a scan takes on; a mesh with more goes to the block kernel."""
+
 REGION_BYTES = 80
 """Bytes per region (two per triangle, one per edge and vertex): cut radius, kind, box, and the
 mesh's connectivity and coarse grid shared out."""
@@ -71,9 +75,12 @@ def coarse_upper(dist, origin, spacing, shape, every):
 def scan_grid(dist, kern, origin, spacing, shape, limit):
     """Signed distances (flat, unit box) at the samples ``origin + (i, j, k) * spacing`` of a
     grid of ``shape`` (unit box), ``inf`` beyond ``sqrt(limit)``; None when some triangle is too
-    thin for a plane (the block kernel serves). ``kern``: the compiled module."""
+    thin for a plane or more than :data:`WIDE_REGIONS` regions span the grid (the block kernel
+    serves). ``kern``: the compiled module."""
     reg = regions(dist, kern, origin, spacing, shape, limit)
-    return None if reg is None else scan(dist, kern, reg, origin, spacing, shape, limit)
+    if reg is None or np.count_nonzero(reg[2] == 2) > WIDE_REGIONS:
+        return None
+    return scan(dist, kern, reg, origin, spacing, shape, limit)
 
 
 def regions(dist, kern, origin, spacing, shape, limit):

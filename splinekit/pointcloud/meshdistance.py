@@ -380,7 +380,7 @@ class MeshDistance:
         with np.errstate(over="ignore"):
             limit = float(max_distance / self._scale) ** 2
         out = scan_grid(self, scan, o, h, shape, limit) if GRID_SCAN else None
-        if out is None:  # a triangle too thin for a plane: the block kernel
+        if out is None:  # a triangle too thin for a plane, or many knife edges: the block kernel
             limits.check(GRID_WORK_BYTES * len(self.tris) * (os.cpu_count() or 1),
                          f"the grid distance kernel's work arrays for {len(self.tris):,} triangles")
             fn, en, vn = self._bvh_normals
