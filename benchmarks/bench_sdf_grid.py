@@ -31,14 +31,49 @@ the output, the float64 grid. Agreement with splinekit (max |difference|, differ
 is printed; on the full case Open3D's ray-parity sign is wrong at a few samples (the
 generalized winding number, by brute force, agrees with splinekit there).
 
-Profile of ``from_mesh`` at 128^3 (81,920 triangles): the kernel call (``MeshDistance.grid_signed``;
-the compiled kernel is ``splinekit/pointcloud/_gridsdf_kernels.py``, whose notes describe it) takes
-nearly all of it; the component sign pass about 0.13 CPU seconds, the hierarchy, pseudo-normals and
-bounds about 0.2. Earlier sessions: blocks of 4^3 samples with one range query each (4.2-4.5 CPU
-seconds on one thread), then a hierarchy of candidate lists 8^3 -> 4^3 -> 2^3 (3.2-3.4) that still
-queried the triangle hierarchy from its root for every far 8^3 block (2,721), for every far 4^3
-part of a near 8^3 block (6,276) and for every 2^3 part of a near 4^3 block (36,768): 1.5-1.6 CPU
-seconds of queries (470 nodes and 280 exact distances each), 1.4-1.5 of filters and leaves.
+Profile of ``from_mesh`` at 128^3 (81,920 triangles), one thread, CPU seconds (``cProfile`` on
+``process_time``, load 4-5): 0.97 in all; the region scan (``MeshDistance.grid_signed``; the
+kernel is ``splinekit/pointcloud/_gridsdf_scan.py``, whose notes give the argument) 0.90: scan
+0.40, regions and their cuts 0.21, the coarse grid's exact distances 0.05 (these three run on
+all threads), connectivity 0.04, pseudo-normals 0.08, the hierarchy 0.05, bound coefficients
+0.03; the component sign pass 0.04. So on two idle threads about 0.3 s stays serial.
+
+Seventh session: a whole different structure, as the sixth session's profile called for (every
+level of the block hierarchy cost about what it saved): no blocks, no candidate lists. The
+nearest point of a sample lies inside a face, inside an edge or at a vertex, and the sample
+then lies in that feature's characteristic region (the prism over a face, the wedge between the
+two face normals at an edge, the cone of directions obtuse to every edge at a vertex); each
+region is scanned once, column by column of the grid, and each sample inside it measures the
+region's triangle exactly. Regions are cut where a coarse grid's exact distances (every 8th
+sample, plus the way to the node) prove something else nearer: the distance is 1-Lipschitz and
+each region a cone over its feature. Counts per sample: 2.2 columns and 1.6 exact distances
+(faces 0.8, edges 0.65, vertices 0.14); 327,682 regions, 311,507 non-empty. One thread, CPU
+seconds, the kernels alone (same load): regions 0.29 (connectivity 0.05, coarse grid 0.06, cuts
+0.18), scan 0.44-0.52 (faces 0.18, edges 0.20-0.26, vertices 0.06), against the block kernel's
+2.6-3.8 in the same runs (its levels, sixth session: 16^3 0.02, 8^3 0.43-0.45, 4^3 0.59-0.63,
+2^3 and the samples 1.8-2.0). Steps that counted: signs written during the scan (a second pass
+over the grid cost 0.07), the vertices renumbered in the hierarchy's order (edge regions, in
+vertex order, wrote all over the grid: 0.26 -> 0.20), rows from the hull's two chains and
+half-spaces as affine bounds on the column (0.52 -> 0.49), coarse nodes every 8th sample (every
+4th: 0.3 s of queries for 7 % fewer distances; every 16th: 0.02 s, 9 % more distances). Whole
+``from_mesh`` (``--threads``, load 3.9-4.3, where two threads ran no faster than one): 0.98-1.17
+CPU seconds against pysdf's 4.0-4.3 (3.5-4.2x in CPU). ``grid_signed`` alone on a fresh
+``MeshDistance`` (hierarchy, normals and connectivity included), one thread, interleaved at load
+7.5-8.2: scan 0.89-1.08 CPU s, block kernel 3.22-3.56 (3.1-3.9x). Distances: the true nearest
+triangle's, measured by the same closest-point routine as brute force, and both triangles of an
+edge (they may round the distance to it 1 ulp apart; with one, 1,253 of 110,160 samples of the
+quick case differed by 1.1e-16): the benchmark grid equals the block kernel's bit for bit,
+signs included. The block kernel stays for meshes with a triangle too thin for a plane
+(``MeshDistance.GRID_SCAN`` switches the scan off).
+
+Earlier sessions (the block kernel, ``splinekit/pointcloud/_gridsdf_kernels.py``): the kernel
+call took nearly all of ``from_mesh``; the component sign pass about 0.13 CPU seconds, the
+hierarchy, pseudo-normals and bounds about 0.2. Blocks of 4^3 samples with one range query each
+(4.2-4.5 CPU seconds on one thread), then a hierarchy of candidate lists 8^3 -> 4^3 -> 2^3
+(3.2-3.4) that still queried the triangle hierarchy from its root for every far 8^3 block
+(2,721), for every far 4^3 part of a near 8^3 block (6,276) and for every 2^3 part of a near
+4^3 block (36,768): 1.5-1.6 CPU seconds of queries (470 nodes and 280 exact distances each),
+1.4-1.5 of filters and leaves.
 
 The fifth session: a dual-tree traversal (the kernel's notes): top blocks of 16^3 start from the root
 of the hierarchy and every block hands its items, hierarchy nodes and triangles, down to its eight
@@ -90,7 +125,7 @@ groups of 8 with their 20 coefficients together (``[group, coefficient, lane]``,
 numba 0.68 no longer vectorized the bounds, 6.3 against 2.8; FAR 1.25, 1.5, 3: 2.80, 2.64-2.76,
 3.2 against 2.80; OPENS 1: 3.2 against 2.8.
 
-What limits 3x pysdf (about 0.75 us of CPU per sample, 1.4 s in all): the levels above the leaf
+What limited the block kernel against 3x pysdf (about 0.75 us of CPU per sample, 1.4 s in all): the levels above the leaf
 blocks alone take 1.05 s (0.57 us a sample), the near subtrees 0.55, the far leaf blocks and
 their samples 1.25. The hierarchy is balanced: each level costs about ``8 N / block^3`` bounds a
 sample (a far block of half size ``h`` keeps a cap of radius about ``2 h`` whatever its

@@ -173,7 +173,8 @@ def test_a_sliver_triangle_gets_no_plane_and_the_grid_stays_exact(compiled):
     check_random_samples(mesh, from_mesh(mesh, 24), 1500)
 
 
-def test_the_kernels_work_arrays_are_checked_against_the_memory_budget(compiled):
+def test_the_kernels_work_arrays_are_checked_against_the_memory_budget(compiled, monkeypatch):
+    monkeypatch.setattr(meshdistance, "GRID_SCAN", False)  # the block kernel's arrays
     dist = MeshDistance.of_mesh(star_mesh())
     need = meshdistance.GRID_WORK_BYTES * len(dist.tris)
     with limits.budget(need // 2), pytest.raises(ResourceLimitError, match="work arrays"):
@@ -308,6 +309,7 @@ def test_the_answer_does_not_depend_on_the_block_size(compiled, block, monkeypat
     args = (np.full(3, -2.5), np.full(3, 0.13), (39, 40, 41))
     ref = dist.grid_signed(*args)
     monkeypatch.setattr(meshdistance, "GRID_BLOCK", block)
+    monkeypatch.setattr(meshdistance, "GRID_SCAN", False)  # the block kernel (the regions' scan has no blocks)
     assert np.allclose(dist.grid_signed(*args), ref, atol=1e-12, rtol=0)
     check_random_samples(mesh, from_mesh(mesh, 30), 600, seed=block)
 
@@ -330,6 +332,7 @@ def test_spiky_meshes_any_block_and_node_size_against_brute_force(seed, block, o
     with forced(), pytest.MonkeyPatch.context() as mp:
         mp.setattr(meshdistance, "GRID_BLOCK", block)
         mp.setattr(meshdistance, "GRID_OPEN", open_ratio)
+        mp.setattr(meshdistance, "GRID_SCAN", False)  # the block kernel
         d = dist.grid_signed(origin, np.full(3, step), shape).ravel()
     axes = [origin[k] + step * np.arange(shape[k]) for k in range(3)]
     P = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, 3)

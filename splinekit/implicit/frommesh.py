@@ -5,7 +5,7 @@ the angle-weighted pseudo-normal of the nearest feature (face, edge or vertex; B
 Aanaes 2005), which is exact for a closed, consistently oriented mesh: both from
 :class:`~splinekit.pointcloud.meshdistance.MeshDistance`, the one mesh distance of splinekit
 (on large grids its compiled :meth:`~splinekit.pointcloud.meshdistance.MeshDistance.grid_signed`,
-which works by blocks of samples).
+which scans the characteristic regions of the mesh's faces, edges and vertices).
 Voxels farther than half a voxel from the surface take the majority sign of their 6-connected
 component (no such component can straddle the surface), which protects them against a rounding
 slip of the pseudo-normal test.

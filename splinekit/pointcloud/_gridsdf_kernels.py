@@ -1,6 +1,9 @@
 """Compiled (numba) exact signed distance of a closed triangle mesh at every sample of a grid:
 :meth:`splinekit.pointcloud.meshdistance.MeshDistance.grid_signed`.
 
+Since the region scan of :mod:`._gridsdf_scan` took over, this kernel serves meshes with a
+triangle too thin for a plane (``MeshDistance.GRID_SCAN`` False: every mesh).
+
 Loaded through :func:`splinekit._kernels.load`. Per sample it answers what
 :meth:`~splinekit.pointcloud.meshdistance.MeshDistance.signed` answers (the exact nearest
 triangle, sign by the angle-weighted pseudo-normal of its nearest feature), but it walks the

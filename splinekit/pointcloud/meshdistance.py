@@ -22,8 +22,10 @@ tests in the same order), which also names the feature (face, edge or vertex) it
 Signed (:meth:`MeshDistance.signed`, for a closed, consistently oriented mesh): the sign comes
 from the angle-weighted pseudo-normal of that feature (Baerentzen & Aanaes 2005), which is exact
 for such a mesh. On the samples of a grid, :meth:`MeshDistance.grid_signed` gives the same
-answer with the compiled kernel of :mod:`._gridsdf_kernels`, which shares most of the work
-over blocks of samples (its module notes).
+answer with compiled code: by scanning the characteristic regions of the mesh's faces, edges
+and vertices (:mod:`._gridsdf_scan`, its module notes), or, for a mesh with a triangle too thin
+for a plane, with the kernel of :mod:`._gridsdf_kernels`, which shares most of the work over
+blocks of samples.
 
 Every query runs on a copy of the mesh moved and scaled (by a power of two, exactly) to the unit
 box: the region tests multiply dot products (length^4) and the pseudo-normals take norms of
@@ -43,6 +45,7 @@ from ..mesh.geometry import triangulate
 from ..mesh.polymesh import PolyMesh
 from ..mesh.topology import Topology
 from ._cloud import as_cloud, kd_tree
+from ._gridscan import SCAN_KERNELS, scan_grid
 from ._trianglebvh import TriangleBVH
 
 __all__ = ["MeshDistance", "closest_points_on_mesh", "closest_points_on_triangles"]
@@ -69,6 +72,10 @@ GRID_KERNELS = "splinekit.pointcloud._gridsdf_kernels"
 GRID_BLOCK = 16
 """Samples along each side of the top blocks :meth:`MeshDistance.grid_signed` shares its work
 over, halved level by level down to 2^3 (module notes of its kernels)."""
+
+GRID_SCAN = True
+"""Whether :meth:`MeshDistance.grid_signed` scans the regions of the mesh's features (False: the
+block kernel on every mesh, as it serves meshes with a triangle too thin for a plane)."""
 
 GRID_OPEN = 1.0
 """A block of the grid kernel keeps a hierarchy node (rather than opening it) when the node's
@@ -162,17 +169,17 @@ MIN_QUERIES = 1000
 ones)."""
 
 
-def _pseudo_normals(V, T):
+def _pseudo_normals(V, T, topo):
     """Angle-weighted pseudo-normals ``(face (m, 3), edge (m, 3, 3), vertex (n, 3))`` of a closed
-    triangle mesh; the edge array holds, per triangle and local edge (01, 12, 20), the sum of the
-    unit normals of the edge's two triangles. NotManifoldError when an edge has not two triangles."""
+    triangle mesh (its :class:`Topology` ``topo``); the edge array holds, per triangle and local
+    edge (01, 12, 20), the sum of the unit normals of the edge's two triangles. NotManifoldError
+    when an edge has not two triangles."""
     a, b, c = V[T[:, 0]], V[T[:, 1]], V[T[:, 2]]
     n = np.cross(b - a, c - a)
     ln = np.linalg.norm(n, axis=1)
     fn = n / np.where(ln > 0, ln, 1.0)[:, None]
     # edges: corner k of triangle t is the half-edge T[t, k] -> T[t, k + 1]; the
     # topology's edge table gives the edge shared by the two triangles using it
-    topo = Topology(len(V), T.ravel(), np.arange(len(T) + 1, dtype=np.int64) * 3, check=False)
     inv = topo.halfedge_edge
     counts = np.bincount(inv, minlength=len(topo.edges))
     if (counts != 2).any():
@@ -256,9 +263,14 @@ class MeshDistance:
         return TriangleBVH(self.unit_vertices, self.tris)
 
     @cached_property
+    def topology(self) -> Topology:
+        """The triangles' connectivity: corner ``k`` of triangle ``t`` is half-edge ``3 t + k``."""
+        return Topology(len(self.V), self.tris.ravel(), np.arange(len(self.tris) + 1, dtype=np.int64) * 3, check=False)
+
+    @cached_property
     def pseudo_normals(self):
         """``(face, edge, vertex)`` pseudo-normals for :meth:`signed`; NotManifoldError when open."""
-        return _pseudo_normals(self.unit_vertices, self.tris)
+        return _pseudo_normals(self.unit_vertices, self.tris, self.topology)
 
     @cached_property
     def _bvh_normals(self):
@@ -354,25 +366,29 @@ class MeshDistance:
     def grid_signed(self, origin, spacing, shape, max_distance=np.inf):
         """Signed distances (model units, negative inside) at the samples ``origin + (i, j, k) *
         spacing`` of a grid of ``shape`` (3 ints), as an array of that shape, ``inf`` beyond
-        ``max_distance``; what :meth:`signed` gives at those points, computed by blocks of
-        samples (module notes of :mod:`splinekit.pointcloud._gridsdf_kernels`). None when
+        ``max_distance``; what :meth:`signed` gives at those points, computed by scanning the
+        regions of the mesh's features (module notes of :mod:`splinekit.pointcloud._gridsdf_scan`)
+        or by blocks of samples (:mod:`splinekit.pointcloud._gridsdf_kernels`). None when
         compiled code does not serve this job (then call :meth:`signed` on the points)."""
         shape = tuple(int(x) for x in shape)
         total = int(np.prod(shape))
-        kernels = _kernels.load(GRID_KERNELS, work=total)
-        if kernels is None:
+        scan = _kernels.load(SCAN_KERNELS, work=total)
+        if scan is None:
             return None
-        limits.check(GRID_WORK_BYTES * len(self.tris) * (os.cpu_count() or 1),
-                     f"the grid distance kernel's work arrays for {len(self.tris):,} triangles")
-        fn, en, vn = self._bvh_normals
-        b = self.bvh
         o = (np.asarray(origin, dtype=np.float64) - self._shift) / self._scale
         h = np.asarray(spacing, dtype=np.float64) / self._scale
         with np.errstate(over="ignore"):
             limit = float(max_distance / self._scale) ** 2
-        out = np.empty(total)
-        kernels.grid_signed(o, h, np.array(shape, dtype=np.int64), limit, GRID_BLOCK, GRID_OPEN, b.lo, b.hi, b.tlo,
-                            b.thi, b.tri, b.n_leaves, b.m, fn, en, vn, self._bvh_prisms, out)
+        out = scan_grid(self, scan, o, h, shape, limit) if GRID_SCAN else None
+        if out is None:  # a triangle too thin for a plane, or many knife edges: the block kernel
+            limits.check(GRID_WORK_BYTES * len(self.tris) * (os.cpu_count() or 1),
+                         f"the grid distance kernel's work arrays for {len(self.tris):,} triangles")
+            fn, en, vn = self._bvh_normals
+            b = self.bvh
+            out = np.empty(total)
+            _kernels.load(GRID_KERNELS).grid_signed(o, h, np.array(shape, dtype=np.int64), limit, GRID_BLOCK, GRID_OPEN,
+                                                    b.lo, b.hi, b.tlo, b.thi, b.tri, b.n_leaves, b.m, fn, en, vn,
+                                                    self._bvh_prisms, out)
         return (out * self._scale).reshape(shape)
 
     def _nearest(self, P, max_distance, kernels=None):
