@@ -293,7 +293,10 @@ def export_step(path, objects, *, names=None, unit: str = "mm", tolerance: float
       solid when the shell is closed (see :func:`splinekit.occ.to_shape`);
     * a :class:`~splinekit.brep.TrimmedFace`, ``Shell`` or ``Solid``: an exact OCC face, shell
       or solid with its trims and shared edges, checked with ``BRepCheck_Analyzer`` before
-      anything is written (an invalid one raises BackendError naming the failing faces);
+      anything is written (an invalid one raises BackendError naming the failing faces); the pole
+      edges of a loop that is only a seam and poles, beside other loops, are written as edges of
+      zero length, which OCC's reader turns back into pole edges
+      (:mod:`splinekit.interop.occ_step_poles`);
     * an OCC shape or a build123d / cadquery object: written as it is.
 
     So ``export_step(p, [s0, s1])`` writes two faces and ``export_step(p, [[s0, s1]])``
