@@ -25,6 +25,8 @@ from splinekit._atomic import atomic_write, write_target
 from splinekit._signals import reraise_interrupt
 from splinekit.errors import ExportError, FileFormatError, ParameterError
 from splinekit.interop.occ import _compound, from_occ, require_ocp, to_shape
+from splinekit.interop.occ_brep import is_brep
+from splinekit.interop.occ_step_poles import pole_edges_as_points
 from splinekit.tolerances import OCC_CONFUSION
 
 from ._brep_io import BrepItem, ReadResult, default_names, items_from_shapes
@@ -261,6 +263,14 @@ def _products(shapes, names):
     return out
 
 
+def _built_here(obj) -> bool:
+    """Whether :func:`to_shape` builds a new OCC shape for ``obj`` (a B-rep object or a list of
+    them), rather than handing back the caller's own."""
+    if isinstance(obj, (list, tuple)):
+        return bool(obj) and all(is_brep(o) for o in obj)
+    return is_brep(obj)
+
+
 def _check_target(path) -> str:
     """``path`` as a str, checked before the (slow) OCC translation: the mesh writers' checks,
     and a writable folder."""
@@ -283,7 +293,10 @@ def export_step(path, objects, *, names=None, unit: str = "mm", tolerance: float
       solid when the shell is closed (see :func:`splinekit.occ.to_shape`);
     * a :class:`~splinekit.brep.TrimmedFace`, ``Shell`` or ``Solid``: an exact OCC face, shell
       or solid with its trims and shared edges, checked with ``BRepCheck_Analyzer`` before
-      anything is written (an invalid one raises BackendError naming the failing faces);
+      anything is written (an invalid one raises BackendError naming the failing faces); the pole
+      edges of a loop that is only a seam and poles, beside other loops, are written as edges of
+      zero length, which OCC's reader turns back into pole edges
+      (:mod:`splinekit.interop.occ_step_poles`);
     * an OCC shape or a build123d / cadquery object: written as it is.
 
     So ``export_step(p, [s0, s1])`` writes two faces and ``export_step(p, [[s0, s1]])``
@@ -310,6 +323,9 @@ def export_step(path, objects, *, names=None, unit: str = "mm", tolerance: float
     path = _check_target(path)
     IFSelect, _, _, STEPCAFControl, STEPControl, TCollection, TDataStd, _, _, XCAFDoc = _ocp_step()
     shapes = [to_shape(obj, tolerance=tolerance) for obj in items]
+    for obj, shape in zip(items, shapes):
+        if _built_here(obj):  # a shape of our own making, never the caller's: changed in place
+            pole_edges_as_points(shape)
     doc = _new_document(metres)
     tool = XCAFDoc.XCAFDoc_DocumentTool.ShapeTool_s(doc.Main())
     for shape, name in _products(shapes, labels):
