@@ -42,6 +42,17 @@ does not see)."""
 _MIN_COS = 0.5
 """The trace and the curve must run the same way at the end (cosine of their tangents)."""
 
+_MIN_RELATIVE = 1e-8
+"""Overshoots below this fraction of the part's size are left alone: the reader's re-fit moves a
+corner by about the overshoot, which then changes no area by more than about 1e-11 (NX: the
+re-read of a settled part has three of 8e-8 mm, on edges of tolerance 1e-7)."""
+
+_WIDEN = 1.1
+"""A measured deviation becomes a tolerance times this (OCC's check samples other parameters)."""
+
+_SAMPLES = 129
+"""Points at which a moved pcurve's trace is compared with its 3-D curve to widen its tolerance."""
+
 
 def _on_surface(surface, uv, order: int = 0):
     """``surface`` (derivatives to ``order``) at the ``(n, 2)`` ``uv``, clamped to its domain (a
@@ -50,9 +61,9 @@ def _on_surface(surface, uv, order: int = 0):
     return surface.derivatives(np.clip(uv[:, 0], u0, u1), np.clip(uv[:, 1], v0, v1), order)
 
 
-def _overshoots(face):
+def _overshoots(face, least: float):
     """``(loop, position, end, d)`` for each edge use of ``face`` whose trace runs ``d`` past the
-    normal plane of its curve's end (``end`` 0: the start, 1: the end)."""
+    normal plane of its curve's end (``end`` 0: the start, 1: the end), ``d`` over ``least``."""
     uses = [(j, k, e) for j, loop in enumerate(face.loops) for k, e in enumerate(loop)
             if e.curve is not None and not e.degenerate]
     if not uses:
@@ -70,7 +81,7 @@ def _overshoots(face):
     d = np.einsum("ij,ij->i", Q - P, U)
     cos = np.einsum("ij,ij->i", U, T)
     tol = np.repeat([e.tolerance for *_, e in uses], 2)
-    hit = np.flatnonzero((d > _MARGIN * tol) & (d <= tol) & (cos >= _MIN_COS))
+    hit = np.flatnonzero((d > np.maximum(_MARGIN * tol, least)) & (d <= tol) & (cos >= _MIN_COS))
     return [(uses[i // 2][0], uses[i // 2][1], i % 2, float(d[i])) for i in hit]
 
 
@@ -110,10 +121,10 @@ def _nearest_on_trace(surface, edge, at_end: int, d: float) -> float:
                                  options={"xatol": 1e-15 * max(1.0, abs(end))}).x)
 
 
-def _settled_face(face):
-    """``face`` with its overshooting pcurve ends pulled back (see the module docstring), or
-    ``face`` itself when it has none."""
-    found = _overshoots(face)
+def _settled_face(face, least: float):
+    """``face`` with its pcurve ends that overshoot by more than ``least`` pulled back (see the
+    module docstring), or ``face`` itself when it has none."""
+    found = _overshoots(face, least)
     if not found:
         return face
     loops = [list(loop) for loop in face.loops]
@@ -123,18 +134,24 @@ def _settled_face(face):
             continue
         old = edge.pcurve.evaluate(np.array([edge.domain[at_end]]))[0]
         new = edge.pcurve.evaluate(np.array([_nearest_on_trace(face.surface, edge, at_end, d)]))[0]
-        loops[j][k] = _replaced(edge, _with_pole(edge.pcurve, at_end, new))
+        loops[j][k] = _replaced(face.surface, edge, _with_pole(edge.pcurve, at_end, new))
         # the neighbour that met this end in (u, v) follows it; one that did not keeps its end
         n = (k + 1) % len(loops[j]) if at_end else k - 1
         other = loops[j][n]
         other_uv = other.pcurve.evaluate(np.array([other.domain[1 - at_end]]))[0]
         if n != k and _clamped(other.pcurve, 1 - at_end) and np.allclose(other_uv, old, rtol=1e-12, atol=1e-14):
-            loops[j][n] = _replaced(other, _with_pole(other.pcurve, 1 - at_end, new))
+            loops[j][n] = _replaced(face.surface, other, _with_pole(other.pcurve, 1 - at_end, new))
     return TrimmedFace(face.surface, loops, reversed=face.reversed, tolerance=face.tolerance, name=face.name)
 
 
-def _replaced(edge, pcurve):
-    return Edge(pcurve, edge.curve, key=edge.key, degenerate=edge.degenerate, tolerance=edge.tolerance)
+def _replaced(surface, edge, pcurve):
+    """``edge`` with ``pcurve``, its tolerance widened to cover how far the new trace lies from
+    the 3-D curve at the same parameter (the pole moved along the trace, so inside the edge the
+    trace slides along the curve by up to the overshoot)."""
+    t = np.linspace(*edge.domain, _SAMPLES)
+    gap = np.linalg.norm(_on_surface(surface, pcurve.evaluate(t))[0, 0] - edge.curve.evaluate(t), axis=1).max()
+    return Edge(pcurve, edge.curve, key=edge.key, degenerate=edge.degenerate,
+                tolerance=max(edge.tolerance, _WIDEN * float(gap)))
 
 
 def settle_corners(obj):
@@ -143,12 +160,19 @@ def settle_corners(obj):
     nearest that end, and the next pcurve of its loop with it, so that OCC's STEP reader keeps
     the corners when the part is written and read again (see the module docstring). Parts without
     such ends come back as the same object."""
+    faces = [obj] if isinstance(obj, TrimmedFace) else list(obj.faces) if isinstance(obj, (Shell, Solid)) else []
+    if not faces:
+        return obj
+    poles = np.concatenate([np.asarray(f.surface.control_points).reshape(-1, 3) for f in faces])
+    least = _MIN_RELATIVE * float(np.linalg.norm(poles.max(axis=0) - poles.min(axis=0)))
+    return _settled(obj, least)
+
+
+def _settled(obj, least: float):
     if isinstance(obj, TrimmedFace):
-        return _settled_face(obj)
+        return _settled_face(obj, least)
     if isinstance(obj, Shell):
-        faces = [_settled_face(f) for f in obj.faces]
+        faces = [_settled_face(f, least) for f in obj.faces]
         return obj if all(a is b for a, b in zip(faces, obj.faces)) else Shell(faces, name=obj.name)
-    if isinstance(obj, Solid):
-        shells = [settle_corners(s) for s in obj.shells]
-        return obj if all(a is b for a, b in zip(shells, obj.shells)) else Solid(shells, name=obj.name)
-    return obj
+    shells = [_settled(s, least) for s in obj.shells]
+    return obj if all(a is b for a, b in zip(shells, obj.shells)) else Solid(shells, name=obj.name)
