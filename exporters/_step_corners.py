@@ -26,7 +26,7 @@ reading of the file.
 from __future__ import annotations
 
 import numpy as np
-from scipy.optimize import minimize_scalar
+from scipy.optimize import brentq
 
 from splinekit.brep import Edge, Shell, Solid, TrimmedFace
 from splinekit.curves import BSplineCurve, NurbsCurve
@@ -102,23 +102,29 @@ def _with_pole(curve, at_end: int, point):
     return NurbsCurve(curve.degree, curve.knots, poles, curve.weights)
 
 
-def _nearest_on_trace(surface, edge, at_end: int, d: float) -> float:
+def _nearest_on_trace(surface, edge, at_end: int, d: float):
     """The parameter of ``edge``'s trace nearest its curve's end (``at_end`` 0: start, 1: end),
-    searched within about four times the overshoot ``d`` of that end."""
+    searched within about four times the overshoot ``d`` of that end: the root of ``(trace(s) -
+    P) . trace'(s)`` (the curve end ``P`` in the trace's normal plane), or None if there is none."""
     a, b = edge.domain
     end = b if at_end else a
     P = edge.curve.evaluate(np.array([end]))[0]
-    uv, duv = edge.pcurve.derivatives(np.array([end]), 1)[:, 0]
-    S = _on_surface(surface, uv[None], 1)
-    speed = float(np.linalg.norm(S[1, 0][0] * duv[0] + S[0, 1][0] * duv[1]))
+
+    def trace(s):  # the trace's point and derivative at s
+        uv, duv = edge.pcurve.derivatives(np.array([s]), 1)[:, 0]
+        S = _on_surface(surface, uv[None], 1)
+        return S[0, 0][0], S[1, 0][0] * duv[0] + S[0, 1][0] * duv[1]
+
+    def along(s):  # (trace(s) - P) . trace'(s): zero where P lies in the trace's normal plane
+        Q, dQ = trace(s)
+        return float((Q - P) @ dQ)
+
+    speed = float(np.linalg.norm(trace(end)[1]))
     reach = min(b - a, 4.0 * d / speed) if speed > 0 else b - a
     lo, hi = (end - reach, end) if at_end else (end, end + reach)
-
-    def gap(s):
-        return float(np.linalg.norm(_on_surface(surface, edge.pcurve.evaluate(np.array([s])))[0, 0][0] - P))
-
-    return float(minimize_scalar(gap, bounds=(lo, hi), method="bounded",
-                                 options={"xatol": 1e-15 * max(1.0, abs(end))}).x)
+    if not along(lo) < 0.0 < along(hi):  # the trace does not cross P's normal plane there
+        return None
+    return brentq(along, lo, hi, xtol=1e-15 * max(1.0, abs(end)), rtol=1e-15)
 
 
 def _settled_face(face, least: float):
@@ -132,8 +138,11 @@ def _settled_face(face, least: float):
         edge = loops[j][k]
         if not _clamped(edge.pcurve, at_end):
             continue
+        s = _nearest_on_trace(face.surface, edge, at_end, d)
+        if s is None:
+            continue
         old = edge.pcurve.evaluate(np.array([edge.domain[at_end]]))[0]
-        new = edge.pcurve.evaluate(np.array([_nearest_on_trace(face.surface, edge, at_end, d)]))[0]
+        new = edge.pcurve.evaluate(np.array([s]))[0]
         loops[j][k] = _replaced(face.surface, edge, _with_pole(edge.pcurve, at_end, new))
         # the neighbour that met this end in (u, v) follows it; one that did not keeps its end
         n = (k + 1) % len(loops[j]) if at_end else k - 1
