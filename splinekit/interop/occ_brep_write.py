@@ -99,7 +99,9 @@ def _past_ends(V, owner, P, T):
         rows = owner == n
         need = -inside[rows]  # T @ step >= need: how far the vertex must go past each end
         unit = float(need.max())  # the step in units of the worst violation
-        step = _least_step(T[rows], need / unit)
+        # the two uses of an edge give one row twice: once is enough for the enumeration below
+        rows_ = np.unique(np.round(np.column_stack([T[rows], need / unit]), 12), axis=0)
+        step = _least_step(rows_[:, :3], rows_[:, 3])
         if step is not None:
             V[n] = V[n] + unit * step
     return V
