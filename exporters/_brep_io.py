@@ -59,8 +59,10 @@ def _face_problems(obj) -> tuple[list[int], str | None]:
     return [], None
 
 
-def items_from_shapes(named_shapes, *, strict: bool, path: str, kind: str) -> ReadResult:
+def items_from_shapes(named_shapes, *, strict: bool, path: str, kind: str, prepare=None) -> ReadResult:
     """Convert ``(name, TopoDS_Shape)`` pairs read from ``path`` (a ``kind`` file: "STEP"...).
+    ``prepare``: applied to each converted B-rep object before it is checked (the STEP reader
+    settles loop corners the format cannot carry, :mod:`exporters._step_corners`).
 
     ``strict=True``: any face that cannot be converted, or any object OCC does not call valid once
     rebuilt, raises FileFormatError naming the product, the face and the problem.
@@ -79,6 +81,8 @@ def items_from_shapes(named_shapes, *, strict: bool, path: str, kind: str) -> Re
             if not isinstance(obj, (Solid, Shell, TrimmedFace)):
                 items.append(BrepItem(name, obj))  # a free curve
                 continue
+            if prepare is not None:
+                obj = prepare(obj)
             bad, message = _face_problems(obj)
             if message is None:
                 items.append(BrepItem(name, obj))

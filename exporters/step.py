@@ -31,6 +31,7 @@ from splinekit.tolerances import OCC_CONFUSION
 
 from ._brep_io import BrepItem, ReadResult, default_names, items_from_shapes
 from ._meshio import _fspath
+from ._step_corners import settle_corners
 from ._step_isolated import transfer
 from ._stepscan import scan_step, syntax_errors
 
@@ -438,7 +439,7 @@ def import_step(path, *, unit: str = "mm", strict: bool = True, surfaces: bool =
             for g in geometry if isinstance(geometry, list) else [geometry]:
                 items.append(StepItem(name, g))
     else:
-        items = items_from_shapes(named, strict=strict, path=path, kind="STEP")
+        items = items_from_shapes(named, strict=strict, path=path, kind="STEP", prepare=settle_corners)
     if not items:
         raise FileFormatError(f"the STEP file {path!r} holds no faces or edges")
     return items

@@ -12,6 +12,8 @@ the counts exactly.
 
 from __future__ import annotations
 
+from itertools import combinations
+
 import numpy as np
 
 from ..brep import Shell, Solid, TrimmedFace
@@ -65,20 +67,61 @@ such a direction the curves barely tell where the vertex lies, and following the
 def _vertex_points(centers, owner, P, T):
     """Vertex positions, ``(n, 3)``: each of the ``(n, 3)`` ``centers`` moved the least (least
     squares) so that it lies in the normal plane of every incident 3-D curve end, i.e. projects
-    onto that end. ``owner`` ``(m,)`` names the vertex of each curve end, ``P`` ``(m, 3)`` its point
-    and ``T`` ``(m, 3)`` its unit tangent.
+    onto that end; then, where those planes do not meet in one point, moved the least onto the
+    outer side of all of them (:func:`_past_ends`). ``owner`` ``(m,)`` names the vertex of each
+    curve end, ``P`` ``(m, 3)`` its point and ``T`` ``(m, 3)`` its unit tangent pointing out of
+    the curve.
 
     A STEP file carries no edge ranges: OCC's reader sets an edge's range by projecting its vertices
     onto its 3-D curve, and its pcurves' ranges by projecting the curve's ends onto their traces.
     On a loose edge (curve ends a tolerance apart, as read from another CAD system) a vertex at the
     ends' centroid projects inside a curve, so every re-read shortens that edge a little and moves
-    its faces' areas; a vertex in every end's normal plane keeps the ranges."""
+    its faces' areas; a vertex in every end's normal plane keeps the ranges, and so does one past
+    every end (the projection then stops at the end)."""
     M = np.zeros((len(centers), 3, 3))
     r = np.zeros((len(centers), 3))
     np.add.at(M, owner, T[:, :, None] * T[:, None, :])  # normal equations of each vertex's rows
     np.add.at(r, owner, T * np.einsum("ij,ij->i", T, P - centers[owner])[:, None])
     # M's eigenvalues are the squared singular values of the rows
-    return centers + np.einsum("nij,nj->ni", np.linalg.pinv(M, rcond=_RCOND**2, hermitian=True), r)
+    V = centers + np.einsum("nij,nj->ni", np.linalg.pinv(M, rcond=_RCOND**2, hermitian=True), r)
+    return _past_ends(V, owner, P, T)
+
+
+def _past_ends(V, owner, P, T):
+    """``V`` with each vertex that lies inside one of its curve ends (``(V - P) . T < 0``, ``T``
+    pointing out of the curve) moved the least onto the outer side of all of them, where such a
+    point exists. Four or more curves at a vertex (a ventilator blade's tip in CATIA's file) have
+    normal planes that meet nowhere: the least-squares point lies up to 1e-5 mm inside some of
+    them, and the reader cut those edges; only the outer sides are needed."""
+    inside = np.einsum("ij,ij->i", V[owner] - P, T)
+    scale = np.abs(P).max(initial=1.0)
+    for n in np.unique(owner[inside < -1e-12 * scale]):
+        rows = owner == n
+        need = -inside[rows]  # T @ step >= need: how far the vertex must go past each end
+        unit = float(need.max())  # the step in units of the worst violation
+        # the two uses of an edge give one row twice: once is enough for the enumeration below
+        rows_ = np.unique(np.round(np.column_stack([T[rows], need / unit]), 12), axis=0)
+        step = _least_step(rows_[:, :3], rows_[:, 3])
+        if step is not None:
+            V[n] = V[n] + unit * step
+    return V
+
+
+def _least_step(A, c):
+    """The shortest ``z`` with ``A @ z >= c`` (``A`` ``(k, 3)``), or None if there is none: the
+    nearest point of a polyhedron, found among the points where one, two or three of its planes
+    are active (k is a vertex's few curve ends; opposite rows, two edges that continue each other,
+    make the active set degenerate, which this enumeration does not mind)."""
+    best = None
+    for size in (1, 2, 3):
+        for S in combinations(range(len(A)), size):
+            S = list(S)
+            z = np.linalg.lstsq(A[S], c[S], rcond=None)[0]  # the least-norm point on those planes
+            if np.abs(A[S] @ z - c[S]).max() > 1e-9 or np.any(A @ z < c - 1e-9):
+                continue
+            if best is None or z @ z < best @ best:
+                best = z
+    return best
 
 
 def _all_use_points(faces, uses) -> list:
@@ -271,7 +314,7 @@ def brep_to_shape(obj, *, tolerance: float = OCC_CONFUSION):
         forward = same[id(r)]
         owner += [index[uf.find((r[4], 0 if forward else 1))], index[uf.find((r[4], 1 if forward else 0))]]
         end_points += [r[5][0], r[5][-1]]
-        end_tangents += [tangents[0], tangents[1]]
+        end_tangents += [-tangents[0], tangents[1]]  # out of the curve
     moved = centers if not owner else _vertex_points(centers, np.array(owner), np.array(end_points),
                                                      np.array(end_tangents))
     for root, c, m in zip(roots, centers, moved):

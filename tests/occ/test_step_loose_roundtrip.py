@@ -175,3 +175,21 @@ def test_the_first_export_of_a_process_applies_its_settings(tmp_path):
             "exporters.export_step(%r, sk.BSplineCurve(1, [0, 0, 1, 1], np.eye(3)[:2]), unit='inch')" % str(path))
     subprocess.run([sys.executable, "-c", code], check=True, timeout=300)
     assert "INCH" in path.read_text()
+
+
+def test_a_vertex_goes_past_every_curve_end_where_their_planes_do_not_meet():
+    """Four curve ends whose normal planes meet nowhere (CATIA's ventilator has such vertices: two
+    edges continuing each other, a third parallel to them ending 1e-5 mm on). The least-squares
+    point lies inside one of them, where the STEP reader would cut that edge; the vertex goes to
+    the nearest point past every end instead. Closed form: ends at the origin pointing out along
+    +x, -x and +y, and one at x = 1e-5 pointing out along -x: the least-squares point is
+    (1e-5 / 3, 0, z), the nearest point with 0 <= x <= 0 (and x <= 1e-5, y >= 0) is (0, 0, z)."""
+    P = np.array([[0.0, 0, 0], [0, 0, 0], [1e-5, 0, 0], [0, 0, 0]])
+    T = np.array([[1.0, 0, 0], [-1, 0, 0], [-1, 0, 0], [0, 1, 0]])
+    center = np.array([[1e-6, -2e-6, 3e-6]])
+    V = occ_brep_write._vertex_points(center, np.zeros(4, dtype=int), P, T)
+    assert np.allclose(V, [[0.0, 0.0, 3e-6]], rtol=0, atol=1e-15)
+    # planes that meet in one point keep it: three ends along the axes, at a common corner
+    corner = np.array([1.0, 2.0, 3.0])
+    V = occ_brep_write._vertex_points(center + corner, np.zeros(3, dtype=int), np.tile(corner, (3, 1)), np.eye(3))
+    assert np.allclose(V, [corner], rtol=0, atol=1e-15)
