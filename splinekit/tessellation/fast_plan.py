@@ -240,7 +240,7 @@ def build_plan(prep):
     uv = prep.pcurves.evaluate(np.repeat(rep, SAMPLES), t)
     # every face's point and partials at its domain's corner: an affine face (a plane) is
     # S + (u - u0) Su + (v - v0) Sv exactly, so its points need no surface evaluator
-    corner = np.column_stack([[b[0] for b in prep.batch.bu], [b[0] for b in prep.batch.bv]])  # (F, 2)
+    corner = np.column_stack([prep.batch.lu.lo, prep.batch.lv.lo])  # (F, 2)
     S, Su, Sv = prep.batch.partials(np.arange(F), corner[:, 0], corner[:, 1])
 
     def surface_points(f, uv):

@@ -245,7 +245,7 @@ class _Prepared:
         self.table = LoopTable(self.faces, self.uses, self.groups)
         self.affine = np.array([_is_affine(face.surface) for face in faces], dtype=bool)
         # an affine face's partials are constant: taken once at its domain's corner
-        corner = np.array([[b[0] for b in self.batch.bu], [b[0] for b in self.batch.bv]])
+        corner = np.array([self.batch.lu.lo, self.batch.lv.lo])
         self.partials = self.batch.partials(np.arange(len(faces)), corner[0], corner[1])[1:]
         self.reversed = np.array([face.reversed for face in faces], dtype=bool)
         self.memo = {}
