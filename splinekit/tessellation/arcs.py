@@ -67,9 +67,9 @@ class Circles:
         return out
 
 
-def fit_circles(X, scale) -> Circles:
+def fit_circles(X, scale, through=None) -> Circles:
     """The circle arcs through the samples ``X`` ``(n, k, 3)`` of ``n`` curves (in order along
-    each curve, ``k >= 7``, uniform in the curve's parameter): curve ``i`` is one (``ok[i]``) if
+    each curve, ``k >= 7``, spread over the curve's parameter): curve ``i`` is one (``ok[i]``) if
     every sample lies on one circle within ``REL * max(radius, scale)`` and the angle grows
     monotonically. Conics (rational quadratic pieces) with five points on a circle are that
     circle, so enough samples per piece make this exact for the curves the tessellator meets.

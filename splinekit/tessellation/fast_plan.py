@@ -39,7 +39,13 @@ from .welding import close_pairs, components
 __all__ = ["FastPlan", "build_plan", "planar_triangles"]
 
 SAMPLES = 129
-"""Samples per edge used to recognise its shape (at least 8 per conic piece for 16 pieces)."""
+"""Samples per edge used to recognise its shape (at least :data:`PER_PIECE` per conic piece for 16
+pieces), unless every edge of the face set has at most 4 pieces: then :data:`FEW_SAMPLES`."""
+FEW_SAMPLES = 33
+"""Samples per edge when no edge has more than 4 conic pieces (:func:`sample_parameters`): every
+fourth of the :data:`SAMPLES`, plus the two a circle is fitted through and their mirror images."""
+PER_PIECE = 8
+"""Fewest samples per conic piece of an edge: five points on a circle make a conic that circle."""
 
 PLANE, CYLINDER, REVOLUTION = 0, 1, 2
 MERIDIAN, PARALLEL = 2.0, 1.0
@@ -211,6 +217,37 @@ class FastPlan:
     )  # fmt: skip
 
 
+def sample_parameters(prep, rep):
+    """``(keep (k,), through)``: the samples (indices into :data:`SAMPLES` uniform fractions of the
+    pcurve's domain) that recognise every
+    edge group's shape, from its representative use ``rep`` ``(G,)``, and the indices of the two
+    a circle is fitted through (:func:`.arcs.fit_circles`: the samples at a third and two thirds
+    of the :data:`SAMPLES`, so that the fitted circles do not depend on the count). All
+    :data:`SAMPLES` unless each group's 3-D curve has at
+    most ``(FEW_SAMPLES - 1) / PER_PIECE`` conic pieces, counted as its pcurve's pieces, each split
+    at most ``degree`` times per knot line of its surface (a line pcurve on a plane: one; a full
+    circle of four quarters: four; a line around a four-span cylinder: four), and its shortest
+    pcurve piece spans at least that fraction of its domain: then :data:`FEW_SAMPLES` (every fourth),
+    plus the two fitting ones and their mirror images (37). Most machined parts need the fewer: a quarter of the samples' arrays
+    (and of their evaluations)."""
+    pc = prep.pcurves.breaks
+    curve = np.repeat(np.arange(pc.count.size), pc.count)
+    width = (pc.b - pc.a) / (pc.hi - pc.lo)[curve]  # each piece's share of its pcurve's domain
+    shortest = np.minimum.reduceat(width, pc.start)[rep]
+    f = prep.table.face[rep]
+    lines = prep.batch.nsu[f] + prep.batch.nsv[f] - 2  # the face's inner knot lines
+    pieces = pc.count[rep] * (1 + prep.pcurves.degree[rep] * lines)
+    most = (FEW_SAMPLES - 1) // PER_PIECE
+    few = (pieces <= most) & (shortest * most >= 1.0 - 1e-9)
+    through = np.array([SAMPLES // 3, (2 * SAMPLES) // 3])
+    if not few.all():
+        return np.arange(SAMPLES), tuple(through.tolist())
+    step = (SAMPLES - 1) // (FEW_SAMPLES - 1)
+    # symmetric about the middle: a use that runs against its group reads the samples backwards
+    keep = np.union1d(np.arange(0, SAMPLES, step), np.concatenate([through, SAMPLES - 1 - through]))
+    return keep, tuple(np.searchsorted(keep, through).tolist())
+
+
 def build_plan(prep):
     """The :class:`FastPlan` of the face set ``prep`` (:class:`.trimmed._Prepared`), or None if
     any face is not a plane, a right circular cylinder or a face of revolution of the shapes
@@ -235,9 +272,11 @@ def build_plan(prep):
     pdom = np.column_stack([prep.pcurves.breaks.lo, prep.pcurves.breaks.hi])
     # every group's shape, from its first use's surface at its pcurve
     rep = np.array([g[0] for g in groups], dtype=np.int64)
-    r = np.linspace(0.0, 1.0, SAMPLES)
+    keep, through = sample_parameters(prep, rep)
+    r = np.linspace(0.0, 1.0, SAMPLES)[keep]
+    K = keep.size  # samples per group
     t = (pdom[rep, :1] + (pdom[rep, 1:] - pdom[rep, :1]) * r).ravel()
-    uv = prep.pcurves.evaluate(np.repeat(rep, SAMPLES), t)
+    uv = prep.pcurves.evaluate(np.repeat(rep, K), t)
     # every face's point and partials at its domain's corner: an affine face (a plane) is
     # S + (u - u0) Su + (v - v0) Sv exactly, so its points need no surface evaluator
     corner = np.column_stack([prep.batch.lu.lo, prep.batch.lv.lo])  # (F, 2)
@@ -254,10 +293,10 @@ def build_plan(prep):
             out[k] = prep.batch.evaluate(f[k], uv[k, 0], uv[k, 1])
         return out
 
-    X = surface_points(np.repeat(use_face[rep], SAMPLES), uv).reshape(G, SAMPLES, 3)
+    X = surface_points(np.repeat(use_face[rep], K), uv).reshape(G, K, 3)
     # every group a pole, a straight segment or a circle arc
     curved = np.flatnonzero(~pole_group & ~segments(X, size))
-    fits = fit_circles(X[curved], size)
+    fits = fit_circles(X[curved], size, through)
     if not fits.ok.all():
         return None
     arcs = [fits.circle(i) for i in range(curved.size)]
@@ -267,7 +306,7 @@ def build_plan(prep):
     third = prep.pcurves.evaluate(np.arange(U), pdom[:, 0] + (pdom[:, 1] - pdom[:, 0]) / 3.0)
     Y = surface_points(use_face, third)
     nearest = np.argmin(np.linalg.norm(X[use_group] - Y[:, None], axis=2), axis=1)
-    use_flip = nearest > SAMPLES // 2
+    use_flip = nearest > K // 2
     use_uv0 = prep.pcurves.evaluate(np.arange(U), pdom[:, 0])
     use_uv1 = prep.pcurves.evaluate(np.arange(U), pdom[:, 1])
     # the corners: the groups' end points welded as the general path welds them
@@ -295,9 +334,9 @@ def build_plan(prep):
     plan.origin = S
     plan.cyl = cyl
     # every use's (u, v) map, checked on its group's samples against its surface
-    samples = X[use_group]  # (U, SAMPLES, 3)
+    samples = X[use_group]  # (U, K, 3)
     samples = np.where(use_flip[:, None, None], samples[:, ::-1], samples)
-    pred = np.empty((U, SAMPLES, 2))
+    pred = np.empty((U, K, 2))
     pred[:] = np.einsum("uij,usj->usi", plan.A[use_face], samples) + plan.b[use_face][:, None]
     # cylinders: per arc use (offset, sense) of its angles in the face's circle; its samples'
     # (u, v) through the face's circle map; a ruling runs iso-u, v affine along it
@@ -323,19 +362,20 @@ def build_plan(prep):
         theta = np.unwrap(np.mod(np.arctan2(_dot(d, plan.arc_e2[a][:, None]), _dot(d, plan.arc_e1[a][:, None])), 2 * np.pi), axis=1)
         theta -= theta[:, :1]
         theta = np.where(use_flip[cu][:, None], theta[:, ::-1], theta)
-        pred[cu, :, 0] = plan.maps.param(np.repeat(q, SAMPLES), (arc_cyl[cu, :1] + arc_cyl[cu, 1:] * theta).ravel()).reshape(-1, SAMPLES)
+        pred[cu, :, 0] = plan.maps.param(np.repeat(q, K), (arc_cyl[cu, :1] + arc_cyl[cu, 1:] * theta).ravel()).reshape(-1, K)
         pred[cu, :, 1] = use_uv0[cu, 1:]
         pred[cu, 0], pred[cu, -1] = use_uv0[cu], use_uv1[cu]
     ru = np.flatnonzero((kind[use_face] == CYLINDER) & (arc_of[use_group] < 0))
-    pred[ru] = np.linspace(use_uv0[ru], use_uv1[ru], SAMPLES, axis=1)
+    pred[ru] = np.linspace(use_uv0[ru], use_uv1[ru], SAMPLES, axis=1)[:, keep]
     revs = Revolutions([rev[f] for f in sorted(rev)]) if rev else None
     vu = np.flatnonzero(kind[use_face] == REVOLUTION)
     if vu.size:
         rq = np.searchsorted(np.array(sorted(rev)), use_face[vu])
-        pred[vu] = revs.uv_of(rq, samples[vu], use_uv0[vu], use_uv1[vu], arc_of[use_group[vu]] >= 0)
-    back = surface_points(np.repeat(use_face, SAMPLES), pred.reshape(-1, 2))
+        line = np.linspace(use_uv0[vu], use_uv1[vu], SAMPLES, axis=1)[:, keep]  # a pole's (u, v), straight
+        pred[vu] = revs.uv_of(rq, samples[vu], line, arc_of[use_group[vu]] >= 0)
+    back = surface_points(np.repeat(use_face, K), pred.reshape(-1, 2))
     # (a sloppy file's edges off their faces take the general path, which allows for that)
-    map_error = float(np.linalg.norm(back.reshape(U, SAMPLES, 3) - samples, axis=2).max())
+    map_error = float(np.linalg.norm(back.reshape(U, K, 3) - samples, axis=2).max())
     if map_error > 10.0 * REL * size:
         return None
     if not _cylinder_loops(plan, prep, use_uv0, use_uv1):
@@ -345,7 +385,9 @@ def build_plan(prep):
         return None
     plan.map_error = map_error
     # the loops checked on their exact shapes, so that a first call needs no general-path mesh
-    plan.checked = loops_valid(plan, prep.table, pred, use_uv0, use_uv1, kind[use_face] == PLANE, arc_of[use_group] >= 0)
+    plane_use, arc_use = kind[use_face] == PLANE, arc_of[use_group] >= 0
+    arcs = _plane_arcs(plan, np.flatnonzero(plane_use & arc_use), pred)
+    plan.checked = loops_valid(plan, prep.table, pred, use_uv0, use_uv1, plane_use, arc_use, arcs)
     # straight-edged planes: triangulated once (indices into the face's loop points, which are
     # its uses' start corners at every tolerance)
     fixed_face, polygons, plan.curved_planes, plan.face_loops = [], [], [], {}
@@ -368,6 +410,24 @@ def build_plan(prep):
     plan.cp_first_use, plan.cp_loop_uses = prep.table.first[plan.cp_loops], prep.table.count[plan.cp_loops]
     _derive(plan)
     return plan
+
+
+def _plane_arcs(plan, uses, pred):
+    """``(U, SAMPLES, 2)``: the ``(u, v)`` of :data:`SAMPLES` points of the exact circle arc of each
+    of ``uses`` (arc uses on planes), uniform in angle from the use's start to its end (the ends:
+    ``pred``'s), for the loop checks' polygons (:func:`.plan_checks.loops_valid`; the other rows
+    are left zero)."""
+    out = np.zeros((len(pred), SAMPLES, 2))
+    if uses.size == 0:
+        return out
+    a, f = plan.arc_of[plan.use_group[uses]], plan.use_face[uses]
+    theta = plan.arc_sweep[a][:, None] * np.linspace(0.0, 1.0, SAMPLES)
+    theta = np.where(plan.use_flip[uses][:, None], theta[:, ::-1], theta)
+    X = plan.arc_c[a][:, None] + plan.arc_r[a][:, None, None] * (np.cos(theta)[..., None] * plan.arc_e1[a][:, None]
+                                                               + np.sin(theta)[..., None] * plan.arc_e2[a][:, None])  # fmt: skip
+    out[uses] = np.einsum("uij,usj->usi", plan.A[f], X) + plan.b[f][:, None]
+    out[uses, 0], out[uses, -1] = pred[uses, 0], pred[uses, -1]
+    return out
 
 
 def _derive(plan):

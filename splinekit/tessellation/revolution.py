@@ -104,14 +104,16 @@ class Revolutions:
             setattr(self, name, np.array([getattr(r, name) for r in revs], dtype=np.float64))
         self.kappa_u, self.kappa_v = self.umaps.kappa, self.vmaps.kappa
 
-    def uv_of(self, q, X, uv0, uv1, arc):
+    def uv_of(self, q, X, line, arc):
         """``(n, k, 2)`` parameters of the points ``X`` ``(n, k, 3)`` of ``n`` edge uses on faces
-        ``q`` ``(n,)``, each from ``uv0`` to ``uv1`` ``(n, 2)``: along a parallel (``v`` constant)
-        ``u`` from the angle about the axis, along a meridian (``u`` constant) ``v`` from the angle
-        on the profile circle; a pole (``arc`` ``(n,)`` False) runs straight from ``uv0`` to
-        ``uv1``. The ends are ``uv0`` and ``uv1``."""
+        ``q`` ``(n,)``, each running straight in ``(u, v)`` along ``line`` ``(n, k, 2)`` (from its
+        start to its end, at the samples' fractions of its pcurve's domain): along a parallel
+        (``v`` constant) ``u`` from the angle about the axis, along a meridian (``u`` constant)
+        ``v`` from the angle on the profile circle; a pole (``arc`` ``(n,)`` False) runs along
+        ``line``. The ends are ``line``'s."""
         k = X.shape[1]
-        out = np.linspace(uv0, uv1, k, axis=1)
+        out = np.array(line)
+        uv0, uv1 = line[:, 0], line[:, -1]
         d = X - self.O[q][:, None]
         parallel = arc & (np.abs(uv1[:, 1] - uv0[:, 1]) <= np.abs(uv1[:, 0] - uv0[:, 0]))
         i = np.flatnonzero(parallel)
