@@ -42,14 +42,23 @@ def revolution_nets(surface):
     if surface.degree_u != 2 or surface.degree_v != 2 or surface.weights is None:
         return None
     (u0, u1), (v0, v1) = surface.domain
-    c = surface.isocurve(v=0.5 * (v0 + v1))
+    kv = np.asarray(surface.knots_v)
+    if kv.size == 6 and kv[0] == kv[2] and kv[3] == kv[5]:
+        # one Bézier span in v (sphere and torus pieces): the middle isocurve is the de Casteljau
+        # midpoint of the columns, exactly, without the general isocurve's ~0.1 ms per face
+        H = np.asarray(surface.homogeneous_points)  # (nu, 3, 4)
+        h = 0.25 * H[:, 0] + 0.5 * H[:, 1] + 0.25 * H[:, 2]
+        middle = surface.knots_u, h[:, :3] / h[:, 3:], h[:, 3]
+    else:
+        c = surface.isocurve(v=0.5 * (v0 + v1))
+        middle = c.knots, c.control_points, c.weights
     ku = np.asarray(surface.knots_u)
     if ku[2] == ku[0]:  # clamped: the isocurve at the first u is the first row of the net
         profile = surface.knots_v, np.asarray(surface.control_points)[0], np.asarray(surface.weights)[0]
     else:
         p = surface.isocurve(u=u0)
         profile = p.knots, p.control_points, p.weights
-    return (c.knots, c.control_points, c.weights), profile
+    return middle, profile
 
 
 def revolution_of(surface, umap, vmap, scale):
