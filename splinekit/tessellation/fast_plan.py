@@ -265,8 +265,9 @@ def build_plan(prep):
     degenerate = np.array([u.edge.degenerate for u in uses], dtype=bool)
     if (kind[use_face[degenerate]] != REVOLUTION).any():
         return None
-    pole_group = np.array([degenerate[g].all() for g in groups], dtype=bool)
-    if (pole_group != np.array([degenerate[g].any() for g in groups], dtype=bool)).any():
+    n_degenerate = np.bincount(prep.table.group_of, degenerate, G)
+    pole_group = n_degenerate == np.bincount(prep.table.group_of, minlength=G)
+    if (pole_group != (n_degenerate > 0)).any():
         return None
     use_group = prep.table.group_of
     pdom = np.column_stack([prep.pcurves.breaks.lo, prep.pcurves.breaks.hi])
@@ -276,11 +277,17 @@ def build_plan(prep):
     r = np.linspace(0.0, 1.0, SAMPLES)[keep]
     K = keep.size  # samples per group
     t = (pdom[rep, :1] + (pdom[rep, 1:] - pdom[rep, :1]) * r).ravel()
-    uv = prep.pcurves.evaluate(np.repeat(rep, K), t)
+    # the groups' samples, and each use's (u, v) at a third of its domain and at its ends: one
+    # evaluation of all pcurves (the batch evaluators give every point the same bits in any batch)
+    ids = np.arange(U)
+    uv, third, use_uv0, use_uv1 = np.split(
+        prep.pcurves.evaluate(np.concatenate([np.repeat(rep, K), ids, ids, ids]),
+                              np.concatenate([t, pdom[:, 0] + (pdom[:, 1] - pdom[:, 0]) / 3.0, pdom[:, 0], pdom[:, 1]])),
+        np.cumsum([G * K, U, U]))  # fmt: skip
     # every face's point and partials at its domain's corner: an affine face (a plane) is
     # S + (u - u0) Su + (v - v0) Sv exactly, so its points need no surface evaluator
     corner = np.column_stack([prep.batch.lu.lo, prep.batch.lv.lo])  # (F, 2)
-    S, Su, Sv = prep.batch.partials(np.arange(F), corner[:, 0], corner[:, 1])
+    S, (Su, Sv) = prep.origin, prep.partials
 
     def surface_points(f, uv):
         out = np.empty((len(f), 3))
@@ -293,7 +300,8 @@ def build_plan(prep):
             out[k] = prep.batch.evaluate(f[k], uv[k, 0], uv[k, 1])
         return out
 
-    X = surface_points(np.repeat(use_face[rep], K), uv).reshape(G, K, 3)
+    X, Y = np.split(surface_points(np.concatenate([np.repeat(use_face[rep], K), use_face]), np.concatenate([uv, third])), [G * K])
+    X = X.reshape(G, K, 3)
     # every group a pole, a straight segment or a circle arc
     curved = np.flatnonzero(~pole_group & ~segments(X, size))
     fits = fit_circles(X[curved], size, through)
@@ -302,13 +310,9 @@ def build_plan(prep):
     arcs = [fits.circle(i) for i in range(curved.size)]
     arc_of = np.full(G, -1, dtype=np.int64)
     arc_of[curved] = np.arange(curved.size)
-    # each use's direction against its group's samples, and its (u, v) at its start
-    third = prep.pcurves.evaluate(np.arange(U), pdom[:, 0] + (pdom[:, 1] - pdom[:, 0]) / 3.0)
-    Y = surface_points(use_face, third)
+    # each use's direction against its group's samples
     nearest = np.argmin(np.linalg.norm(X[use_group] - Y[:, None], axis=2), axis=1)
     use_flip = nearest > K // 2
-    use_uv0 = prep.pcurves.evaluate(np.arange(U), pdom[:, 0])
-    use_uv1 = prep.pcurves.evaluate(np.arange(U), pdom[:, 1])
     # the corners: the groups' end points welded as the general path welds them
     ends = np.concatenate([X[:, 0], X[:, -1]])
     pairs = close_pairs(ends, max(WELD * size, 10.0 * prep.edge_tol))

@@ -230,7 +230,7 @@ class _Prepared:
     tolerance-independent memo of the edge sampler and the grids."""
 
     __slots__ = ("faces", "size", "batch", "_bounds", "edge_tol", "uses", "pcurves", "groups", "table", "affine",
-                 "partials", "reversed", "memo", "index", "natural", "rest")
+                 "origin", "partials", "reversed", "memo", "index", "natural", "rest")
 
     def __init__(self, faces, size, index=None):
         self.faces, self.size = tuple(faces), size
@@ -244,9 +244,9 @@ class _Prepared:
         self.groups = group_uses(self.uses, max(WELD * size, 2.0 * self.edge_tol), self.pcurves, self.batch)
         self.table = LoopTable(self.faces, self.uses, self.groups)
         self.affine = np.array([_is_affine(face.surface) for face in faces], dtype=bool)
-        # an affine face's partials are constant: taken once at its domain's corner
+        # an affine face's partials are constant: taken once at its domain's corner (``origin``: the point there)
         corner = np.array([self.batch.lu.lo, self.batch.lv.lo])
-        self.partials = self.batch.partials(np.arange(len(faces)), corner[0], corner[1])[1:]
+        self.origin, *self.partials = self.batch.partials(np.arange(len(faces)), corner[0], corner[1])
         self.reversed = np.array([face.reversed for face in faces], dtype=bool)
         self.memo = {}
         # faces bounded by their natural domain that share no edge go to the patch path
