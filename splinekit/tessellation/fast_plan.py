@@ -29,6 +29,7 @@ from __future__ import annotations
 import mapbox_earcut as earcut
 import numpy as np
 
+from ..mesh.topology import ranges
 from ..tolerances import WELD
 from .arcs import REL, CircleMap, CircleMaps, _cross, _dot, fit_circles, segments
 from .latitude import latitude_plan
@@ -206,7 +207,7 @@ class FastPlan:
     __slots__ = (
         "faces", "kind", "reversed", "corners", "end_vid", "arc_of", "arcs", "arc_c", "arc_r", "arc_e1", "arc_e2",
         "arc_sweep", "arc_closed", "arc_min", "arc_factor", "use_group", "use_face", "use_flip", "use_uv0",
-        "use_arc_cyl", "A", "b", "normal", "origin", "fixed_T", "fixed_face", "curved_planes", "face_loops",
+        "use_arc_cyl", "A", "b", "normal", "origin", "fixed_T", "fixed_face", "curved_planes",
         "loop_first", "cyl", "cyl_faces", "map_error", "checked",
         # derived for the per-call path (:func:`_derive`)
         "use_arc", "start_vid", "start_X", "au", "au_arc", "au_flip", "au_slot", "au_off", "au_sense", "au_v",
@@ -393,24 +394,26 @@ def build_plan(prep):
     arcs = _plane_arcs(plan, np.flatnonzero(plane_use & arc_use), pred)
     plan.checked = loops_valid(plan, prep.table, pred, use_uv0, use_uv1, plane_use, arc_use, arcs)
     # straight-edged planes: triangulated once (indices into the face's loop points, which are
-    # its uses' start corners at every tolerance)
-    fixed_face, polygons, plan.curved_planes, plan.face_loops = [], [], [], {}
-    plan.loop_first = prep.table.first
-    for f in np.flatnonzero(kind == PLANE).tolist():
-        plan.face_loops[f] = np.flatnonzero(prep.table.loop_face == f)
-        mine = np.flatnonzero(use_face == f)
-        if (arc_of[use_group[mine]] < 0).all():
-            polygons.append((use_uv0[mine], np.cumsum(prep.table.count[plan.face_loops[f]])))
-            fixed_face.append(f)
-        else:
-            plan.curved_planes.append((f, plan.face_loops[f]))
+    # its uses' start corners at every tolerance); uses and loops run face after face, so all
+    # plane faces are split at once, with no numpy calls per face
+    table = prep.table
+    plane = np.flatnonzero(kind == PLANE)
+    curved_uses = np.bincount(use_face, arc_use, F)[plane] > 0
+    fixed, bent = plane[~curved_uses], plane[curved_uses]
+    n_uses, n_loops = np.bincount(use_face, minlength=F), np.bincount(table.loop_face, minlength=F)
+    first_use = np.cumsum(n_uses) - n_uses
+    on = np.isin(table.loop_face, fixed)
+    uv = np.split(use_uv0[ranges(first_use[fixed], n_uses[fixed])], np.cumsum(n_uses[fixed])[:-1])
+    ring_ends = (table.first + table.count - first_use[table.loop_face])[on]
+    polygons = list(zip(uv, np.split(ring_ends, np.cumsum(n_loops[fixed])[:-1]))) if fixed.size else []
+    plan.loop_first = table.first
+    plan.cp_loops = np.flatnonzero(np.isin(table.loop_face, bent))
+    plan.curved_planes = list(zip(bent.tolist(), np.split(plan.cp_loops, np.cumsum(n_loops[bent])[:-1]))) if bent.size else []
     fixed_T = planar_triangles(polygons)
     if fixed_T is None:
         return None
-    fixed_face = [np.full(len(T), f) for f, T in zip(fixed_face, fixed_T)]
     plan.fixed_T = np.concatenate(fixed_T) if fixed_T else np.zeros((0, 3), dtype=np.int64)
-    plan.fixed_face = np.concatenate(fixed_face) if fixed_face else np.zeros(0, dtype=np.int64)
-    plan.cp_loops = np.concatenate([loops for _, loops in plan.curved_planes]) if plan.curved_planes else np.zeros(0, dtype=np.int64)
+    plan.fixed_face = np.repeat(fixed, n_uses[fixed] + 2 * n_loops[fixed] - 4)  # n + 2 holes - 2 triangles each
     plan.cp_first_use, plan.cp_loop_uses = prep.table.first[plan.cp_loops], prep.table.count[plan.cp_loops]
     _derive(plan)
     return plan
