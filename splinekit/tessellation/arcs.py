@@ -286,7 +286,7 @@ class CircleMaps:
         # sorted search keys: map q's pieces end at 2 q + (fraction of its domain), 8 q + angle
         self.tkey = 2.0 * q + (self.hi - self.t0[q]) / (self.t1 - self.t0)[q]
         self.akey = 8.0 * q + self.start + 2.0 * self.half
-        self.kappa = np.array([_kappa(m) for m in maps])
+        self.kappa = np.maximum.reduceat(_kappa(self.half, self.t_half, self.lam), self.first) if maps else np.zeros(0)
         self.full = bool((self.sweep >= 2.0 * np.pi - 1e-12).all())
         # per piece, the columns both maps read (one gather per call instead of six)
         self.table = np.column_stack([self.lo, self.hi - self.lo, self.start + self.half, self.lam, self.t_half])
@@ -315,16 +315,18 @@ class CircleMaps:
         return lo + span * (lam * s / ((1.0 - s) + lam * s))
 
 
-def _kappa(m) -> float:
-    """``max |u''(theta) / u'(theta)|`` of a circle map (``u``: parameter, ``theta``: angle): how
-    far a parametric midpoint strays from the angular one, in units of the squared step (it moves
-    by ``kappa step^2 / 8`` radians to leading order). In closed form on each piece: with
+def _kappa(half, t_half, lam):
+    """``max |u''(theta) / u'(theta)|`` on each circle-map piece (``u``: parameter, ``theta``: angle;
+    ``half``, ``t_half``, ``lam`` ``(k,)``: the pieces' columns of :class:`CircleMap`): how far a
+    parametric midpoint strays from the angular one, in units of the squared step (it moves by
+    ``kappa step^2 / 8`` radians to leading order). In closed form on each piece: with
     ``t = tan((theta - mid) / 2)``, ``s = (t / tan(half / 2) + 1) / 2`` and ``x = lam s / (1 + (lam - 1) s)``,
-    ``u''/u' = x''/x' s' + s''/s' = -2 (lam - 1) s' / (1 + (lam - 1) s) + t``, taken at 257 angles per piece."""
-    a = np.linspace(-1.0, 1.0, 257)[None, :] * m.half[:, None]  # theta - mid over each piece
+    ``u''/u' = x''/x' s' + s''/s' = -2 (lam - 1) s' / (1 + (lam - 1) s) + t``, taken at 257 angles per
+    piece (all pieces of all maps in one pass). Returns ``(k,)``."""
+    a = np.linspace(-1.0, 1.0, 257)[None, :] * half[:, None]  # theta - mid over each piece
     t = np.tan(0.5 * a)
-    tq = m.t_half[:, None]
+    tq = t_half[:, None]
     s = 0.5 * (t / tq + 1.0)
     ds = (1.0 + t * t) / (4.0 * tq)
-    lam = m.lam[:, None]
-    return float(np.abs(-2.0 * (lam - 1.0) * ds / (1.0 + (lam - 1.0) * s) + t).max())
+    lam = lam[:, None]
+    return np.abs(-2.0 * (lam - 1.0) * ds / (1.0 + (lam - 1.0) * s) + t).max(axis=1)
