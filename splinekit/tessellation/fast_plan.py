@@ -305,9 +305,10 @@ def build_plan(prep):
     X = X.reshape(G, K, 3)
     # every group a pole, a straight segment or a circle arc
     curved = np.flatnonzero(~pole_group & ~segments(X, size))
-    fits = fit_circles(X[curved], size, through)
-    if not fits.ok.all():
-        return None
+    if curved.size:
+        fits = fit_circles(X[curved], size, through)
+        if not fits.ok.all():
+            return None
     arcs = [fits.circle(i) for i in range(curved.size)]
     arc_of = np.full(G, -1, dtype=np.int64)
     arc_of[curved] = np.arange(curved.size)
