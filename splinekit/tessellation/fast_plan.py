@@ -220,17 +220,16 @@ class FastPlan:
 
 def sample_parameters(prep, rep):
     """``(keep (k,), through)``: the samples (indices into :data:`SAMPLES` uniform fractions of the
-    pcurve's domain) that recognise every
-    edge group's shape, from its representative use ``rep`` ``(G,)``, and the indices of the two
-    a circle is fitted through (:func:`.arcs.fit_circles`: the samples at a third and two thirds
-    of the :data:`SAMPLES`, so that the fitted circles do not depend on the count). All
-    :data:`SAMPLES` unless each group's 3-D curve has at
-    most ``(FEW_SAMPLES - 1) / PER_PIECE`` conic pieces, counted as its pcurve's pieces, each split
-    at most ``degree`` times per knot line of its surface (a line pcurve on a plane: one; a full
+    pcurve's domain) that recognise every edge group's shape, from its representative use ``rep``
+    ``(G,)``, and the indices in ``keep`` of the two a circle is fitted through
+    (:func:`.arcs.fit_circles`: the samples at a third and two thirds of the :data:`SAMPLES`,
+    whatever the count). All :data:`SAMPLES` unless each group's 3-D curve has at most
+    ``(FEW_SAMPLES - 1) / PER_PIECE`` conic pieces, counted as its pcurve's pieces, each split at
+    most ``degree`` times per knot line of its surface (a line pcurve on a plane: one; a full
     circle of four quarters: four; a line around a four-span cylinder: four), and its shortest
-    pcurve piece spans at least that fraction of its domain: then :data:`FEW_SAMPLES` (every fourth),
-    plus the two fitting ones and their mirror images (37). Most machined parts need the fewer: a quarter of the samples' arrays
-    (and of their evaluations)."""
+    pcurve piece spans at least that fraction of its domain: then every fourth (:data:`FEW_SAMPLES`),
+    plus the two fitting ones and their mirror images (37). Most machined parts need the fewer: a
+    quarter of the samples' arrays and of their evaluations."""
     pc = prep.pcurves.breaks
     curve = np.repeat(np.arange(pc.count.size), pc.count)
     width = (pc.b - pc.a) / (pc.hi - pc.lo)[curve]  # each piece's share of its pcurve's domain
@@ -289,8 +288,12 @@ def build_plan(prep):
     # S + (u - u0) Su + (v - v0) Sv exactly, so its points need no surface evaluator
     corner = np.column_stack([prep.batch.lu.lo, prep.batch.lv.lo])  # (F, 2)
     S, (Su, Sv) = prep.origin, prep.partials
+    all_flat = bool(prep.affine.all())
 
     def surface_points(f, uv):
+        if all_flat:  # only planes (a box, a chamfered block): no selection
+            d = uv - corner[f]
+            return S[f] + d[:, :1] * Su[f] + d[:, 1:] * Sv[f]
         out = np.empty((len(f), 3))
         flat = prep.affine[f]
         k = np.flatnonzero(flat)
@@ -372,7 +375,8 @@ def build_plan(prep):
         pred[cu, :, 1] = use_uv0[cu, 1:]
         pred[cu, 0], pred[cu, -1] = use_uv0[cu], use_uv1[cu]
     ru = np.flatnonzero((kind[use_face] == CYLINDER) & (arc_of[use_group] < 0))
-    pred[ru] = np.linspace(use_uv0[ru], use_uv1[ru], SAMPLES, axis=1)[:, keep]
+    if ru.size:
+        pred[ru] = np.linspace(use_uv0[ru], use_uv1[ru], SAMPLES, axis=1)[:, keep]
     revs = Revolutions([rev[f] for f in sorted(rev)]) if rev else None
     vu = np.flatnonzero(kind[use_face] == REVOLUTION)
     if vu.size:
