@@ -26,7 +26,7 @@ from splinekit.brep import TrimmedFace, primitives
 from splinekit.construct.curves import line
 from splinekit.errors import SplineKitError
 from splinekit.tessellation import fast_plan, trimmed
-from splinekit.tessellation.arcs import CircleMap, CircleMaps
+from splinekit.tessellation.arcs import CircleMap, CircleMaps, _norm, _unwrap
 from splinekit.tessellation.fast_mesh import fast_tessellation
 from splinekit.tessellation.trimmed import _Prepared
 
@@ -261,3 +261,17 @@ def test_circle_maps_speed_bound_against_finite_differences(arcs):
             d1, d2 = (u[2] - u[0]) / (2 * h), (u[2] - 2 * u[1] + u[0]) / h**2
             worst = max(worst, float(np.abs(d2 / d1).max()))
         assert abs(table.kappa[q] - worst) <= 3e-3 * max(worst, 1e-3)  # 257 angles per piece against 4000
+
+
+@settings(max_examples=50, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), rows=st.integers(1, 6), cols=st.integers(2, 40), jumps=st.booleans())
+def test_plan_helpers_equal_numpys_unwrap_and_norm_bit_for_bit(seed, rows, cols, jumps):
+    # the plan's own unwrap and norm (without numpy's argument handling) must not change a bit
+    rng = np.random.default_rng(seed)
+    p = np.cumsum(rng.uniform(-1.5, 1.5, (rows, cols)), axis=1)
+    if jumps:  # branch cuts, and steps of exactly pi either way
+        p = np.mod(p, 2 * np.pi) - np.pi
+        p[:, -1] = p[:, -2] + np.pi * rng.choice([-1.0, 1.0])
+    assert np.array_equal(_unwrap(p), np.unwrap(p, axis=-1))
+    v = rng.normal(size=(rows, cols, 3)) * 10.0 ** rng.integers(-5, 5)
+    assert np.array_equal(_norm(v), np.linalg.norm(v, axis=-1))

@@ -26,12 +26,14 @@ so a first call needs no general-path mesh. The recognition runs over all faces 
 
 from __future__ import annotations
 
+import math
+
 import mapbox_earcut as earcut
 import numpy as np
 
 from ..mesh.topology import ranges
 from ..tolerances import WELD
-from .arcs import REL, CircleMap, CircleMaps, _cross, _dot, fit_circles, segments
+from .arcs import REL, CircleMap, CircleMaps, _cross, _dot, _norm, _unwrap, fit_circles, segments
 from .latitude import latitude_plan
 from .plan_checks import loops_valid
 from .revolution import Revolutions, revolution_nets, revolution_of
@@ -42,6 +44,8 @@ __all__ = ["FastPlan", "build_plan", "planar_triangles"]
 SAMPLES = 129
 """Samples per edge used to recognise its shape (at least :data:`PER_PIECE` per conic piece for 16
 pieces), unless every edge of the face set has at most 4 pieces: then :data:`FEW_SAMPLES`."""
+FRACTIONS = np.linspace(0.0, 1.0, SAMPLES)
+FRACTIONS.setflags(write=False)
 FEW_SAMPLES = 33
 """Samples per edge when no edge has more than 4 conic pieces (:func:`sample_parameters`): every
 fourth of the :data:`SAMPLES`, plus the two a circle is fitted through and their mirror images."""
@@ -54,6 +58,13 @@ MERIDIAN, PARALLEL = 2.0, 1.0
 the tolerance): a meridian sets the rows' spacing, which must leave room for the rows' own steps
 (:mod:`.latitude`); a parallel is raised per call to what its row needs. 2.0 measured fewest
 triangles on the filleted box and cylinder (1.6: +5%, 2.4: +1-5% at 1e-3 and 1e-4)."""
+
+
+def _mask(n, index):
+    """``(n,)`` bool, True at ``index`` (``np.isin`` against ``arange(n)`` without its sort)."""
+    out = np.zeros(n, dtype=bool)
+    out[index] = True
+    return out
 
 
 def planar_triangles(polygons):
@@ -133,8 +144,8 @@ def _cylinder(surface, cmap, mid):
         return None
     P = np.asarray(surface.control_points)
     D = P[0, 1] - P[0, 0]
-    axis = D / np.linalg.norm(D)
-    if np.linalg.norm(_cross(axis, cmap.circle.normal)) > REL:
+    axis = D / math.sqrt(D.dot(D))  # np.linalg.norm's own formula for a vector
+    if _norm(_cross(axis, cmap.circle.normal)) > REL:
         return None
     c = _Cylinder()
     c.cmap, c.axis = cmap, axis
@@ -274,7 +285,7 @@ def build_plan(prep):
     # every group's shape, from its first use's surface at its pcurve
     rep = np.array([g[0] for g in groups], dtype=np.int64)
     keep, through = sample_parameters(prep, rep)
-    r = np.linspace(0.0, 1.0, SAMPLES)[keep]
+    r = FRACTIONS[keep]
     K = keep.size  # samples per group
     t = (pdom[rep, :1] + (pdom[rep, 1:] - pdom[rep, :1]) * r).ravel()
     # the groups' samples, and each use's (u, v) at a third of its domain and at its ends: one
@@ -316,7 +327,7 @@ def build_plan(prep):
     arc_of = np.full(G, -1, dtype=np.int64)
     arc_of[curved] = np.arange(curved.size)
     # each use's direction against its group's samples
-    nearest = np.argmin(np.linalg.norm(X[use_group] - Y[:, None], axis=2), axis=1)
+    nearest = np.argmin(_norm(X[use_group] - Y[:, None]), axis=1)
     use_flip = nearest > K // 2
     # the corners: the groups' end points welded as the general path welds them
     ends = np.concatenate([X[:, 0], X[:, -1]])
@@ -338,7 +349,7 @@ def build_plan(prep):
     plan.A = np.linalg.pinv(np.stack([Su, Sv], axis=2))  # (F, 2, 3): (u, v) of a point of an affine face
     plan.b = corner - np.einsum("fij,fj->fi", plan.A, S)
     n = _cross(Su, Sv)
-    length = np.linalg.norm(n, axis=1, keepdims=True)  # zero at a pole (a face of revolution: not used)
+    length = _norm(n)[:, None]  # zero at a pole (a face of revolution: not used)
     plan.normal = n / np.where(length > 0, length, 1.0) * np.where(prep.reversed, -1.0, 1.0)[:, None]
     plan.origin = S
     plan.cyl = cyl
@@ -368,7 +379,7 @@ def build_plan(prep):
         arc_cyl[cu, 0] = th[:, 0]
         arc_cyl[cu, 1] = np.where(np.mod(th[:, 1] - th[:, 0], 2 * np.pi) < np.pi, 1.0, -1.0)
         d = X[use_group[cu]] - plan.arc_c[a][:, None]
-        theta = np.unwrap(np.mod(np.arctan2(_dot(d, plan.arc_e2[a][:, None]), _dot(d, plan.arc_e1[a][:, None])), 2 * np.pi), axis=1)
+        theta = _unwrap(np.mod(np.arctan2(_dot(d, plan.arc_e2[a][:, None]), _dot(d, plan.arc_e1[a][:, None])), 2 * np.pi))
         theta -= theta[:, :1]
         theta = np.where(use_flip[cu][:, None], theta[:, ::-1], theta)
         pred[cu, :, 0] = plan.maps.param(np.repeat(q, K), (arc_cyl[cu, :1] + arc_cyl[cu, 1:] * theta).ravel()).reshape(-1, K)
@@ -385,7 +396,7 @@ def build_plan(prep):
         pred[vu] = revs.uv_of(rq, samples[vu], line, arc_of[use_group[vu]] >= 0)
     back = surface_points(np.repeat(use_face, K), pred.reshape(-1, 2))
     # (a sloppy file's edges off their faces take the general path, which allows for that)
-    map_error = float(np.linalg.norm(back.reshape(U, K, 3) - samples, axis=2).max())
+    map_error = float(_norm(back.reshape(U, K, 3) - samples).max())
     if map_error > 10.0 * REL * size:
         return None
     if not _cylinder_loops(plan, prep, use_uv0, use_uv1):
@@ -407,12 +418,12 @@ def build_plan(prep):
     fixed, bent = plane[~curved_uses], plane[curved_uses]
     n_uses, n_loops = np.bincount(use_face, minlength=F), np.bincount(table.loop_face, minlength=F)
     first_use = np.cumsum(n_uses) - n_uses
-    on = np.isin(table.loop_face, fixed)
+    on = _mask(F, fixed)[table.loop_face]
     uv = np.split(use_uv0[ranges(first_use[fixed], n_uses[fixed])], np.cumsum(n_uses[fixed])[:-1])
     ring_ends = (table.first + table.count - first_use[table.loop_face])[on]
     polygons = list(zip(uv, np.split(ring_ends, np.cumsum(n_loops[fixed])[:-1]))) if fixed.size else []
     plan.loop_first = table.first
-    plan.cp_loops = np.flatnonzero(np.isin(table.loop_face, bent))
+    plan.cp_loops = np.flatnonzero(_mask(F, bent)[table.loop_face])
     plan.curved_planes = list(zip(bent.tolist(), np.split(plan.cp_loops, np.cumsum(n_loops[bent])[:-1]))) if bent.size else []
     fixed_T = planar_triangles(polygons)
     if fixed_T is None:
@@ -433,7 +444,7 @@ def _plane_arcs(plan, uses, pred):
     if uses.size == 0:
         return out
     a, f = plan.arc_of[plan.use_group[uses]], plan.use_face[uses]
-    theta = plan.arc_sweep[a][:, None] * np.linspace(0.0, 1.0, SAMPLES)
+    theta = plan.arc_sweep[a][:, None] * FRACTIONS
     theta = np.where(plan.use_flip[uses][:, None], theta[:, ::-1], theta)
     X = plan.arc_c[a][:, None] + plan.arc_r[a][:, None, None] * (np.cos(theta)[..., None] * plan.arc_e1[a][:, None]
                                                                + np.sin(theta)[..., None] * plan.arc_e2[a][:, None])  # fmt: skip
@@ -532,7 +543,7 @@ def _cylinder_loops(plan, prep, uv0, uv1) -> bool:
     faces = np.array(sorted(plan.cyl), dtype=np.int64)
     if faces.size == 0:
         return True
-    on = np.isin(plan.use_face, faces)
+    on = _mask(len(plan.faces), faces)[plan.use_face]
     use = np.flatnonzero(on)
     if (prep.table.loop[use] != 0).any():
         return False

@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .arcs import REL, CircleMaps, _dot
+from .arcs import REL, CircleMaps, _dot, _norm
 
 __all__ = ["Revolution", "Revolutions", "revolution_nets", "revolution_of"]
 
@@ -135,7 +135,7 @@ class Revolutions:
             qi = q[i]
             a = self.a[qi][:, None]
             z = _dot(d[i], a)
-            rho = np.linalg.norm(d[i] - z[..., None] * a, axis=2) - self.rho_c[qi][:, None]
+            rho = _norm(d[i] - z[..., None] * a) - self.rho_c[qi][:, None]
             dz = z - self.z_c[qi][:, None]
             g1, g2 = self.g1[qi][:, None], self.g2[qi][:, None]
             psi = np.arctan2(rho * g2[..., 0] + dz * g2[..., 1], rho * g1[..., 0] + dz * g1[..., 1])
