@@ -206,7 +206,7 @@ def sample_groups(uses, groups, scales, tol, angle_tol, surfaces, pc, memo=None,
     ``pc``: a :class:`.batch.CurveBatch` of the uses' pcurves; ``memo``: a dict kept with the
     face set (its tolerance-independent part: representatives, 3-D curve batch, directions,
     span bounds, filled on the first call); ``flat`` ``(F,)`` bool: faces that are affine maps
-    of their parameters (planes: :func:`.trimmed._is_affine`).
+    of their parameters (planes: :func:`.trimmed._affine`).
 
     A line segment whose every use lies on a flat face needs its two end points only at any
     tolerance (the chord is the edge, its ``(u, v)`` images are straight, and the face's one
