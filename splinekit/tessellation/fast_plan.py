@@ -26,6 +26,7 @@ so a first call needs no general-path mesh. The recognition runs over all faces 
 
 from __future__ import annotations
 
+import functools
 import math
 
 import mapbox_earcut as earcut
@@ -250,12 +251,17 @@ def sample_parameters(prep, rep):
     pieces = pc.count[rep] * (1 + prep.pcurves.degree[rep] * lines)
     most = (FEW_SAMPLES - 1) // PER_PIECE
     few = (pieces <= most) & (shortest * most >= 1.0 - 1e-9)
-    through = np.array([SAMPLES // 3, (2 * SAMPLES) // 3])
-    if not few.all():
-        return np.arange(SAMPLES), tuple(through.tolist())
-    step = (SAMPLES - 1) // (FEW_SAMPLES - 1)
-    # symmetric about the middle: a use that runs against its group reads the samples backwards
-    keep = np.union1d(np.arange(0, SAMPLES, step), np.concatenate([through, SAMPLES - 1 - through]))
+    return _kept(SAMPLES, FEW_SAMPLES if few.all() else SAMPLES)
+
+
+@functools.lru_cache(maxsize=4)
+def _kept(samples, few):
+    """``(keep, through)`` of :func:`sample_parameters` for ``few`` of ``samples`` (cached, read-only)."""
+    through = np.array([samples // 3, (2 * samples) // 3])
+    # every step-th, and symmetric about the middle: a use that runs against its group reads the
+    # samples backwards
+    keep = np.union1d(np.arange(0, samples, (samples - 1) // (few - 1)), np.concatenate([through, samples - 1 - through]))
+    keep.setflags(write=False)
     return keep, tuple(np.searchsorted(keep, through).tolist())
 
 
