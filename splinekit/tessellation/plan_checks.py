@@ -9,7 +9,7 @@ any tolerance:
 * closed: every use ends at the welded corner where the next use of its loop starts, in 3-D,
   and at the same ``(u, v)`` (to :data:`UV_RTOL` of the face's parameter range);
 * cylinders and faces of revolution: one loop that is a rectangle in ``(u, v)`` run
-  counter-clockwise (checked where the plan is built, :func:`.fast_plan._cylinder_loops` and
+  counter-clockwise (checked where the plan is built, :func:`.plan_faces.cylinder_loops` and
   :func:`.latitude.latitude_plan`), so closure is all that is left;
 * planes: each loop as a polygon through its corners and, along its circle arcs, through
   :data:`.fast_plan.SAMPLES` points of the exact arc (uniform in angle; much finer than a mesh at
