@@ -77,7 +77,8 @@ class _Breaks:
         self.lo, self.hi = flat[end - count - 1], flat[end - 1]
         piece = np.ones(flat.size, dtype=bool)
         piece[end - 1] = False  # each object's last break starts no piece
-        self.a, self.b = flat[piece], flat[np.roll(piece, 1)]  # per piece, in object order
+        start = np.flatnonzero(piece)
+        self.a, self.b = flat[start], flat[start + 1]  # per piece, in object order
         # all breaks on one increasing axis: object k occupies [2 k, 2 k + 1]
         k = np.repeat(np.arange(count.size), count)
         self.key = 2 * k + (self.a - self.lo[k]) / (self.hi[k] - self.lo[k])
