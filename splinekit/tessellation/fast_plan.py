@@ -191,7 +191,7 @@ def build_plan(prep):
     K = keep.size  # samples per group
     t = (pdom[rep, :1] + (pdom[rep, 1:] - pdom[rep, :1]) * r).ravel()
     # the groups' samples, and each use's (u, v) at a third of its domain and at its ends: one
-    # evaluation of all pcurves (the batch evaluators give every point the same bits in any batch)
+    # evaluation of all pcurves instead of four
     ids = np.arange(U)
     uv, third, use_uv0, use_uv1 = np.split(
         prep.pcurves.evaluate(np.concatenate([np.repeat(rep, K), ids, ids, ids]),
