@@ -202,6 +202,7 @@ def test_fewer_recognition_samples_give_the_plan_of_all_samples(name, monkeypatc
     for a in ("arc_c", "arc_r", "arc_e1", "arc_e2", "arc_sweep"):
         assert np.allclose(getattr(few, a), getattr(full, a), rtol=0, atol=1e-14 * max(scale, 2 * math.pi)), a
     assert np.array_equal(few.fixed_T, full.fixed_T) and np.array_equal(few.fixed_face, full.fixed_face)
+    monkeypatch.setenv("SPLINEKIT_NUMBA", "0")  # the numpy path: no kernel loads in this test
     for rel in (1e-1, 1e-3):  # the same triangles from both plans
         a, b = fast_tessellation(few, rel * scale, None), fast_tessellation(full, rel * scale, None)
         assert np.array_equal(np.asarray(a.faces), np.asarray(b.faces))
