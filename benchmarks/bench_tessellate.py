@@ -255,9 +255,9 @@ map check ``back``), about 8 of the filleted box's 21 ms. Cut, each with the sam
 Python-level calls per first call (1e-3): box 3.6k -> 2.9k, cylinder 4.5k -> 3.8k, box with a
 hole 6.0k -> 4.8k, plate 7.2k -> 5.5k, box - cylinder 6.0k -> 4.8k, chamfered block 8.3k -> 5.8k,
 filleted box 15.4k -> 11.0k. First call, best CPU time of 15 fresh copies, the old and new code
-in alternating processes (load average ~4.5), 1e-1: box 4.0 -> 2.5 ms, box with a hole 7.6 ->
-5.2 ms, plate 9.9 -> 6.7 ms, box - cylinder 7.7 -> 5.6 ms, chamfered block 10.3 -> 4.6 ms,
-filleted box 20.7 -> 11.7 ms. ``--brep --quick`` (old and new back to back, load average 5),
+in alternating processes (two rounds each, load average 1.0-1.9), 1e-1: box 3.8 -> 2.3 ms,
+cylinder 4.7 -> 3.9 ms, box with a hole 7.3 -> 5.0 ms, plate 9.2 -> 6.2 ms, box - cylinder 7.4 ->
+4.5 ms, chamfered block 10.6 -> 4.2 ms, filleted box 20.6 -> 10.6 ms. ``--brep --quick`` (old and new back to back, load average 5),
 first-call ratio against OCC's first mesh at 1e-1 / 1e-2 / 1e-3: box 0.12x / 0.12x / 0.10x ->
 0.20x / 0.21x / 0.11x (2.3-4.7 ms against 0.5 ms), chamfered block 0.16x / 0.18x / 0.18x -> 0.41x
 / 0.42x / 0.30x, box with a hole 0.32x / 0.21x / 0.23x -> 0.34x / 0.49x / 0.43x, box - cylinder
