@@ -225,6 +225,50 @@ evaluators, edge uses and their pairing, domain check, ~2-6k; the plan ~2-10k), 
 Closing that gap needs the preparation and the plan built from flat per-face-set arrays in one
 compiled pass, not more numpy batching.
 
+First call, next session (cProfile by own time and by call count of one first call per part at
+1e-1 on fresh objects, and a stage timer; load average 1-5). The floor, walking the face set's
+Python objects (faces, loops, edges, their curves' knots, poles and weights): 21 us (box), 59 us
+(box with a hole), 83 us (plate), 156 us (chamfered block), 243 us (filleted box), 1-2% of the
+first call. The rest was ~1-3 us per numpy call times 3.6-15k calls, and arrays made of the
+recognition samples: 129 per edge group, evaluated on the surfaces twice (the samples and the
+map check ``back``), about 8 of the filleted box's 21 ms. Cut, each with the same triangles:
+
+* recognition on 37 samples per edge (every fourth, plus the two a circle is fitted through and
+  their mirror images, ``fast_plan.sample_parameters``) when no edge has more than four conic
+  pieces (all the machined parts here); 129 otherwise. The loop checks' polygons still take 129
+  points per arc, now from the exact circle. Vertices move by at most 4e-15 (the samples are
+  evaluated in batches of another size and the sweeps unwrapped over other chains);
+  ``max_deviation`` and every triangle are unchanged on these parts at 1e-1 ... 1e-5;
+* per-object numpy calls made whole-array passes: the batch evaluators' breaks (one numpy call
+  per pcurve before), the pcurves' Bézier segments per knot vector, the affine test, the loop
+  table, the shared-edge test of natural faces, the pole groups, the planes' polygons, the
+  faces of revolution's side labels, the circle maps' speed bounds (ten numpy calls per map);
+* dropped work: the pcurves' domain check reads their Bézier control points' boxes (a curve lies
+  in their hull) and samples only when a box reaches the slack; the faces' corner partials are
+  taken once (prep and plan each took them); one pcurve and one surface evaluation instead of
+  four and two; einsum's optimizer (0.13 ms of path search per multi-span surface) replaced by
+  two contractions; a one-span sphere or torus piece's middle isocurve from the de Casteljau
+  midpoint of its net (the general isocurve: ~0.1 ms per face); ``np.unwrap`` and
+  ``np.linalg.norm`` (10-50 us of argument handling per call on these small arrays) replaced by
+  helpers with the same operations (bit for bit, tested), ``np.isin`` by masks.
+
+Python-level calls per first call (1e-3): box 3.6k -> 2.9k, cylinder 4.5k -> 3.8k, box with a
+hole 6.0k -> 4.8k, plate 7.2k -> 5.5k, box - cylinder 6.0k -> 4.8k, chamfered block 8.3k -> 5.8k,
+filleted box 15.4k -> 11.0k. First call, best CPU time of 15 fresh copies, the old and new code
+in alternating processes (two rounds each, load average 1.0-1.9), 1e-1: box 3.8 -> 2.3 ms,
+cylinder 4.7 -> 3.9 ms, box with a hole 7.3 -> 5.0 ms, plate 9.2 -> 6.2 ms, box - cylinder 7.4 ->
+4.5 ms, chamfered block 10.6 -> 4.2 ms, filleted box 20.6 -> 10.6 ms. ``--brep --quick`` (old and new back to back, load average 5),
+first-call ratio against OCC's first mesh at 1e-1 / 1e-2 / 1e-3: box 0.12x / 0.12x / 0.10x ->
+0.20x / 0.21x / 0.11x (2.3-4.7 ms against 0.5 ms), chamfered block 0.16x / 0.18x / 0.18x -> 0.41x
+/ 0.42x / 0.30x, box with a hole 0.32x / 0.21x / 0.23x -> 0.34x / 0.49x / 0.43x, box - cylinder
+0.26x / 0.15x / 0.25x -> 0.34x / 0.33x / 0.35x, plate 0.33x / 0.32x / 0.36x -> 0.72x / 0.42x /
+0.67x, filleted box 0.31x / 0.21x / 0.76x -> 0.47x / 0.35x / 0.93x; at 1e-4 and 1e-5 every part
+beats OCC's first mesh (plate at 1e-4: 0.97x -> 1.6x). OCC's first mesh of the box (0.5 ms) stays
+out of reach: what is left is ~2.9k Python-level calls spread over ~40 steps (the batch evaluators'
+set-up, the recognition, the loop checks, ear clipping, the result), none above ~10% of the call;
+a compiled plan builder would be the way, but loading one kernel signature from numba's disk
+cache took ~10 ms here (a latitude kernel, numba already imported), more than a first call saves.
+
 This session's runs (load average 3.8-4.6 on 2 cores; CPU times, best of N; ``--patches --tols
 1e-1,1e-2,1e-3`` and ``--brep --quick``; time ratio = OCC's time / splinekit's at the same
 measured deviation):

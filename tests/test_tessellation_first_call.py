@@ -5,7 +5,10 @@ Judged against the order the tessellator used before, which is kept as its fallb
 path first (it raises on bad loops), then the plan. Forcing that order (the checks patched to
 refuse) must give the very same mesh on good parts and the very same error on bad loops; the
 first call must give the same triangles as every later (warm) call; and on good parts the
-general path must not run at all.
+general path must not run at all. The first call's shortcuts are checked against the routes they
+replace: the plan from fewer recognition samples against the plan from all of them, the domain
+check's control-point boxes against sampling every pcurve, the circle maps' speed bound against
+finite differences.
 """
 
 from __future__ import annotations
@@ -23,7 +26,8 @@ from splinekit.brep import TrimmedFace, primitives
 from splinekit.construct.curves import line
 from splinekit.errors import SplineKitError
 from splinekit.tessellation import fast_plan, trimmed
-from splinekit.tessellation.arcs import CircleMap
+from splinekit.tessellation.arcs import CircleMap, CircleMaps, _norm, _unwrap
+from splinekit.tessellation.fast_mesh import fast_tessellation
 from splinekit.tessellation.trimmed import _Prepared
 
 import _brep_shapes as shapes
@@ -170,3 +174,105 @@ def test_batched_circle_maps_against_the_curves_own_evaluators(arcs, straight):
         assert np.abs(m.circle.points(m.angle(t)) - c.evaluate(t)).max() <= 1e-9 * r
         assert np.abs(m.angle(t) - one.angle(t)).max() <= 1e-12
         assert np.abs(m.param(m.angle(t)) - t).max() <= 1e-9 * (t[-1] - t[0])
+
+
+def _plans(obj, monkeypatch):
+    """The fast plan of ``obj``'s face set with the samples the plan chooses, and with all
+    :data:`fast_plan.SAMPLES` forced (the count used before the fewer were allowed)."""
+    faces = _faces(obj)
+    size = float(np.linalg.norm(np.ptp(np.concatenate([f.surface.control_points.reshape(-1, 3) for f in faces]), axis=0)))
+    few = fast_plan.build_plan(_Prepared(faces, size))
+    with monkeypatch.context() as m:
+        m.setattr(fast_plan, "FEW_SAMPLES", fast_plan.SAMPLES)  # every sample kept
+        full = fast_plan.build_plan(_Prepared(faces, size))
+    return few, full
+
+
+@pytest.mark.parametrize("name", sorted(PARTS))
+def test_fewer_recognition_samples_give_the_plan_of_all_samples(name, monkeypatch):
+    obj = PARTS[name]()
+    few, full = _plans(obj, monkeypatch)
+    assert few is not None and full is not None and few.checked and full.checked
+    assert np.array_equal(few.kind, full.kind) and np.array_equal(few.use_flip, full.use_flip)
+    assert np.array_equal(few.arc_of, full.arc_of) and np.array_equal(few.end_vid, full.end_vid)
+    assert np.array_equal(few.corners, full.corners)
+    # the circles are fitted through the samples at the same parameters (evaluated in batches of
+    # other sizes: equal to rounding); the sweeps are unwrapped over other chains
+    scale = np.abs(full.corners).max()
+    for a in ("arc_c", "arc_r", "arc_e1", "arc_e2", "arc_sweep"):
+        assert np.allclose(getattr(few, a), getattr(full, a), rtol=0, atol=1e-14 * max(scale, 2 * math.pi)), a
+    assert np.array_equal(few.fixed_T, full.fixed_T) and np.array_equal(few.fixed_face, full.fixed_face)
+    monkeypatch.setenv("SPLINEKIT_NUMBA", "0")  # the numpy path: no kernel loads in this test
+    for rel in (1e-1, 1e-3):  # the same triangles from both plans
+        a, b = fast_tessellation(few, rel * scale, None), fast_tessellation(full, rel * scale, None)
+        assert np.array_equal(np.asarray(a.faces), np.asarray(b.faces))
+        assert np.allclose(a.vertices, b.vertices, rtol=0, atol=1e-13 * scale)
+
+
+def test_edges_of_many_pieces_keep_all_samples():
+    four = sk.circle([0.0, 0.0], None, 1.0).transform(np.array([[0.3, 0, 0.5], [0, 0.3, 0.5], [0, 0, 1]]))
+    b = np.unique(four.knots)
+    eight = four.refine(np.repeat(0.5 * (b[:-1] + b[1:]), 2))  # each quarter split in two (joints of multiplicity 2)
+    for hole, count in ((four, 37), (eight, fast_plan.SAMPLES)):
+        face = TrimmedFace(_plane(), [_square(0, 1), [hole.reverse()]])
+        prep = _Prepared([face], math.sqrt(2.0))
+        rep = np.array([g[0] for g in prep.groups])
+        keep, (i, j) = fast_plan.sample_parameters(prep, rep)
+        assert keep.size == count and keep[i] == fast_plan.SAMPLES // 3 and keep[j] == 2 * fast_plan.SAMPLES // 3
+        # symmetric, so that a use running against its group reads its own fractions backwards
+        assert np.array_equal(keep[::-1], fast_plan.SAMPLES - 1 - keep)
+        assert fast_plan.build_plan(prep).checked
+
+
+@settings(max_examples=40, deadline=None)
+@given(cx=st.floats(-0.1, 1.1), cy=st.floats(-0.1, 1.1), r=st.floats(0.05, 0.6), square=st.booleans())
+def test_the_domain_check_refuses_exactly_the_pcurves_whose_samples_leave(cx, cy, r, square):
+    # the check reads the pcurves' control point boxes first and samples only when a box reaches
+    # the slack: it must refuse the same loops as sampling every pcurve (17 samples, 1% slack)
+    if square:
+        c = np.array([[cx - r, cy - r], [cx + r, cy - r], [cx + r, cy + r], [cx - r, cy + r]])
+        loop = [line(c[k], c[(k + 1) % 4]) for k in range(4)]
+    else:
+        loop = _circle(cx, cy, r, False)
+    t = np.linspace(0.0, 1.0, 17)
+    uv = np.concatenate([e.evaluate(e.domain[0] + (e.domain[1] - e.domain[0]) * t) for e in loop])
+    leaves = bool(((uv < -0.01) | (uv > 1.01)).any())
+    face = TrimmedFace(_plane(), [loop])
+    if leaves:
+        with pytest.raises(SplineKitError, match="leaves the surface's domain"):
+            _Prepared([face], math.sqrt(2.0))
+    else:
+        _Prepared([face], math.sqrt(2.0))
+
+
+@settings(max_examples=20, deadline=None)
+@given(arcs=st.lists(st.tuples(st.floats(-math.pi, math.pi), st.floats(0.3, 2 * math.pi)), min_size=1, max_size=4))
+def test_circle_maps_speed_bound_against_finite_differences(arcs):
+    # kappa = max |u''(theta) / u'(theta)| of each map, all maps' pieces in one pass, against
+    # second differences of the map's own parameter at dense angles
+    maps = [CircleMap.of(sk.arc([0.0, 0.0, 0.0], [0.0, 0.0, 1.0], 2.0, a, a + sweep), 1.0) for a, sweep in arcs]
+    table = CircleMaps(maps)
+    for q, m in enumerate(maps):
+        ends = m.start + 2.0 * m.half
+        worst = 0.0
+        for lo, hi in zip(m.start, ends):  # piece by piece (u'' jumps at the joints)
+            h = (hi - lo) / 4000
+            theta = np.linspace(lo + 2 * h, hi - 2 * h, 3997)
+            u = m.param(np.concatenate([theta - h, theta, theta + h]).clip(0.0, ends[-1])).reshape(3, -1)
+            d1, d2 = (u[2] - u[0]) / (2 * h), (u[2] - 2 * u[1] + u[0]) / h**2
+            worst = max(worst, float(np.abs(d2 / d1).max()))
+        assert abs(table.kappa[q] - worst) <= 3e-3 * max(worst, 1e-3)  # 257 angles per piece against 4000
+
+
+@settings(max_examples=50, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), rows=st.integers(1, 6), cols=st.integers(2, 40), jumps=st.booleans())
+def test_plan_helpers_equal_numpys_unwrap_and_norm_bit_for_bit(seed, rows, cols, jumps):
+    # the plan's own unwrap and norm (without numpy's argument handling) must not change a bit
+    rng = np.random.default_rng(seed)
+    p = np.cumsum(rng.uniform(-1.5, 1.5, (rows, cols)), axis=1)
+    if jumps:  # branch cuts, and steps of exactly pi either way
+        p = np.mod(p, 2 * np.pi) - np.pi
+        p[:, -1] = p[:, -2] + np.pi * rng.choice([-1.0, 1.0])
+    assert np.array_equal(_unwrap(p), np.unwrap(p, axis=-1))
+    v = rng.normal(size=(rows, cols, 3)) * 10.0 ** rng.integers(-5, 5)
+    assert np.array_equal(_norm(v), np.linalg.norm(v, axis=-1))

@@ -42,7 +42,7 @@ def _is_natural(obj):
     sk.tessellate(obj, 1e-1, relative=True)  # builds and caches the face set's preparation
     prep = faces[0]._cache["tessellate"]
     assert isinstance(prep, _Prepared)
-    return natural_faces(prep.faces, prep.uses, prep.groups)
+    return natural_faces(prep.faces, prep.uses, prep.table)
 
 
 def test_whole_sphere_and_torus_are_natural_faces_and_others_are_not():

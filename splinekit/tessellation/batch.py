@@ -14,6 +14,7 @@ import numpy as np
 from scipy.sparse import csr_matrix
 
 from .. import _kernels
+from ..mesh.topology import ranges
 from .cells import bezier_matrix, cells_of_patches
 
 __all__ = ["CurveBatch", "SurfaceBatch"]
@@ -58,15 +59,30 @@ class _Breaks:
     ``first[k] .. first[k] + count[k] - 1`` over the sorted breaks ``breaks[k]``."""
 
     def __init__(self, breaks, first):
-        self.count = np.array([len(b) - 1 for b in breaks], dtype=np.int64)
+        self._set(np.concatenate(breaks), np.array([len(b) - 1 for b in breaks], dtype=np.int64), first)
+
+    @classmethod
+    def of_flat(cls, flat, count, first):
+        """The same from all objects' breaks end to end (``flat``; object ``k`` has ``count[k] + 1``)."""
+        out = object.__new__(cls)
+        out._set(flat, count, first)
+        return out
+
+    def _set(self, flat, count, first):
+        # whole-array passes, not one numpy call per object: a face set's first tessellation
+        # builds these for hundreds of pcurves
+        self.count = count
         self.first = np.asarray(first, dtype=np.int64)
-        self.lo = np.array([b[0] for b in breaks])
-        self.hi = np.array([b[-1] for b in breaks])
-        self.a = np.concatenate([b[:-1] for b in breaks])  # per piece, in object order
-        self.b = np.concatenate([b[1:] for b in breaks])
+        end = np.cumsum(count + 1)
+        self.lo, self.hi = flat[end - count - 1], flat[end - 1]
+        piece = np.ones(flat.size, dtype=bool)
+        piece[end - 1] = False  # each object's last break starts no piece
+        start = np.flatnonzero(piece)
+        self.a, self.b = flat[start], flat[start + 1]  # per piece, in object order
         # all breaks on one increasing axis: object k occupies [2 k, 2 k + 1]
-        self.key = np.concatenate([2 * k + (b[:-1] - b[0]) / (b[-1] - b[0]) for k, b in enumerate(breaks)])
-        self.start = np.concatenate([[0], np.cumsum(self.count)[:-1]]).astype(np.int64)
+        k = np.repeat(np.arange(count.size), count)
+        self.key = 2 * k + (self.a - self.lo[k]) / (self.hi[k] - self.lo[k])
+        self.start = (end - count - 1 - np.arange(count.size)).astype(np.int64)
         # the arrays :meth:`locate` reads, for the compiled kernel
         self.table = (self.key, self.lo, self.hi, self.start, self.count, self.a, self.b)
 
@@ -89,33 +105,43 @@ class CurveBatch:
 
     def __init__(self, curves):
         self.dim = curves[0].dim if curves else 0
+        C = len(curves)
         self.degree = np.array([c.degree for c in curves], dtype=np.int64)
         # curves on one knot vector share one decomposition matrix: one product per knot vector
         by_knots: dict = {}
         for i, c in enumerate(curves):
-            by_knots.setdefault((c.degree, tuple(c.knots.tolist())), []).append(i)
-        breaks = [None] * len(curves)
-        segs = [None] * len(curves)
-        for (p, knots), members in by_knots.items():
-            br, M = bezier_matrix(p, knots)
+            by_knots.setdefault((c.degree, c.knots.tobytes()), []).append(i)
+        group = np.empty(C, dtype=np.int64)
+        decomposed = []  # per knot vector: (members, breaks, Bézier segments (m, s, p + 1, dim + 1))
+        for g, ((p, _), members) in enumerate(by_knots.items()):
+            br, M = bezier_matrix(p, tuple(curves[members[0]].knots.tolist()))
             if any(curves[i].is_rational for i in members):
                 coefs = np.stack([_homogeneous(curves[i]) for i in members])  # (m, n, dim + 1)
             else:  # polynomial curves (most pcurves): unit weights appended once for all
                 P = np.stack([curves[i].control_points for i in members])
                 coefs = np.concatenate([P, np.ones(P.shape[:2] + (1,))], axis=2)
-            S = np.einsum("sij,mjk->msik", M, coefs)
-            for r, i in enumerate(members):
-                breaks[i], segs[i] = br, S[r]
-        rows: dict = {}
-        first = np.zeros(len(curves), dtype=np.int64)
-        segs_by_p: dict = {}
-        for i, c in enumerate(curves):
-            p = c.degree
-            first[i] = rows.get(p, 0)
-            rows[p] = first[i] + len(segs[i])
-            segs_by_p.setdefault(p, []).append(segs[i])
-        self.segs = {p: np.concatenate(v) for p, v in segs_by_p.items()}
-        self.breaks = _Breaks(breaks, first) if curves else None
+            members = np.array(members, dtype=np.int64)
+            group[members] = g
+            decomposed.append((members, br, np.einsum("sij,mjk->msik", M, coefs)))
+        # each degree's segments in one table, curve after curve (in the curves' order)
+        nseg = np.array([len(br) - 1 for _, br, _ in decomposed], dtype=np.int64)[group] if C else np.zeros(0, np.int64)
+        first = np.zeros(C, dtype=np.int64)
+        self.segs = {}
+        for p in np.unique(self.degree).tolist():
+            on = np.flatnonzero(self.degree == p)
+            first[on] = np.cumsum(nseg[on]) - nseg[on]
+            self.segs[p] = np.empty((int(nseg[on].sum()), p + 1, self.dim + 1))
+        for members, _, S in decomposed:
+            rows = first[members][:, None] + np.arange(S.shape[1])
+            self.segs[int(self.degree[members[0]])][rows] = S
+        if C:
+            brs = [br for _, br, _ in decomposed]
+            nbr = np.array([len(br) for br in brs], dtype=np.int64)
+            at = (np.cumsum(nbr) - nbr)[group]  # each curve's breaks: its knot vector's, end to end
+            flat = np.concatenate(brs)[ranges(at, nseg + 1)]
+            self.breaks = _Breaks.of_flat(flat, nseg, first)
+        else:
+            self.breaks = None
         self.first_row = first
 
     def segments(self, k):
@@ -180,14 +206,35 @@ class SurfaceBatch:
         np.maximum.at(self.nsv, patch, span[:, 1] + 1)
         ncell = np.bincount(patch, minlength=S)
         self.nsu = ncell // self.nsv
-        # cells of one surface are contiguous, (iu, iv) order with iu major
-        bu = [np.append(box[self.first[k] : self.first[k] + ncell[k] : self.nsv[k], 0], box[self.first[k] + ncell[k] - 1, 1])
-              for k in range(S)]  # fmt: skip
-        bv = [np.append(box[self.first[k] : self.first[k] + self.nsv[k], 2], box[self.first[k] + ncell[k] - 1, 3]) for k in range(S)]
-        self.bu, self.bv = bu, bv
-        self.lu = _Breaks(bu, np.zeros(S))
-        self.lv = _Breaks(bv, np.zeros(S))
+        # cells of one surface are contiguous, (iu, iv) order with iu major: its u breaks are
+        # the u starts of every nsv-th cell and the last cell's end, its v breaks the v starts of
+        # its first nsv cells and the last cell's end (all surfaces in one pass each)
+        last = self.first + ncell - 1
+        ju = ranges(np.zeros(S, dtype=np.int64), self.nsu + 1)  # 0 .. nsu per surface
+        end = ju == np.repeat(self.nsu, self.nsu + 1)
+        row = np.where(end, np.repeat(last, self.nsu + 1), np.repeat(self.first, self.nsu + 1) + ju * np.repeat(self.nsv, self.nsu + 1))
+        flat_u = box[row, np.where(end, 1, 0)]
+        jv = ranges(np.zeros(S, dtype=np.int64), self.nsv + 1)
+        end = jv == np.repeat(self.nsv, self.nsv + 1)
+        flat_v = box[np.where(end, np.repeat(last, self.nsv + 1), np.repeat(self.first, self.nsv + 1) + jv), np.where(end, 3, 2)]
+        self.lu = _Breaks.of_flat(flat_u, self.nsu, np.zeros(S))
+        self.lv = _Breaks.of_flat(flat_v, self.nsv, np.zeros(S))
+        self._bu = self._bv = None
         self.box = box
+
+    @property
+    def bu(self):
+        """Per surface its ``u`` breaks ``(nsu + 1,)`` (a list of arrays)."""
+        if self._bu is None:
+            self._bu = [np.append(a, h) for a, h in zip(np.split(self.lu.a, np.cumsum(self.nsu)[:-1]), self.lu.hi)]
+        return self._bu
+
+    @property
+    def bv(self):
+        """Per surface its ``v`` breaks ``(nsv + 1,)`` (a list of arrays)."""
+        if self._bv is None:
+            self._bv = [np.append(a, h) for a, h in zip(np.split(self.lv.a, np.cumsum(self.nsv)[:-1]), self.lv.hi)]
+        return self._bv
 
     def _cells(self, k, u, v):
         jit = _kernels.get(KERNELS)

@@ -121,7 +121,8 @@ def _split(p, q, surface):
     coefs = np.asarray(surface.homogeneous_points)
     bu, Mu = bezier_matrix(p, tuple(surface.knots_u.tolist()))  # (nsu, p + 1, nu)
     bv, Mv = bezier_matrix(q, tuple(surface.knots_v.tolist()))  # (nsv, q + 1, nv)
-    nets = np.einsum("aik,bjl,klc->abijc", Mu, Mv, coefs, optimize=True)  # (nsu, nsv, p + 1, q + 1, 4)
+    # two contractions, u then v (the order einsum's optimizer picks, without its ~0.1 ms path search per call)
+    nets = np.einsum("bjl,ailc->abijc", Mv, np.einsum("aik,klc->ailc", Mu, coefs))  # (nsu, nsv, p + 1, q + 1, 4)
     nsu, nsv = nets.shape[:2]
     iu, iv = np.meshgrid(np.arange(nsu), np.arange(nsv), indexing="ij")
     iu, iv = iu.ravel(), iv.ravel()

@@ -78,14 +78,20 @@ def check_domains(uses, pcurves, surfaces, samples: int = 17):
     ``samples`` points per pcurve)."""
     if not uses:
         return
-    dom = np.column_stack([pcurves.breaks.lo, pcurves.breaks.hi])
-    r = np.linspace(0.0, 1.0, samples)
-    t = (dom[:, :1] + (dom[:, 1:] - dom[:, :1]) * r).ravel()
-    uv = pcurves.evaluate(np.repeat(np.arange(len(uses)), samples), t).reshape(len(uses), samples, 2)
     f = np.array([u.f for u in uses])
     lo = np.column_stack([surfaces.lu.lo, surfaces.lv.lo])[f]  # (U, 2): (u0, v0) of each use's face
     hi = np.column_stack([surfaces.lu.hi, surfaces.lv.hi])[f]
     slack = DOMAIN_SLACK * (hi - lo)
+    # a curve lies in the convex hull of its Bézier pieces' control points (positive weights): when
+    # every hull is well inside, no sample can leave (the common case, without evaluating)
+    cmin, cmax = _hulls(pcurves)
+    margin = 1e-9 * (hi - lo)
+    if ((cmin >= lo - slack + margin) & (cmax <= hi + slack - margin)).all():
+        return
+    dom = np.column_stack([pcurves.breaks.lo, pcurves.breaks.hi])
+    r = np.linspace(0.0, 1.0, samples)
+    t = (dom[:, :1] + (dom[:, 1:] - dom[:, :1]) * r).ravel()
+    uv = pcurves.evaluate(np.repeat(np.arange(len(uses)), samples), t).reshape(len(uses), samples, 2)
     bad = ((uv < (lo - slack)[:, None]) | (uv > (hi + slack)[:, None])).any(axis=(1, 2))
     if bad.any():
         i = int(np.flatnonzero(bad)[0])
@@ -95,6 +101,19 @@ def check_domains(uses, pcurves, surfaces, samples: int = 17):
         raise ParameterError(
             f"{_face_name(u.face, u.f)}: loop {u.loop} leaves the surface's domain [{u0:g}, {u1:g}] x [{v0:g}, {v1:g}]: "
             f"edge {u.pos} spans [{a[0]:g}, {b[0]:g}] x [{a[1]:g}, {b[1]:g}]")
+
+
+def _hulls(curves):
+    """``(lo, hi)`` ``(n, dim)``: the bounding box of each curve's Bézier control points (a
+    :class:`.batch.CurveBatch`), one pass per degree."""
+    lo, hi = np.empty((len(curves.degree), curves.dim)), np.empty((len(curves.degree), curves.dim))
+    for p, segs in curves.segs.items():
+        on = np.flatnonzero(curves.degree == p)
+        P = segs[..., :-1] / segs[..., -1:]  # (rows, p + 1, dim) Cartesian
+        at = curves.first_row[on]
+        lo[on] = np.minimum.reduceat(P.min(axis=1), at)
+        hi[on] = np.maximum.reduceat(P.max(axis=1), at)
+    return lo, hi
 
 
 def group_uses(uses, weld: float, pcurves, surfaces):
@@ -187,7 +206,7 @@ def sample_groups(uses, groups, scales, tol, angle_tol, surfaces, pc, memo=None,
     ``pc``: a :class:`.batch.CurveBatch` of the uses' pcurves; ``memo``: a dict kept with the
     face set (its tolerance-independent part: representatives, 3-D curve batch, directions,
     span bounds, filled on the first call); ``flat`` ``(F,)`` bool: faces that are affine maps
-    of their parameters (planes: :func:`.trimmed._is_affine`).
+    of their parameters (planes: :func:`.trimmed._affine`).
 
     A line segment whose every use lies on a flat face needs its two end points only at any
     tolerance (the chord is the edge, its ``(u, v)`` images are straight, and the face's one

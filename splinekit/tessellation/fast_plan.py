@@ -21,27 +21,39 @@ faces' own evaluators when it is built (the edges' samples against the recognise
 circles, every use's ``(u, v)`` map against its surface), and its loops are checked as the
 general path would check them (closed, oriented, not crossing, nested right: :mod:`.plan_checks`),
 so a first call needs no general-path mesh. The recognition runs over all faces and edges at once
-(circle fits, circle maps, the uses' ``(u, v)`` maps), not one object at a time.
+(circle fits, circle maps, the uses' ``(u, v)`` maps), not one object at a time; the faces' kinds
+come from :mod:`.plan_faces`.
 """
 
 from __future__ import annotations
 
+import functools
+
 import mapbox_earcut as earcut
 import numpy as np
 
+from ..mesh.topology import ranges
 from ..tolerances import WELD
-from .arcs import REL, CircleMap, CircleMaps, _cross, _dot, fit_circles, segments
+from .arcs import REL, CircleMaps, _cross, _dot, _norm, _unwrap, fit_circles, segments
 from .latitude import latitude_plan
+from .plan_faces import CYLINDER, PLANE, REVOLUTION, _mask, curved_faces, cylinder_loops
 from .plan_checks import loops_valid
-from .revolution import Revolutions, revolution_nets, revolution_of
+from .revolution import Revolutions
 from .welding import close_pairs, components
 
-__all__ = ["FastPlan", "build_plan", "planar_triangles"]
+__all__ = ["CYLINDER", "PLANE", "REVOLUTION", "FastPlan", "build_plan", "planar_triangles"]
 
 SAMPLES = 129
-"""Samples per edge used to recognise its shape (at least 8 per conic piece for 16 pieces)."""
+"""Samples per edge used to recognise its shape (at least :data:`PER_PIECE` per conic piece for 16
+pieces), unless every edge of the face set has at most 4 pieces: then :data:`FEW_SAMPLES`."""
+FRACTIONS = np.linspace(0.0, 1.0, SAMPLES)
+FRACTIONS.setflags(write=False)
+FEW_SAMPLES = 33
+"""Samples per edge when no edge has more than 4 conic pieces (:func:`sample_parameters`): every
+fourth of the :data:`SAMPLES`, plus the two a circle is fitted through and their mirror images."""
+PER_PIECE = 8
+"""Fewest samples per conic piece of an edge: five points on a circle make a conic that circle."""
 
-PLANE, CYLINDER, REVOLUTION = 0, 1, 2
 MERIDIAN, PARALLEL = 2.0, 1.0
 """Factors on the radius of the arcs of faces of revolution (their sagitta aimed at ``1 / factor`` of
 the tolerance): a meridian sets the rows' spacing, which must leave room for the rows' own steps
@@ -95,103 +107,6 @@ def planar_triangles(polygons):
     return np.split(T, np.cumsum(count)[:-1])
 
 
-class _Cylinder:
-    """A right circular cylinder face: ``S(u, v) = C(u) + (v - v0) D`` with ``C`` a circle
-    (``cmap``: its :class:`.arcs.CircleMap`) whose axis is along ``D``."""
-
-    __slots__ = ("cmap", "axis", "sign")
-
-
-def _cylinder_net(surface, scale):
-    """``(knots, P, W)`` of the circle of ``surface`` at its first ``v`` if ``surface`` may be a
-    right circular cylinder (rational quadratic in ``u``, linear in ``v`` along one direction with
-    equal weights), else None. Its :class:`.arcs.CircleMap` then goes to :func:`_cylinder`."""
-    if surface.degree_v != 1 or surface.degree_u != 2 or surface.weights is None:
-        return None
-    P = np.asarray(surface.control_points)
-    W = np.asarray(surface.weights)
-    if P.shape[1] != 2 or np.abs(W[:, 1] - W[:, 0]).max() > 1e-14 * W.max():
-        return None
-    D = P[:, 1] - P[:, 0]
-    if np.abs(D - D[0]).max() > REL * scale:
-        return None
-    return surface.knots_u, P[:, 0], W[:, 0]
-
-
-def _cylinder(surface, cmap, mid):
-    """The :class:`_Cylinder` of ``surface`` (passed by :func:`_cylinder_net`) whose first circle
-    has the map ``cmap`` (or None: not a circle), or None (``mid``: its ``(S, Su, Sv)`` ``(3,)``
-    each at the middle of its domain)."""
-    if cmap is None:
-        return None
-    P = np.asarray(surface.control_points)
-    D = P[0, 1] - P[0, 0]
-    axis = D / np.linalg.norm(D)
-    if np.linalg.norm(_cross(axis, cmap.circle.normal)) > REL:
-        return None
-    c = _Cylinder()
-    c.cmap, c.axis = cmap, axis
-    # which way Su x Sv points: outward (from the axis) or inward
-    S, Su, Sv = mid
-    radial = S - cmap.circle.centre
-    radial -= (radial @ axis) * axis
-    c.sign = 1.0 if _cross(Su, Sv) @ radial > 0 else -1.0
-    return c
-
-
-def _curved_faces(prep, size):
-    """``(kind, cyl, rev)`` of the faces that are not affine: each a right circular cylinder
-    (``cyl[f]``: :class:`_Cylinder`) or a face of revolution with a circular profile (``rev[f]``:
-    :class:`.revolution.Revolution`, its closed form checked against the surface's evaluator on
-    a grid); None if some face is neither. The circle maps of all faces are built in one batch
-    (:meth:`.arcs.CircleMap.batch`), the grid checks evaluated in one call."""
-    faces, batch = prep.faces, prep.batch
-    kind = np.full(len(faces), PLANE)
-    cyl, rev = {}, {}
-    curved = np.flatnonzero(~prep.affine).tolist()
-    if not curved:
-        return kind, cyl, rev
-    # the circles each face needs: a cylinder's first circle, or a revolution's two isocurves
-    nets, wants = [], []
-    for f in curved:
-        net = _cylinder_net(faces[f].surface, size)
-        if net is not None:
-            wants.append((f, CYLINDER, len(nets)))
-            nets.append(net)
-            continue
-        pair = revolution_nets(faces[f].surface)
-        if pair is None:
-            return None
-        wants.append((f, REVOLUTION, len(nets)))
-        nets.extend(pair)
-    maps = CircleMap.batch(nets, size)
-    cf = np.array([f for f, k, _ in wants if k == CYLINDER], dtype=np.int64)
-    if cf.size:
-        dom = np.array([faces[f].surface.domain for f in cf])  # (n, 2, 2)
-        S, Su, Sv = batch.partials(cf, 0.5 * (dom[:, 0, 0] + dom[:, 0, 1]), 0.5 * (dom[:, 1, 0] + dom[:, 1, 1]))
-    grids, q = [], 0
-    for f, k, i in wants:
-        if k == CYLINDER:
-            c = _cylinder(faces[f].surface, maps[i], (S[q], Su[q], Sv[q]))
-            q += 1
-            if c is None:  # linear in v: no face of revolution with a circular profile either
-                return None
-            kind[f], cyl[f] = CYLINDER, c
-            continue
-        found = revolution_of(faces[f].surface, maps[i], maps[i + 1], size)
-        if found is None:
-            return None
-        kind[f], rev[f] = REVOLUTION, found[0]
-        grids.append((f, found[1], found[2], found[3]))
-    if grids:
-        f = np.concatenate([np.full(u.size, f) for f, u, _, _ in grids])
-        want = batch.evaluate(f, np.concatenate([g[1] for g in grids]), np.concatenate([g[2] for g in grids]))
-        got = np.concatenate([g[3] for g in grids])
-        if np.abs(got - want).max() > REL * size:
-            return None
-    return kind, cyl, rev
-
-
 class FastPlan:
     """What :func:`.fast_mesh.fast_tessellation` needs at every tolerance (see the module
     docstring). Arrays per edge group ``g`` (G), per use ``i`` (U, in :func:`.edges.edge_uses`
@@ -200,7 +115,7 @@ class FastPlan:
     __slots__ = (
         "faces", "kind", "reversed", "corners", "end_vid", "arc_of", "arcs", "arc_c", "arc_r", "arc_e1", "arc_e2",
         "arc_sweep", "arc_closed", "arc_min", "arc_factor", "use_group", "use_face", "use_flip", "use_uv0",
-        "use_arc_cyl", "A", "b", "normal", "origin", "fixed_T", "fixed_face", "curved_planes", "face_loops",
+        "use_arc_cyl", "A", "b", "normal", "origin", "fixed_T", "fixed_face", "curved_planes",
         "loop_first", "cyl", "cyl_faces", "map_error", "checked",
         # derived for the per-call path (:func:`_derive`)
         "use_arc", "start_vid", "start_X", "au", "au_arc", "au_flip", "au_slot", "au_off", "au_sense", "au_v",
@@ -211,6 +126,41 @@ class FastPlan:
     )  # fmt: skip
 
 
+def sample_parameters(prep, rep):
+    """``(keep (k,), through)``: the samples (indices into :data:`SAMPLES` uniform fractions of the
+    pcurve's domain) that recognise every edge group's shape, from its representative use ``rep``
+    ``(G,)``, and the indices in ``keep`` of the two a circle is fitted through
+    (:func:`.arcs.fit_circles`: the samples at a third and two thirds of the :data:`SAMPLES`,
+    whatever the count). All :data:`SAMPLES` unless each group's 3-D curve has at most
+    ``(FEW_SAMPLES - 1) / PER_PIECE`` conic pieces, counted as its pcurve's pieces, each split at
+    most ``degree`` times per knot line of its surface (a line pcurve on a plane: one; a full
+    circle of four quarters: four; a line around a four-span cylinder: four), and its shortest
+    pcurve piece spans at least that fraction of its domain: then every fourth (:data:`FEW_SAMPLES`),
+    plus the two fitting ones and their mirror images (37). Most machined parts need the fewer: a
+    quarter of the samples' arrays and of their evaluations."""
+    pc = prep.pcurves.breaks
+    curve = np.repeat(np.arange(pc.count.size), pc.count)
+    width = (pc.b - pc.a) / (pc.hi - pc.lo)[curve]  # each piece's share of its pcurve's domain
+    shortest = np.minimum.reduceat(width, pc.start)[rep]
+    f = prep.table.face[rep]
+    lines = prep.batch.nsu[f] + prep.batch.nsv[f] - 2  # the face's inner knot lines
+    pieces = pc.count[rep] * (1 + prep.pcurves.degree[rep] * lines)
+    most = (FEW_SAMPLES - 1) // PER_PIECE
+    few = (pieces <= most) & (shortest * most >= 1.0 - 1e-9)
+    return _kept(SAMPLES, FEW_SAMPLES if few.all() else SAMPLES)
+
+
+@functools.lru_cache(maxsize=4)
+def _kept(samples, few):
+    """``(keep, through)`` of :func:`sample_parameters` for ``few`` of ``samples`` (cached, read-only)."""
+    through = np.array([samples // 3, (2 * samples) // 3])
+    # every step-th, and symmetric about the middle: a use that runs against its group reads the
+    # samples backwards
+    keep = np.union1d(np.arange(0, samples, (samples - 1) // (few - 1)), np.concatenate([through, samples - 1 - through]))
+    keep.setflags(write=False)
+    return keep, tuple(np.searchsorted(keep, through).tolist())
+
+
 def build_plan(prep):
     """The :class:`FastPlan` of the face set ``prep`` (:class:`.trimmed._Prepared`), or None if
     any face is not a plane, a right circular cylinder or a face of revolution of the shapes
@@ -219,7 +169,7 @@ def build_plan(prep):
     if not uses:
         return None
     F, U, G = len(faces), len(uses), len(groups)
-    found = _curved_faces(prep, size)
+    found = curved_faces(prep, size)
     if found is None:
         return None
     kind, cyl, rev = found
@@ -228,22 +178,35 @@ def build_plan(prep):
     degenerate = np.array([u.edge.degenerate for u in uses], dtype=bool)
     if (kind[use_face[degenerate]] != REVOLUTION).any():
         return None
-    pole_group = np.array([degenerate[g].all() for g in groups], dtype=bool)
-    if (pole_group != np.array([degenerate[g].any() for g in groups], dtype=bool)).any():
+    n_degenerate = np.bincount(prep.table.group_of, degenerate, G)
+    pole_group = n_degenerate == np.bincount(prep.table.group_of, minlength=G)
+    if (pole_group != (n_degenerate > 0)).any():
         return None
     use_group = prep.table.group_of
     pdom = np.column_stack([prep.pcurves.breaks.lo, prep.pcurves.breaks.hi])
     # every group's shape, from its first use's surface at its pcurve
     rep = np.array([g[0] for g in groups], dtype=np.int64)
-    r = np.linspace(0.0, 1.0, SAMPLES)
+    keep, through = sample_parameters(prep, rep)
+    r = FRACTIONS[keep]
+    K = keep.size  # samples per group
     t = (pdom[rep, :1] + (pdom[rep, 1:] - pdom[rep, :1]) * r).ravel()
-    uv = prep.pcurves.evaluate(np.repeat(rep, SAMPLES), t)
+    # the groups' samples, and each use's (u, v) at a third of its domain and at its ends: one
+    # evaluation of all pcurves instead of four
+    ids = np.arange(U)
+    uv, third, use_uv0, use_uv1 = np.split(
+        prep.pcurves.evaluate(np.concatenate([np.repeat(rep, K), ids, ids, ids]),
+                              np.concatenate([t, pdom[:, 0] + (pdom[:, 1] - pdom[:, 0]) / 3.0, pdom[:, 0], pdom[:, 1]])),
+        np.cumsum([G * K, U, U]))  # fmt: skip
     # every face's point and partials at its domain's corner: an affine face (a plane) is
     # S + (u - u0) Su + (v - v0) Sv exactly, so its points need no surface evaluator
-    corner = np.column_stack([[b[0] for b in prep.batch.bu], [b[0] for b in prep.batch.bv]])  # (F, 2)
-    S, Su, Sv = prep.batch.partials(np.arange(F), corner[:, 0], corner[:, 1])
+    corner = np.column_stack([prep.batch.lu.lo, prep.batch.lv.lo])  # (F, 2)
+    S, (Su, Sv) = prep.origin, prep.partials
+    all_flat = bool(prep.affine.all())
 
     def surface_points(f, uv):
+        if all_flat:  # only planes (a box, a chamfered block): no selection
+            d = uv - corner[f]
+            return S[f] + d[:, :1] * Su[f] + d[:, 1:] * Sv[f]
         out = np.empty((len(f), 3))
         flat = prep.affine[f]
         k = np.flatnonzero(flat)
@@ -254,22 +217,20 @@ def build_plan(prep):
             out[k] = prep.batch.evaluate(f[k], uv[k, 0], uv[k, 1])
         return out
 
-    X = surface_points(np.repeat(use_face[rep], SAMPLES), uv).reshape(G, SAMPLES, 3)
+    X, Y = np.split(surface_points(np.concatenate([np.repeat(use_face[rep], K), use_face]), np.concatenate([uv, third])), [G * K])
+    X = X.reshape(G, K, 3)
     # every group a pole, a straight segment or a circle arc
     curved = np.flatnonzero(~pole_group & ~segments(X, size))
-    fits = fit_circles(X[curved], size)
-    if not fits.ok.all():
-        return None
+    if curved.size:
+        fits = fit_circles(X[curved], size, through)
+        if not fits.ok.all():
+            return None
     arcs = [fits.circle(i) for i in range(curved.size)]
     arc_of = np.full(G, -1, dtype=np.int64)
     arc_of[curved] = np.arange(curved.size)
-    # each use's direction against its group's samples, and its (u, v) at its start
-    third = prep.pcurves.evaluate(np.arange(U), pdom[:, 0] + (pdom[:, 1] - pdom[:, 0]) / 3.0)
-    Y = surface_points(use_face, third)
-    nearest = np.argmin(np.linalg.norm(X[use_group] - Y[:, None], axis=2), axis=1)
-    use_flip = nearest > SAMPLES // 2
-    use_uv0 = prep.pcurves.evaluate(np.arange(U), pdom[:, 0])
-    use_uv1 = prep.pcurves.evaluate(np.arange(U), pdom[:, 1])
+    # each use's direction against its group's samples
+    nearest = np.argmin(_norm(X[use_group] - Y[:, None]), axis=1)
+    use_flip = nearest > K // 2
     # the corners: the groups' end points welded as the general path welds them
     ends = np.concatenate([X[:, 0], X[:, -1]])
     pairs = close_pairs(ends, max(WELD * size, 10.0 * prep.edge_tol))
@@ -290,14 +251,14 @@ def build_plan(prep):
     plan.A = np.linalg.pinv(np.stack([Su, Sv], axis=2))  # (F, 2, 3): (u, v) of a point of an affine face
     plan.b = corner - np.einsum("fij,fj->fi", plan.A, S)
     n = _cross(Su, Sv)
-    length = np.linalg.norm(n, axis=1, keepdims=True)  # zero at a pole (a face of revolution: not used)
+    length = _norm(n)[:, None]  # zero at a pole (a face of revolution: not used)
     plan.normal = n / np.where(length > 0, length, 1.0) * np.where(prep.reversed, -1.0, 1.0)[:, None]
     plan.origin = S
     plan.cyl = cyl
     # every use's (u, v) map, checked on its group's samples against its surface
-    samples = X[use_group]  # (U, SAMPLES, 3)
+    samples = X[use_group]  # (U, K, 3)
     samples = np.where(use_flip[:, None, None], samples[:, ::-1], samples)
-    pred = np.empty((U, SAMPLES, 2))
+    pred = np.empty((U, K, 2))
     pred[:] = np.einsum("uij,usj->usi", plan.A[use_face], samples) + plan.b[use_face][:, None]
     # cylinders: per arc use (offset, sense) of its angles in the face's circle; its samples'
     # (u, v) through the face's circle map; a ruling runs iso-u, v affine along it
@@ -320,54 +281,78 @@ def build_plan(prep):
         arc_cyl[cu, 0] = th[:, 0]
         arc_cyl[cu, 1] = np.where(np.mod(th[:, 1] - th[:, 0], 2 * np.pi) < np.pi, 1.0, -1.0)
         d = X[use_group[cu]] - plan.arc_c[a][:, None]
-        theta = np.unwrap(np.mod(np.arctan2(_dot(d, plan.arc_e2[a][:, None]), _dot(d, plan.arc_e1[a][:, None])), 2 * np.pi), axis=1)
+        theta = _unwrap(np.mod(np.arctan2(_dot(d, plan.arc_e2[a][:, None]), _dot(d, plan.arc_e1[a][:, None])), 2 * np.pi))
         theta -= theta[:, :1]
         theta = np.where(use_flip[cu][:, None], theta[:, ::-1], theta)
-        pred[cu, :, 0] = plan.maps.param(np.repeat(q, SAMPLES), (arc_cyl[cu, :1] + arc_cyl[cu, 1:] * theta).ravel()).reshape(-1, SAMPLES)
+        pred[cu, :, 0] = plan.maps.param(np.repeat(q, K), (arc_cyl[cu, :1] + arc_cyl[cu, 1:] * theta).ravel()).reshape(-1, K)
         pred[cu, :, 1] = use_uv0[cu, 1:]
         pred[cu, 0], pred[cu, -1] = use_uv0[cu], use_uv1[cu]
     ru = np.flatnonzero((kind[use_face] == CYLINDER) & (arc_of[use_group] < 0))
-    pred[ru] = np.linspace(use_uv0[ru], use_uv1[ru], SAMPLES, axis=1)
+    if ru.size:
+        pred[ru] = np.linspace(use_uv0[ru], use_uv1[ru], SAMPLES, axis=1)[:, keep]
     revs = Revolutions([rev[f] for f in sorted(rev)]) if rev else None
     vu = np.flatnonzero(kind[use_face] == REVOLUTION)
     if vu.size:
         rq = np.searchsorted(np.array(sorted(rev)), use_face[vu])
-        pred[vu] = revs.uv_of(rq, samples[vu], use_uv0[vu], use_uv1[vu], arc_of[use_group[vu]] >= 0)
-    back = surface_points(np.repeat(use_face, SAMPLES), pred.reshape(-1, 2))
+        line = np.linspace(use_uv0[vu], use_uv1[vu], SAMPLES, axis=1)[:, keep]  # a pole's (u, v), straight
+        pred[vu] = revs.uv_of(rq, samples[vu], line, arc_of[use_group[vu]] >= 0)
+    back = surface_points(np.repeat(use_face, K), pred.reshape(-1, 2))
     # (a sloppy file's edges off their faces take the general path, which allows for that)
-    map_error = float(np.linalg.norm(back.reshape(U, SAMPLES, 3) - samples, axis=2).max())
+    map_error = float(_norm(back.reshape(U, K, 3) - samples).max())
     if map_error > 10.0 * REL * size:
         return None
-    if not _cylinder_loops(plan, prep, use_uv0, use_uv1):
+    if not cylinder_loops(plan, prep, use_uv0, use_uv1):
         return None
     plan.lat = latitude_plan(plan, prep.table.loop, rev, revs, pole_group, use_uv0, use_uv1, size) if rev else None
     if rev and plan.lat is None:
         return None
     plan.map_error = map_error
     # the loops checked on their exact shapes, so that a first call needs no general-path mesh
-    plan.checked = loops_valid(plan, prep.table, pred, use_uv0, use_uv1, kind[use_face] == PLANE, arc_of[use_group] >= 0)
+    plane_use, arc_use = kind[use_face] == PLANE, arc_of[use_group] >= 0
+    arcs = _plane_arcs(plan, np.flatnonzero(plane_use & arc_use), pred)
+    plan.checked = loops_valid(plan, prep.table, pred, use_uv0, use_uv1, plane_use, arc_use, arcs)
     # straight-edged planes: triangulated once (indices into the face's loop points, which are
-    # its uses' start corners at every tolerance)
-    fixed_face, polygons, plan.curved_planes, plan.face_loops = [], [], [], {}
-    plan.loop_first = prep.table.first
-    for f in np.flatnonzero(kind == PLANE).tolist():
-        plan.face_loops[f] = np.flatnonzero(prep.table.loop_face == f)
-        mine = np.flatnonzero(use_face == f)
-        if (arc_of[use_group[mine]] < 0).all():
-            polygons.append((use_uv0[mine], np.cumsum(prep.table.count[plan.face_loops[f]])))
-            fixed_face.append(f)
-        else:
-            plan.curved_planes.append((f, plan.face_loops[f]))
+    # its uses' start corners at every tolerance); uses and loops run face after face, so all
+    # plane faces are split at once, with no numpy calls per face
+    table = prep.table
+    plane = np.flatnonzero(kind == PLANE)
+    curved_uses = np.bincount(use_face, arc_use, F)[plane] > 0
+    fixed, bent = plane[~curved_uses], plane[curved_uses]
+    n_uses, n_loops = np.bincount(use_face, minlength=F), np.bincount(table.loop_face, minlength=F)
+    first_use = np.cumsum(n_uses) - n_uses
+    on = _mask(F, fixed)[table.loop_face]
+    uv = np.split(use_uv0[ranges(first_use[fixed], n_uses[fixed])], np.cumsum(n_uses[fixed])[:-1])
+    ring_ends = (table.first + table.count - first_use[table.loop_face])[on]
+    polygons = list(zip(uv, np.split(ring_ends, np.cumsum(n_loops[fixed])[:-1]))) if fixed.size else []
+    plan.loop_first = table.first
+    plan.cp_loops = np.flatnonzero(_mask(F, bent)[table.loop_face])
+    plan.curved_planes = list(zip(bent.tolist(), np.split(plan.cp_loops, np.cumsum(n_loops[bent])[:-1]))) if bent.size else []
     fixed_T = planar_triangles(polygons)
     if fixed_T is None:
         return None
-    fixed_face = [np.full(len(T), f) for f, T in zip(fixed_face, fixed_T)]
     plan.fixed_T = np.concatenate(fixed_T) if fixed_T else np.zeros((0, 3), dtype=np.int64)
-    plan.fixed_face = np.concatenate(fixed_face) if fixed_face else np.zeros(0, dtype=np.int64)
-    plan.cp_loops = np.concatenate([loops for _, loops in plan.curved_planes]) if plan.curved_planes else np.zeros(0, dtype=np.int64)
+    plan.fixed_face = np.repeat(fixed, n_uses[fixed] + 2 * n_loops[fixed] - 4)  # n + 2 holes - 2 triangles each
     plan.cp_first_use, plan.cp_loop_uses = prep.table.first[plan.cp_loops], prep.table.count[plan.cp_loops]
     _derive(plan)
     return plan
+
+
+def _plane_arcs(plan, uses, pred):
+    """``(U, SAMPLES, 2)``: the ``(u, v)`` of :data:`SAMPLES` points of the exact circle arc of each
+    of ``uses`` (arc uses on planes), uniform in angle from the use's start to its end (the ends:
+    ``pred``'s), for the loop checks' polygons (:func:`.plan_checks.loops_valid`; the other rows
+    are left zero)."""
+    out = np.zeros((len(pred), SAMPLES, 2))
+    if uses.size == 0:
+        return out
+    a, f = plan.arc_of[plan.use_group[uses]], plan.use_face[uses]
+    theta = plan.arc_sweep[a][:, None] * FRACTIONS
+    theta = np.where(plan.use_flip[uses][:, None], theta[:, ::-1], theta)
+    X = plan.arc_c[a][:, None] + plan.arc_r[a][:, None, None] * (np.cos(theta)[..., None] * plan.arc_e1[a][:, None]
+                                                               + np.sin(theta)[..., None] * plan.arc_e2[a][:, None])  # fmt: skip
+    out[uses] = np.einsum("uij,usj->usi", plan.A[f], X) + plan.b[f][:, None]
+    out[uses, 0], out[uses, -1] = pred[uses, 0], pred[uses, -1]
+    return out
 
 
 def _derive(plan):
@@ -448,52 +433,3 @@ def _derive(plan):
              plan.slot_centre, plan.slot_axis, plan.slot_sign) if slots  # fmt: skip
             else (ei, ei, ei, ei, e, e, e, np.zeros((0, 3)), np.zeros((0, 3)), e))
     plan.kernel_args = maps, angle, zips
-
-
-def _cylinder_loops(plan, prep, uv0, uv1) -> bool:
-    """Whether every cylinder face has one loop that is a rectangle in ``(u, v)``: circle arcs
-    along ``v = v_lo`` (u increasing, the bottom), a ruling at ``u = u_hi``, arcs along
-    ``v = v_hi`` (u decreasing, the top) and a ruling at ``u = u_lo``. Keeps per face the loop's
-    uses rotated to start at the bottom: ``cyl_faces[f] = (uses, n_bottom)``. All cylinders at
-    once (their uses are consecutive, face after face)."""
-    plan.cyl_faces = {}
-    faces = np.array(sorted(plan.cyl), dtype=np.int64)
-    if faces.size == 0:
-        return True
-    on = np.isin(plan.use_face, faces)
-    use = np.flatnonzero(on)
-    if (prep.table.loop[use] != 0).any():
-        return False
-    fu = plan.use_face[use]
-    first = np.flatnonzero(np.concatenate([[True], fu[1:] != fu[:-1]]))
-    n = np.diff(np.append(first, use.size))
-    block = np.repeat(np.arange(first.size), n)
-    a, b = uv0[use], uv1[use]
-    lo = np.minimum.reduceat(np.minimum(a, b), first)[block]
-    hi = np.maximum.reduceat(np.maximum(a, b), first)[block]
-    eps = 1e-9 * (hi - lo)
-    arc = plan.arc_of[plan.use_group[use]] >= 0
-
-    def at(c, d):
-        return (np.abs(a[:, d] - c[:, d]) <= eps[:, d]) & (np.abs(b[:, d] - c[:, d]) <= eps[:, d])
-
-    bottom = arc & at(lo, 1) & (b[:, 0] > a[:, 0])
-    top = arc & at(hi, 1) & (b[:, 0] < a[:, 0])
-    right = ~arc & at(hi, 0) & (b[:, 1] > a[:, 1])
-    left = ~arc & at(lo, 0) & (b[:, 1] < a[:, 1])
-    label = np.select([bottom, right, top, left], [0, 1, 2, 3], -1)
-    count = np.stack([np.bincount(block, label == k, first.size) for k in range(4)], axis=1)
-    if (label < 0).any() or (count[:, 1] != 1).any() or (count[:, 3] != 1).any():
-        return False
-    # each loop rotated to start at its bottom: the bottoms, the right ruling, the tops, the left ruling
-    nb, nt = count[:, 0].astype(np.int64), count[:, 2].astype(np.int64)
-    start = (np.flatnonzero(label == 1) - first - nb) % n
-    j = np.arange(use.size) - first[block]
-    order = first[block] + (start[block] + j) % n[block]
-    lab = label[order]
-    want = np.where(j < nb[block], 0, np.where(j == nb[block], 1, np.where(j <= nb[block] + nt[block], 2, 3)))
-    if (lab != want).any():
-        return False
-    for k, f in enumerate(faces.tolist()):
-        plan.cyl_faces[f] = (use[order[first[k] : first[k] + n[k]]], int(nb[k]))
-    return True

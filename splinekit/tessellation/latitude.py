@@ -66,16 +66,18 @@ class LatitudePlan:
 
 
 def side_labels(uv0, uv1, arc, pole):
-    """Per use of one loop ``(k,)``: 0 bottom (``v = v_lo``, ``u`` increasing; an arc or a pole),
-    1 right (``u = u_hi``, ``v`` increasing, an arc), 2 top (``v = v_hi``, ``u`` decreasing),
-    3 left (``u = u_lo``, ``v`` decreasing), -1 none; and the rectangle ``(lo, hi)``."""
-    lo, hi = np.minimum(uv0, uv1).min(axis=0), np.maximum(uv0, uv1).max(axis=0)
-    eps = 1e-9 * (hi - lo)
-    at = lambda c, d: (np.abs(uv0[:, d] - c[d]) <= eps[d]) & (np.abs(uv1[:, d] - c[d]) <= eps[d])  # noqa: E731
-    bottom = (arc | pole) & at(lo, 1) & (uv1[:, 0] > uv0[:, 0])
-    right = arc & at(hi, 0) & (uv1[:, 1] > uv0[:, 1])
-    top = (arc | pole) & at(hi, 1) & (uv1[:, 0] < uv0[:, 0])
-    left = arc & at(lo, 0) & (uv1[:, 1] < uv0[:, 1])
+    """Per use of each loop ``(S, k)`` (``uv0``, ``uv1`` ``(S, k, 2)``, ``arc``, ``pole``
+    ``(S, k)`` bool; one loop per row, all loops at once): 0 bottom (``v = v_lo``, ``u``
+    increasing; an arc or a pole), 1 right (``u = u_hi``, ``v`` increasing, an arc), 2 top
+    (``v = v_hi``, ``u`` decreasing), 3 left (``u = u_lo``, ``v`` decreasing), -1 none; and each
+    loop's rectangle ``(lo, hi)`` ``(S, 2)`` each."""
+    lo, hi = np.minimum(uv0, uv1).min(axis=1), np.maximum(uv0, uv1).max(axis=1)
+    eps = (1e-9 * (hi - lo))[:, None]
+    at = lambda c, d: (np.abs(uv0[..., d] - c[:, None, d]) <= eps[..., d]) & (np.abs(uv1[..., d] - c[:, None, d]) <= eps[..., d])  # noqa: E731
+    bottom = (arc | pole) & at(lo, 1) & (uv1[..., 0] > uv0[..., 0])
+    right = arc & at(hi, 0) & (uv1[..., 1] > uv0[..., 1])
+    top = (arc | pole) & at(hi, 1) & (uv1[..., 0] < uv0[..., 0])
+    left = arc & at(lo, 0) & (uv1[..., 1] < uv0[..., 1])
     return np.select([bottom, right, top, left], [BOTTOM, RIGHT, TOP, LEFT], -1), lo, hi
 
 
@@ -90,20 +92,21 @@ def latitude_plan(plan, loop, rev, revs, pole_group, uv0, uv1, size):
     S = len(faces)
     lp.face = np.array(faces, dtype=np.int64)
     lp.uses = np.zeros((S, 4), dtype=np.int64)
-    lp.pole = np.zeros((S, 2), dtype=bool)
-    lp.lo, lp.hi = np.zeros((S, 2)), np.zeros((S, 2))
     lp.revs = revs
-    for s, f in enumerate(faces):
-        mine = np.flatnonzero(plan.use_face == f)
-        if len(mine) != 4 or (loop[mine] != 0).any():
-            return None
-        g = plan.use_group[mine]
-        label, lp.lo[s], lp.hi[s] = side_labels(uv0[mine], uv1[mine], plan.arc_of[g] >= 0, pole_group[g])
-        if sorted(label.tolist()) != [0, 1, 2, 3]:
-            return None
-        lp.uses[s, label] = mine
-        lp.pole[s] = pole_group[g[label == BOTTOM][0]], pole_group[g[label == TOP][0]]
+    # every face's uses at once (uses run face after face): four in its one loop, one per side
+    count = np.bincount(plan.use_face, minlength=len(plan.faces))[lp.face]
+    if (count != 4).any():
+        return None
+    mine = np.searchsorted(plan.use_face, lp.face)[:, None] + np.arange(4)  # (S, 4)
+    if (loop[mine] != 0).any():
+        return None
+    g = plan.use_group[mine]
+    label, lp.lo, lp.hi = side_labels(uv0[mine], uv1[mine], plan.arc_of[g] >= 0, pole_group[g])
+    if (np.sort(label, axis=1) != np.arange(4)).any():
+        return None
     q = np.arange(S)
+    lp.uses[q[:, None], label] = mine
+    lp.pole = pole_group[plan.use_group[lp.uses[:, [BOTTOM, TOP]]]]
     lp.phi = np.column_stack([lp.revs.umaps.angle(q, lp.lo[:, 0]), lp.revs.umaps.angle(q, lp.hi[:, 0])])
     lp.psi = np.column_stack([lp.revs.vmaps.angle(q, lp.lo[:, 1]), lp.revs.vmaps.angle(q, lp.hi[:, 1])])
     # a pole side lies on the axis, a parallel off it

@@ -30,11 +30,9 @@ class LoopTable:
         n = len(uses)
         self.faces = faces
         self.group_of = np.empty(n, dtype=np.int64)
-        for g, members in enumerate(groups):
-            self.group_of[members] = g
-        self.face = np.array([u.f for u in uses], dtype=np.int64)
-        self.loop = np.array([u.loop for u in uses], dtype=np.int64)
-        self.pos = np.array([u.pos for u in uses], dtype=np.int64)
+        if groups:
+            self.group_of[np.concatenate(groups)] = np.repeat(np.arange(len(groups)), [len(m) for m in groups])
+        self.face, self.loop, self.pos = np.array([(u.f, u.loop, u.pos) for u in uses], dtype=np.int64).reshape(n, 3).T.copy()
         new = np.ones(n, dtype=bool)
         new[1:] = (self.face[1:] != self.face[:-1]) | (self.loop[1:] != self.loop[:-1])
         self.first = np.flatnonzero(new)

@@ -44,17 +44,20 @@ def _on_one_side(pcurve, domain) -> bool:
     return False
 
 
-def natural_faces(faces, uses, groups) -> np.ndarray:
+def natural_faces(faces, uses, table) -> np.ndarray:
     """``(len(faces),)`` bool: faces with one loop lying on their domain's sides whose edges are
-    used by no other face (``uses``: the face set's :class:`.edges.EdgeUse` list; ``groups``:
-    lists of the use indices that are one edge)."""
+    used by no other face (``uses``: the face set's :class:`.edges.EdgeUse` list; ``table``: its
+    :class:`.loops.LoopTable`, which gives each use's face and edge group)."""
     ok = np.array([len(face.boundary_loops()) == 1 for face in faces], dtype=bool)
-    # shared edges first: in a closed solid every face has one, and no pcurve need be looked at
-    for group in groups:
-        owners = {uses[i].f for i in group}
-        if len(owners) > 1:
-            ok[list(owners)] = False
-    for u in uses:
+    # shared edges first: in a closed solid every face has one, and no pcurve need be looked at;
+    # a group is shared when its uses' faces differ (all groups in one pass)
+    G = int(table.group_of.max()) + 1 if table.group_of.size else 0
+    lo, hi = np.full(G, len(faces)), np.full(G, -1)
+    np.minimum.at(lo, table.group_of, table.face)
+    np.maximum.at(hi, table.group_of, table.face)
+    ok[table.face[lo[table.group_of] != hi[table.group_of]]] = False
+    for i in np.flatnonzero(ok[table.face]).tolist():
+        u = uses[i]
         if ok[u.f] and not _on_one_side(u.edge.pcurve, faces[u.f].surface.domain):
             ok[u.f] = False
     return ok

@@ -9,11 +9,11 @@ any tolerance:
 * closed: every use ends at the welded corner where the next use of its loop starts, in 3-D,
   and at the same ``(u, v)`` (to :data:`UV_RTOL` of the face's parameter range);
 * cylinders and faces of revolution: one loop that is a rectangle in ``(u, v)`` run
-  counter-clockwise (checked where the plan is built, :func:`.fast_plan._cylinder_loops` and
+  counter-clockwise (checked where the plan is built, :func:`.plan_faces.cylinder_loops` and
   :func:`.latitude.latitude_plan`), so closure is all that is left;
-* planes: each loop as a polygon through its corners and, along its circle arcs, through the
-  plan's recognition samples (:data:`.fast_plan.SAMPLES` per arc: the exact arc sampled much
-  finer than a mesh at a coarse tolerance); the outer loop counter-clockwise and the holes
+* planes: each loop as a polygon through its corners and, along its circle arcs, through
+  :data:`.fast_plan.SAMPLES` points of the exact arc (uniform in angle; much finer than a mesh at
+  a coarse tolerance); the outer loop counter-clockwise and the holes
   clockwise (signed area), no segment crossing or touching another
   (:func:`.untangle.crossing_pairs`, exact orientation tests), and every hole inside the outer
   loop and outside the other holes (a crossing-number test of one of its points).
@@ -38,13 +38,14 @@ UV_RTOL = 1e-9
 parameter range (the fast path puts both at the same vertex)."""
 
 
-def loops_valid(plan, table, pred, uv0, uv1, plane, arc_use) -> bool:
+def loops_valid(plan, table, pred, uv0, uv1, plane, arc_use, arcs=None) -> bool:
     """Whether the loops of the plan's faces are closed and, on planes, simple, nested and
     oriented (see the module docstring). ``table``: the face set's :class:`.loops.LoopTable`;
     ``pred`` ``(U, k, 2)``: each use's ``(u, v)`` at its ``k`` recognition samples (from its start
     to its end); ``uv0``, ``uv1`` ``(U, 2)``: its ends; ``plane`` ``(U,)`` bool: uses on planes;
     ``arc_use`` ``(U,)`` bool: uses along circle arcs (the others are straight in ``(u, v)`` on a
-    plane)."""
+    plane); ``arcs`` ``(U, m, 2)``: the points of the arc uses on planes for their polygons (from
+    start to end; default ``pred``)."""
     g, flip = plan.use_group, plan.use_flip
     start = np.where(flip, plan.end_vid[g, 1], plan.end_vid[g, 0])
     end = np.where(flip, plan.end_vid[g, 0], plan.end_vid[g, 1])
@@ -63,11 +64,12 @@ def loops_valid(plan, table, pred, uv0, uv1, plane, arc_use) -> bool:
         return True
     # the planes' loops as polygons: a straight use gives its start, an arc use its samples but the last
     uses = ranges(table.first[loops], table.count[loops])
-    k = pred.shape[1] - 1
+    arcs = pred if arcs is None else arcs
+    k = arcs.shape[1] - 1
     per = np.where(arc_use[uses], k, 1)
     which = np.repeat(uses, per)
     j = np.arange(int(per.sum())) - np.repeat(np.cumsum(per) - per, per)
-    P = pred[which, j]
+    P = np.where(arc_use[which][:, None], arcs[which, j], pred[which, 0])
     face = table.face[which]
     size = np.add.reduceat(per, np.cumsum(table.count[loops]) - table.count[loops])
     first = np.cumsum(size) - size

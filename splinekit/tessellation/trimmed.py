@@ -208,18 +208,23 @@ def _keep_inside(T, N, nxt):
     return inside[lab], conflict, along
 
 
-def _is_affine(surface) -> bool:
-    """Whether ``surface`` is an affine map of its parameters (one bilinear span whose control
-    points form a parallelogram, equal weights): a plane on which a flat triangle's point is
-    the surface's point at the same barycentric (u, v)."""
-    P = np.asarray(surface.control_points)
-    if P.shape[:2] != (2, 2) or surface.degree_u != 1 or surface.degree_v != 1:
-        return False
-    w = surface.weights
-    if w is not None and np.ptp(np.asarray(w)) > 0:
-        return False
-    twist = P[1, 1] - P[1, 0] - P[0, 1] + P[0, 0]
-    return bool(np.abs(twist).max() <= 1e-14 * max(np.abs(P).max(), 1e-300))
+def _affine(surfaces) -> np.ndarray:
+    """``(n,)`` bool: which ``surfaces`` are affine maps of their parameters (one bilinear span
+    whose control points form a parallelogram, equal weights): planes on which a flat triangle's
+    point is the surface's point at the same barycentric (u, v). All candidates in one pass."""
+    out = np.zeros(len(surfaces), dtype=bool)
+    cand = [i for i, s in enumerate(surfaces) if s.degree_u == 1 and s.degree_v == 1 and s.control_points.shape[:2] == (2, 2)]
+    if not cand:
+        return out
+    P = np.stack([surfaces[i].control_points for i in cand])  # (k, 2, 2, 3)
+    twist = P[:, 1, 1] - P[:, 1, 0] - P[:, 0, 1] + P[:, 0, 0]
+    flat = np.abs(twist).max(axis=1) <= 1e-14 * np.maximum(np.abs(P).reshape(len(cand), -1).max(axis=1), 1e-300)
+    for k, i in enumerate(cand):  # rational: only with equal weights
+        w = surfaces[i].weights
+        if w is not None and np.ptp(np.asarray(w)) > 0:
+            flat[k] = False
+    out[cand] = flat
+    return out
 
 
 class _Prepared:
@@ -230,7 +235,7 @@ class _Prepared:
     tolerance-independent memo of the edge sampler and the grids."""
 
     __slots__ = ("faces", "size", "batch", "_bounds", "edge_tol", "uses", "pcurves", "groups", "table", "affine",
-                 "partials", "reversed", "memo", "index", "natural", "rest")
+                 "origin", "partials", "reversed", "memo", "index", "natural", "rest")
 
     def __init__(self, faces, size, index=None):
         self.faces, self.size = tuple(faces), size
@@ -243,15 +248,15 @@ class _Prepared:
         check_domains(self.uses, self.pcurves, self.batch)
         self.groups = group_uses(self.uses, max(WELD * size, 2.0 * self.edge_tol), self.pcurves, self.batch)
         self.table = LoopTable(self.faces, self.uses, self.groups)
-        self.affine = np.array([_is_affine(face.surface) for face in faces], dtype=bool)
-        # an affine face's partials are constant: taken once at its domain's corner
-        corner = np.array([[b[0] for b in self.batch.bu], [b[0] for b in self.batch.bv]])
-        self.partials = self.batch.partials(np.arange(len(faces)), corner[0], corner[1])[1:]
+        self.affine = _affine([face.surface for face in faces])
+        # an affine face's partials are constant: taken once at its domain's corner (``origin``: the point there)
+        corner = np.array([self.batch.lu.lo, self.batch.lv.lo])
+        self.origin, *self.partials = self.batch.partials(np.arange(len(faces)), corner[0], corner[1])
         self.reversed = np.array([face.reversed for face in faces], dtype=bool)
         self.memo = {}
         # faces bounded by their natural domain that share no edge go to the patch path
         # (.natural); the others, if any, keep a preparation of their own (.rest)
-        natural = natural_faces(self.faces, self.uses, self.groups) if index is None else np.zeros(len(faces), bool)
+        natural = natural_faces(self.faces, self.uses, self.table) if index is None else np.zeros(len(faces), bool)
         self.natural = self.rest = None
         if natural.any():
             k = np.flatnonzero(natural)
