@@ -19,9 +19,8 @@ import pytest
 
 bd = pytest.importorskip("build123d")
 
+from _gprop import volume_area  # noqa: E402
 from OCP.BRep import BRep_Tool  # noqa: E402
-from OCP.BRepGProp import BRepGProp  # noqa: E402
-from OCP.GProp import GProp_GProps  # noqa: E402
 from OCP.STEPControl import STEPControl_Reader  # noqa: E402
 
 from exporters import export_step, import_step  # noqa: E402
@@ -47,13 +46,6 @@ def _counts(shape):
     edges = _sub_shapes(shape, "EDGE")
     degenerated = sum(bool(BRep_Tool.Degenerated_s(e)) for e in edges)
     return [len(_sub_shapes(shape, "FACE")), len(edges), degenerated, len(_sub_shapes(shape, "VERTEX"))]
-
-
-def _volume_area(shape):
-    v, a = GProp_GProps(), GProp_GProps()
-    BRepGProp.VolumeProperties_s(shape, v, 1e-10)
-    BRepGProp.SurfaceProperties_s(shape, a, 1e-10)
-    return v.Mass(), a.Mass()
 
 
 def _occ_read(path):
@@ -83,7 +75,7 @@ def test_round_trip_keeps_pole_edges(name, tmp_path):
     assert _counts(_occ_read(again)) == counts  # OCC's reader alone on the file we write
     after = brep_list_to_shape(reread)
     assert _counts(after) == counts
-    (v0, a0), (v1, a1) = _volume_area(before), _volume_area(after)
+    (v0, a0), (v1, a1) = volume_area(before), volume_area(after)
     assert v1 == pytest.approx(v0, rel=1e-9)
     assert a1 == pytest.approx(a0, rel=1e-9)
     if PARTS[name][1]:  # the loop of seam and poles is written as an EDGE_LOOP

@@ -17,6 +17,7 @@ import pickle
 
 import numpy as np
 import pytest
+from _gprop import volume_area
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from test_tessellation_brep import measured_deviation
@@ -37,17 +38,6 @@ def rounded_box(a, r):
     L = a - 2.0 * r
     volume = L**3 + 6 * L * L * r + 3 * math.pi * L * r * r + 4 / 3 * math.pi * r**3
     return volume, 6 * L * L + 6 * math.pi * L * r + 4 * math.pi * r * r
-
-
-def _gprop(shape):
-    """``(volume, area)`` by OCC's GProp with its precision raised to 1e-10."""
-    from OCP.BRepGProp import BRepGProp
-    from OCP.GProp import GProp_GProps
-
-    v, s = GProp_GProps(), GProp_GProps()
-    BRepGProp.VolumeProperties_s(shape, v, 1e-10)
-    BRepGProp.SurfaceProperties_s(shape, s, 1e-10)
-    return v.Mass(), s.Mass()
 
 
 def _solid(part):
@@ -82,7 +72,7 @@ def _built(name):
     conversion and GProp take seconds)."""
     make, exact = PARTS[name]
     part = make()
-    return _solid(part), exact if exact is not None else _gprop(part.wrapped)
+    return _solid(part), exact if exact is not None else volume_area(part.wrapped)
 
 
 def _make(name):
