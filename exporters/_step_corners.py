@@ -61,19 +61,25 @@ def _on_surface(surface, uv, order: int = 0):
     return surface.derivatives(np.clip(uv[:, 0], u0, u1), np.clip(uv[:, 1], v0, v1), order)
 
 
-def _overshoots(face, least: float):
-    """``(loop, position, end, d)`` for each edge use of ``face`` whose trace runs ``d`` past the
-    normal plane of its curve's end (``end`` 0: the start, 1: the end), ``d`` over ``least``."""
-    uses = [(j, k, e) for j, loop in enumerate(face.loops) for k, e in enumerate(loop)
-            if e.curve is not None and not e.degenerate]
+def _overshoots(faces, least: float) -> list:
+    """Per face of ``faces``, ``(loop, position, end, d)`` for each edge use whose trace runs ``d``
+    past the normal plane of its curve's end (``end`` 0: the start, 1: the end), ``d`` over
+    ``least``. The pcurves and curves of all faces are evaluated in one batch each; the surfaces
+    face by face."""
+    uses = [(f, j, k, e) for f, face in enumerate(faces) for j, loop in enumerate(face.loops)
+            for k, e in enumerate(loop) if e.curve is not None and not e.degenerate]
     if not uses:
-        return []
-    t = np.array([e.domain for _, _, e in uses], dtype=np.float64).ravel()
+        return [[] for _ in faces]
+    t = np.array([e.domain for *_, e in uses], dtype=np.float64).ravel()
     index = np.repeat(np.arange(len(uses)), 2)
     uv, duv = CurveBatch([e.pcurve for *_, e in uses]).derivatives(index, t, 1)
     P, dP = CurveBatch([e.curve for *_, e in uses]).derivatives(index, t, 1)
-    S = _on_surface(face.surface, uv, 1)
-    Q, dQ = S[0, 0], S[1, 0] * duv[:, :1] + S[0, 1] * duv[:, 1:]
+    owner = np.repeat([f for f, *_ in uses], 2)
+    cut = np.flatnonzero(np.diff(owner)) + 1  # uses come face by face
+    Q, dQ = np.empty_like(P), np.empty_like(P)
+    for lo, hi in zip(np.r_[0, cut], np.r_[cut, owner.size]):
+        S = _on_surface(faces[owner[lo]].surface, uv[lo:hi], 1)
+        Q[lo:hi], dQ[lo:hi] = S[0, 0], S[1, 0] * duv[lo:hi, :1] + S[0, 1] * duv[lo:hi, 1:]
     outward = np.tile([-1.0, 1.0], len(uses))[:, None]
     with np.errstate(invalid="ignore", divide="ignore"):
         U = outward * dQ / np.linalg.norm(dQ, axis=1, keepdims=True)
@@ -82,7 +88,11 @@ def _overshoots(face, least: float):
     cos = np.einsum("ij,ij->i", U, T)
     tol = np.repeat([e.tolerance for *_, e in uses], 2)
     hit = np.flatnonzero((d > np.maximum(_MARGIN * tol, least)) & (d <= tol) & (cos >= _MIN_COS))
-    return [(uses[i // 2][0], uses[i // 2][1], i % 2, float(d[i])) for i in hit]
+    found = [[] for _ in faces]
+    for i in hit.tolist():
+        f, j, k, _ = uses[i // 2]
+        found[f].append((j, k, i % 2, float(d[i])))
+    return found
 
 
 def _clamped(curve, at_end: int) -> bool:
@@ -127,10 +137,9 @@ def _nearest_on_trace(surface, edge, at_end: int, d: float):
     return brentq(along, lo, hi, xtol=1e-15 * max(1.0, abs(end)), rtol=1e-15)
 
 
-def _settled_face(face, least: float):
-    """``face`` with its pcurve ends that overshoot by more than ``least`` pulled back (see the
-    module docstring), or ``face`` itself when it has none."""
-    found = _overshoots(face, least)
+def _settled_face(face, found):
+    """``face`` with the pcurve ends ``found`` (:func:`_overshoots`) pulled back (see the module
+    docstring), or ``face`` itself when there are none."""
     if not found:
         return face
     loops = [list(loop) for loop in face.loops]
@@ -174,14 +183,16 @@ def settle_corners(obj):
         return obj
     poles = np.concatenate([np.asarray(f.surface.control_points).reshape(-1, 3) for f in faces])
     least = _MIN_RELATIVE * float(np.linalg.norm(poles.max(axis=0) - poles.min(axis=0)))
-    return _settled(obj, least)
+    settled = {id(f): _settled_face(f, found) for f, found in zip(faces, _overshoots(faces, least)) if found}
+    return _settled(obj, settled) if settled else obj
 
 
-def _settled(obj, least: float):
+def _settled(obj, settled: dict):
+    """``obj`` with each face whose id is a key of ``settled`` replaced by its value."""
     if isinstance(obj, TrimmedFace):
-        return _settled_face(obj, least)
+        return settled.get(id(obj), obj)
     if isinstance(obj, Shell):
-        faces = [_settled_face(f, least) for f in obj.faces]
+        faces = [settled.get(id(f), f) for f in obj.faces]
         return obj if all(a is b for a, b in zip(faces, obj.faces)) else Shell(faces, name=obj.name)
-    shells = [_settled(s, least) for s in obj.shells]
+    shells = [_settled(s, settled) for s in obj.shells]
     return obj if all(a is b for a, b in zip(shells, obj.shells)) else Solid(shells, name=obj.name)
