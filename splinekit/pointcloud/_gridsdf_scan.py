@@ -112,6 +112,19 @@ def cut_all(V, T, tri, plane, prism, ea, eb, eh, ptr, nbr, vown, origin, spacing
 
 
 @njit(cache=True, inline="always")
+def _measure(px, py, pz, tri, t, q, f, best, out, limit, fn, en, vn):
+    """Sample ``f`` at ``(px, py, pz)`` measured against triangle ``t``: its squared distance and
+    signed distance written to ``best[f]`` / ``out[f]`` where nearer than ``best[f]`` and within
+    ``limit`` (``q``: scratch for the closest point)."""
+    reg = closest_on_triangle(px, py, pz, tri, t, q)
+    dx, dy, dz = px - q[0], py - q[1], pz - q[2]
+    d2 = dx * dx + dy * dy + dz * dz
+    if d2 < best[f] and d2 <= limit:
+        best[f] = d2
+        out[f] = _signed(px, py, pz, d2, t, reg, q, fn, en, vn)
+
+
+@njit(cache=True, inline="always")
 def _stride(axis, ny, nz):
     """Step in the flat (C order) sample index along ``axis``."""
     return ny * nz if axis == 0 else (nz if axis == 1 else 1)
@@ -282,19 +295,9 @@ def scan(V, T, tri, plane, prism, ea, eb, eh, ptr, nbr, vown, R, kind, box, orig
                         px = origin[0] + i * spacing[0]
                         py = origin[1] + j * spacing[1]
                         pz = origin[2] + k * spacing[2]
-                        reg = closest_on_triangle(px, py, pz, tri, t, q)
-                        dx, dy, dz = px - q[0], py - q[1], pz - q[2]
-                        d2 = dx * dx + dy * dy + dz * dz
-                        if d2 < best[f] and d2 <= limit:
-                            best[f] = d2
-                            out[f] = _signed(px, py, pz, d2, t, reg, q, fn, en, vn)
+                        _measure(px, py, pz, tri, t, q, f, best, out, limit, fn, en, vn)
                         if t2 >= 0:
-                            reg = closest_on_triangle(px, py, pz, tri, t2, q)
-                            dx, dy, dz = px - q[0], py - q[1], pz - q[2]
-                            d2 = dx * dx + dy * dy + dz * dz
-                            if d2 < best[f] and d2 <= limit:
-                                best[f] = d2
-                                out[f] = _signed(px, py, pz, d2, t2, reg, q, fn, en, vn)
+                            _measure(px, py, pz, tri, t2, q, f, best, out, limit, fn, en, vn)
                         f += stride_w
         count[part, 0] = cols
         count[part, 1] = evals
