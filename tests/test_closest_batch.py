@@ -4,6 +4,8 @@ segments)."""
 
 from __future__ import annotations
 
+import re
+
 import numpy as np
 import pytest
 
@@ -11,6 +13,7 @@ from splinekit import BSplineCurve
 from splinekit.basis.knots import clamped_uniform
 from splinekit.closest import batch, curve_distances, project
 from splinekit.construct import circle, polyline
+from splinekit.errors import ParameterError
 
 
 def _point_segment_distances(points, a, b):
@@ -80,3 +83,15 @@ def test_a_wrong_point_set_changes_the_answer(scale):
     assert max(right[0][0], right[1][0]) <= 1e-9 * scale
     wrong = curve_distances([a, b], [pb, pa])
     assert wrong[0][0] == pytest.approx(2.0 * scale) and wrong[1][0] == pytest.approx(2.0 * scale)
+
+
+@pytest.mark.parametrize("sets, words", [
+    ([np.zeros((2, 3))], "one point set per curve"),
+    ([np.zeros((2, 2)), np.zeros((1, 3))], "shape (n, 3)"),
+    ([np.array([[0.0, np.nan, 0.0]]), np.zeros((1, 3))], "not finite"),
+    ([np.full((1, 3), 1e200), np.zeros((1, 3))], "beyond"),
+])
+def test_bad_point_sets_raise_naming_the_problem(sets, words):
+    curves = [circle((0.0, 0.0, 0.0), (0.0, 0.0, 1.0), 1.0), circle((0.0, 0.0, 0.0), (0.0, 0.0, 1.0), 2.0)]
+    with pytest.raises(ParameterError, match=re.escape(words)):
+        curve_distances(curves, sets)

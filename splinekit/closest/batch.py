@@ -6,9 +6,11 @@ from __future__ import annotations
 import numpy as np
 
 from ..curves.batch import CurveBatch
+from ..errors import ParameterError
 from .newton import nearest_per_point, newton_search
 from .parametric import _Curve
 from .projection import project
+from .queries import _as_query_points
 
 __all__ = ["curve_distances"]
 
@@ -51,10 +53,18 @@ def curve_distances(curves, point_sets) -> list:
     :func:`project` itself (and raises what it raises) when a point's best search does not
     converge, or stops on a crease with the distance still falling across it (``project`` would
     search on in the next piece), or when ``project`` would rescale the curve (larger than 1e60
-    or smaller than 1e-60)."""
-    point_sets = [np.asarray(p, dtype=np.float64).reshape(-1, np.asarray(p).shape[-1]) for p in point_sets]
+    or smaller than 1e-60).
+
+    Raises ParameterError when the numbers of curves and point sets differ, or a point set is not
+    finite ``(n, dim)`` points of its curve's dimension (worded as ``project`` words it)."""
+    curves, point_sets = list(curves), list(point_sets)
+    if len(curves) != len(point_sets):
+        raise ParameterError(f"curve_distances needs one point set per curve, got {len(curves)} curves "
+                             f"and {len(point_sets)} point sets")
     out = [None] * len(curves)
     targets = [_Curve(curve, curve.domain) for curve in curves]
+    # each set checked as project checks it (finite, the curve's dimension, not too large)
+    point_sets = [_as_query_points(pts, tg.dim, tg.unit)[0] * tg.unit for pts, tg in zip(point_sets, targets)]
     batched = [i for i, tg in enumerate(targets) if tg.unit == 1.0 and len(point_sets[i])]
     if batched:
         x0, owner, lo, hi, first, last, counts, start = [], [], [], [], [], [], [], 0
