@@ -37,6 +37,7 @@ from ..basis.bernstein import bezier_knots
 from ..basis.bspline import basis_ders_t, basis_funs_t, combine, find_span, span_bounds
 from ..basis.knots import clamped_uniform, domain, validate_knots
 from ..basis.rational import rational_curve_derivatives
+from ..basis.taylor import MAX_DEGREE as TAYLOR_MAX_DEGREE, span_taylor
 from ..errors import KnotRemovalError, ParameterError
 from ..tolerances import ARC_LENGTH_RTOL
 from .knot_algebra import CurveKnotAlgebra, _elevation_step
@@ -200,6 +201,11 @@ class SplineCurve(CurveKnotAlgebra, CurveMeasures):
     def _points(self, flat):
         """Points ``(n, dim)`` at the checked parameters ``flat`` (no overflow handling)."""
         p, U = self._degree, self._knots
+        taylor = self._taylor_job(flat.size)
+        if taylor is not None:
+            pts = np.empty((flat.size, self.dim))
+            taylor[0].curve_points(*taylor[1:], flat, self._rational, pts)
+            return pts
         jit = _kernels.load("splinekit.basis._numba_kernels", work=flat.size)
         if jit is not None:
             pts = np.empty((flat.size, self.dim))
@@ -211,6 +217,17 @@ class SplineCurve(CurveKnotAlgebra, CurveMeasures):
         if self._rational:
             pts = pts[:, :-1] / pts[:, -1:]
         return pts
+
+    def _taylor_job(self, n: int):
+        """``(kernels, breaks, table)``: the compiled Taylor-table kernels for ``n`` points and this
+        curve's :func:`~splinekit.basis.taylor.span_taylor` (built once); None for a degree above
+        :data:`~splinekit.basis.taylor.MAX_DEGREE`, a small job or compiled code off."""
+        K = None if self._degree > TAYLOR_MAX_DEGREE else _kernels.load("splinekit.basis._taylor_kernels", work=n)
+        if K is None:
+            return None
+        if "taylor" not in self._cache:
+            self._cache["taylor"] = span_taylor(self._degree, self._knots, self._coefs)
+        return (K,) + self._cache["taylor"]
 
     def _scaled(self, k: int):
         """This curve with its coordinates multiplied by ``2**k`` (exact; weights unchanged)."""
@@ -239,11 +256,15 @@ class SplineCurve(CurveKnotAlgebra, CurveMeasures):
     def _derivatives(self, flat, order):
         """``(order + 1, n, dim)`` at the checked parameters ``flat`` (no overflow handling)."""
         p, U = self._degree, self._knots
-        jit = _kernels.load("splinekit.basis._numba_kernels", work=flat.size)
+        taylor = self._taylor_job(flat.size)
+        jit = _kernels.load("splinekit.basis._numba_kernels", work=flat.size) if taylor is None else taylor[0]
         if jit is not None:
             ders = np.empty((order + 1, flat.size, self.dim))
             binom = np.array([[comb(k, j) for j in range(order + 1)] for k in range(order + 1)], dtype=np.float64)
-            jit.curve_derivatives(p, U, *span_bounds(p, U), self._coefs, flat, order, self._rational, binom, ders)
+            if taylor is not None:
+                jit.curve_derivatives(*taylor[1:], flat, order, self._rational, binom, ders)
+            else:
+                jit.curve_derivatives(p, U, *span_bounds(p, U), self._coefs, flat, order, self._rational, binom, ders)
             return ders
         span = find_span(p, U, flat)
         ders = combine(self._coefs, p, span, basis_ders_t(p, U, span, flat, order))
