@@ -185,7 +185,7 @@ def test_kernels_load_once_the_numpy_path_has_served_load_work():
         "seen = []\n"
         "for n in (30_000, 5_000, 30_000, 30_000, 30_000, 20_000):\n"
         "    c.evaluate(np.linspace(0, 1, n))\n"
-        "    seen.append(_kernels.get('splinekit.basis._numba_kernels') is not None)\n"
+        "    seen.append(_kernels.get('splinekit.basis._taylor_kernels') is not None)\n"
         "print(seen)"
     )
     assert out == "[False, False, False, False, True, True]"
@@ -204,7 +204,7 @@ def test_env_switch_one_loads_kernels_at_the_first_large_job():
         "c.evaluate(np.linspace(0, 1, _kernels.MIN_WORK - 1))\n"
         "small = 'numba' in sys.modules\n"
         "c.evaluate(np.linspace(0, 1, _kernels.MIN_WORK))\n"
-        "print(small, _kernels.get('splinekit.basis._numba_kernels') is not None)"
+        "print(small, _kernels.get('splinekit.basis._taylor_kernels') is not None)"
     )
     assert _run(code) == "False True"
 
