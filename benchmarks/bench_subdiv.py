@@ -52,6 +52,16 @@ icosahedron differ slightly; the table reports the difference, it does not fail.
 
 Until ``splinekit.subdivide`` exists the script says so and still times the
 peers.
+
+Profile of the Loop case at ``--quick`` size (icosahedron -> level 6, 2026-11-26, a busy 2-core
+machine; best of 7, interleaved with the former code): levels 1-4 (80 to 5,120 faces) were below
+the kernels' ``MIN_WORK`` and took the numpy/scipy rules, about 1.5 ms each in per-call overhead
+(cProfile: 22,000 Python calls per run, most of them scipy.sparse construction), which with the
+two compiled levels made 16 ms of CPU against libigl's 25 ms. A refinement now asks for the
+kernels once with its finest level's size and refines every level with them: 6.6 ms CPU. In
+wall time the kernels lost a further 5-8x to OpenMP workers spinning between kernel calls while
+other processes wanted the cores (125 ms wall for 16 ms CPU); ``splinekit._kernels`` now starts
+them with ``OMP_WAIT_POLICY=PASSIVE`` (18.4 -> 6.3 ms wall, libigl 29-41 ms in the same runs).
 """
 
 from __future__ import annotations
