@@ -24,7 +24,8 @@ __all__ = ["MAX_DEGREE", "span_taylor"]
 
 MAX_DEGREE = 5
 """Highest degree evaluated through the Taylor table: rounding grows like ``2^p`` times the
-coefficients' size (1e-14 relative at degree 5); higher degrees keep the A2.2 kernels."""
+coefficients' size (tests/test_curve_taylor.py holds it to 1e-13 of it); higher degrees keep the
+A2.2 kernels."""
 
 
 def span_taylor(degree: int, knots: np.ndarray, coefs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
