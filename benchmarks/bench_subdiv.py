@@ -65,7 +65,7 @@ the kernels' ``MIN_WORK`` and took the numpy/scipy rules, about 1.5 ms each in p
 (cProfile: 22,000 Python calls per run, most of them scipy.sparse construction), which with the
 two compiled levels made 16 ms of CPU against libigl's 25 ms. A refinement now asks for the
 kernels once with its finest level's size and refines every level with them: 6.6 ms CPU. In
-wall time the kernels lost a further 5-8x to OpenMP workers spinning between kernel calls while
+wall time the kernels lost a further 3-8x to OpenMP workers spinning between kernel calls while
 other processes wanted the cores (125 ms wall for 16 ms CPU); ``splinekit._kernels`` now starts
 them with ``OMP_WAIT_POLICY=PASSIVE`` (18.4 -> 6.3 ms wall, libigl 29-41 ms in the same runs).
 """

@@ -130,9 +130,9 @@ class Refinement:
         X = None
         if not keep and isinstance(mesh, PolyMesh):
             X = mesh.vertices.reshape(mesh.topology.n_vertices, -1)
-        # the job's size decides once: the small first levels of a large job cost the numpy rules
-        # about 1.5 ms each in per-call overhead (cProfile: 22,000 Python calls for icosahedron ->
-        # level 6), ten times the kernels' time on them
+        # the job's size decides once: on the small first levels of a large job the numpy rules
+        # cost about 1.5 ms each in per-call overhead (icosahedron -> Loop level 6: 22,000 Python
+        # calls, 16 ms CPU with them, 6.6 ms with the kernels at every level)
         K = rules.kernels(level.topology, work=expected) if levels else None
         for k in range(levels):
             halves = None
