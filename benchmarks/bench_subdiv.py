@@ -52,6 +52,22 @@ icosahedron differ slightly; the table reports the difference, it does not fail.
 
 Until ``splinekit.subdivide`` exists the script says so and still times the
 peers.
+
+splinekit's times are those of the compiled kernels once loaded (the steady state of a long
+session): like bench_eval.py, the script sets ``SPLINEKIT_NUMBA=1`` unless it is set already.
+Without it, the kernels load only once the numpy rules have served ``_kernels.LOAD_WORK``
+(2,000,000) faces in jobs of at least ``MIN_WORK``, and the splinekit rows timed the numpy rules
+until then (one quick Loop run to level 6 is 82k faces).
+
+Profile of the Loop case at ``--quick`` size (icosahedron -> level 6, 2026-11-26, a busy 2-core
+machine; best of 7, interleaved with the former code): levels 1-4 (80 to 5,120 faces) were below
+the kernels' ``MIN_WORK`` and took the numpy/scipy rules, about 1.5 ms each in per-call overhead
+(cProfile: 22,000 Python calls per run, most of them scipy.sparse construction), which with the
+two compiled levels made 16 ms of CPU against libigl's 25 ms. A refinement now asks for the
+kernels once with its finest level's size and refines every level with them: 6.6 ms CPU. In
+wall time the kernels lost a further 3-8x to OpenMP workers spinning between kernel calls while
+other processes wanted the cores (125 ms wall for 16 ms CPU); ``splinekit._kernels`` now starts
+them with ``OMP_WAIT_POLICY=PASSIVE`` (18.4 -> 6.3 ms wall, libigl 29-41 ms in the same runs).
 """
 
 from __future__ import annotations
@@ -77,6 +93,9 @@ if BENCH_DIR not in sys.path:
 REPO_DIR = os.path.dirname(BENCH_DIR)
 if REPO_DIR not in sys.path:
     sys.path.insert(0, REPO_DIR)
+
+NUMBA_SETTING = os.environ.get("SPLINEKIT_NUMBA")  # as the caller set it (None: unset)
+os.environ.setdefault("SPLINEKIT_NUMBA", "1")  # warm figures of the compiled kernels, as bench_eval.py
 
 import _meshes as M  # noqa: E402
 from _memory import measure_memory, output_bytes  # noqa: E402
@@ -1077,6 +1096,11 @@ def main(argv=None):
     elif msg:
         print(f"note: {msg}")
         print()
+    print(f"splinekit rows: SPLINEKIT_NUMBA={os.environ['SPLINEKIT_NUMBA']}"
+          f"{' (set by this script)' if NUMBA_SETTING is None else ''}: with 1 the compiled kernels serve from the "
+          "first job of at least splinekit._kernels.MIN_WORK faces (the steady state of a long session; the default "
+          "waits until the numpy rules have served LOAD_WORK). A fresh process's first call: bench_cold_start.py.")
+    print()
     print("Times are wall-clock, numpy arrays in and out, from the base mesh to level k in one call "
           "(every peer takes an iteration count). faces/s = output faces / time. "
           "CPU/wall > 1: more than one core used. "

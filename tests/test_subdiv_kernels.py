@@ -37,8 +37,10 @@ SHARPNESS = np.array([np.inf, 2.0, 1.5, 1.0, 0.5])
 
 @pytest.fixture
 def compiled(monkeypatch):
-    """Every refinement level through the kernels."""
+    """Every refinement level through the kernels (LOAD_WORK = 0 too: without it the kernels
+    were loaded only once earlier tests had served enough work, so a test run alone failed)."""
     monkeypatch.setattr(_kernels, "MIN_WORK", 0)
+    monkeypatch.setattr(_kernels, "LOAD_WORK", 0)
     monkeypatch.delenv("SPLINEKIT_NUMBA", raising=False)
 
 
@@ -249,8 +251,29 @@ def both_paths(monkeypatch, make_refinement):
     ref = make_refinement()
     monkeypatch.delenv("SPLINEKIT_NUMBA")
     monkeypatch.setattr(_kernels, "MIN_WORK", 0)
+    monkeypatch.setattr(_kernels, "LOAD_WORK", 0)
     fast = make_refinement()
     return ref, fast
+
+
+def test_a_large_job_refines_its_small_first_levels_with_the_kernels(monkeypatch):
+    """The job's size (its finest level) decides the path once, at the default thresholds: the
+    first levels of icosphere -> level 5 (80 ... 20,480 faces, below MIN_WORK until the last)
+    take the kernels too, and the result equals the numpy path's (same topology, stencils to rounding)."""
+    mesh = icosphere(0)
+    levels = 5
+    assert 20 * 4 ** (levels - 1) < _kernels.MIN_WORK <= 20 * 4**levels
+    monkeypatch.setenv("SPLINEKIT_NUMBA", "0")
+    ref = Refinement(mesh, "loop", levels)
+    monkeypatch.setenv("SPLINEKIT_NUMBA", "1")
+    fast = Refinement(mesh, "loop", levels)
+    assert all("_uniform_size" in lv.topology.__dict__ for lv in fast.hierarchy[1:]), "a level took the numpy rules"
+    for a, b in zip(ref.hierarchy[1:], fast.hierarchy[1:]):
+        assert_same_topology(a.topology, b.topology)
+        assert_same_stencil(a.stencil, b.stencil)
+    np.testing.assert_allclose(fast.apply(mesh.vertices), ref.apply(mesh.vertices), rtol=0, atol=1e-14)
+    small = Refinement(mesh, "loop", 2)  # a small job stays on the numpy rules
+    assert not any("_uniform_size" in lv.topology.__dict__ for lv in small.hierarchy[1:])
 
 
 @pytest.mark.parametrize("scheme,name", CASES)

@@ -37,6 +37,7 @@ from ..basis.bernstein import bezier_knots
 from ..basis.bspline import basis_ders_t, basis_funs_t, combine, find_span, span_bounds
 from ..basis.knots import clamped_uniform, domain, validate_knots
 from ..basis.rational import rational_curve_derivatives
+from ..basis.taylor import MAX_DEGREE as TAYLOR_MAX_DEGREE, span_taylor
 from ..errors import KnotRemovalError, ParameterError
 from ..tolerances import ARC_LENGTH_RTOL
 from .knot_algebra import CurveKnotAlgebra, _elevation_step
@@ -200,10 +201,10 @@ class SplineCurve(CurveKnotAlgebra, CurveMeasures):
     def _points(self, flat):
         """Points ``(n, dim)`` at the checked parameters ``flat`` (no overflow handling)."""
         p, U = self._degree, self._knots
-        jit = _kernels.load("splinekit.basis._numba_kernels", work=flat.size)
-        if jit is not None:
+        job = self._kernel_job(flat.size)
+        if job is not None:
             pts = np.empty((flat.size, self.dim))
-            jit.curve_points(p, U, *span_bounds(p, U), self._coefs, flat, self._rational, pts)
+            job[0].curve_points(*job[1:], flat, self._rational, pts)
             return pts
         span = find_span(p, U, flat)
         N = basis_funs_t(p, U, span, flat)
@@ -211,6 +212,20 @@ class SplineCurve(CurveKnotAlgebra, CurveMeasures):
         if self._rational:
             pts = pts[:, :-1] / pts[:, -1:]
         return pts
+
+    def _kernel_job(self, n: int):
+        """The compiled kernels for ``n`` points and their leading arguments, or None (small job,
+        compiled code off: the numpy path). Up to :data:`~splinekit.basis.taylor.MAX_DEGREE`:
+        the Taylor-table kernels and this curve's :func:`~splinekit.basis.taylor.span_taylor`
+        (built once); above it the A2.2 kernels, the knots and the coefficients."""
+        p, U = self._degree, self._knots
+        taylor = p <= TAYLOR_MAX_DEGREE  # one load call per job: each counts towards LOAD_WORK
+        K = _kernels.load("splinekit.basis._taylor_kernels" if taylor else "splinekit.basis._numba_kernels", work=n)
+        if K is None or not taylor:
+            return None if K is None else (K, p, U, *span_bounds(p, U), self._coefs)
+        if "taylor" not in self._cache:
+            self._cache["taylor"] = span_taylor(p, U, self._coefs)
+        return (K,) + self._cache["taylor"]
 
     def _scaled(self, k: int):
         """This curve with its coordinates multiplied by ``2**k`` (exact; weights unchanged)."""
@@ -239,11 +254,11 @@ class SplineCurve(CurveKnotAlgebra, CurveMeasures):
     def _derivatives(self, flat, order):
         """``(order + 1, n, dim)`` at the checked parameters ``flat`` (no overflow handling)."""
         p, U = self._degree, self._knots
-        jit = _kernels.load("splinekit.basis._numba_kernels", work=flat.size)
-        if jit is not None:
+        job = self._kernel_job(flat.size)
+        if job is not None:
             ders = np.empty((order + 1, flat.size, self.dim))
             binom = np.array([[comb(k, j) for j in range(order + 1)] for k in range(order + 1)], dtype=np.float64)
-            jit.curve_derivatives(p, U, *span_bounds(p, U), self._coefs, flat, order, self._rational, binom, ders)
+            job[0].curve_derivatives(*job[1:], flat, order, self._rational, binom, ders)
             return ders
         span = find_span(p, U, flat)
         ders = combine(self._coefs, p, span, basis_ders_t(p, U, span, flat, order))

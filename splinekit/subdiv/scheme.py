@@ -67,11 +67,15 @@ class Scheme:
             return topology.n_faces
         return self.child_faces(topology) * 4 ** (levels - 1)
 
-    def kernels(self, topology: Topology):
-        """The compiled kernels when they should refine ``topology``, else None (the numpy rules)."""
+    def kernels(self, topology: Topology, work: int | None = None):
+        """The compiled kernels when they should refine ``topology``, else None (the numpy rules).
+
+        ``work`` is the size of the whole job in child faces (default: one step of ``topology``);
+        a multi-level refinement passes its finest level's faces once and refines every level,
+        the smallest included, with what this returns."""
         if self.kernel is None:
             return None
-        return _kernels.load(KERNELS, work=self.child_faces(topology))
+        return _kernels.load(KERNELS, work=self.child_faces(topology) if work is None else work)
 
 
 def refine_once(scheme: Scheme, level: Level) -> RefinementStep:
