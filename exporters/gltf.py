@@ -110,7 +110,7 @@ def export_glb(path, mesh, normals=True) -> str:
         for p in parts:
             _meshio.write_part(fh, p)
 
-    return _meshio.save(path, write, "glTF binary file")
+    return _meshio.save(path, write, "glTF binary file", size=total)
 
 
 # -- reading ----------------------------------------------------------------------------------
