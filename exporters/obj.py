@@ -16,7 +16,7 @@ import numpy as np
 
 from splinekit.errors import FileFormatError, ParameterError
 
-from . import _meshio, _text
+from . import _meshio, _objscan, _text
 
 __all__ = ["NORMAL_DECIMALS", "export_obj", "import_obj"]
 
@@ -141,6 +141,20 @@ def import_obj(path):
     if b"\r" in data:
         data = data.replace(b"\r\n", b"\n").replace(b"\r", b"\n")
     text = data.replace(b"\\\n", b" ")  # continued lines
+
+    fast = _objscan.scan(text)  # plain files (what exporters write); None: the general path below
+    if fast is not None:
+        V, kinds, sizes, fields = fast
+        is_v, is_vt, is_vn, is_f = (kinds == k for k in (1, 2, 3, 4))
+        n_v, n_vt, n_vn = int(is_v.sum()), int(is_vt.sum()), int(is_vn.sum())
+        face_of_corner = np.repeat(np.arange(sizes.size), sizes)
+        v_before, vt_before, vn_before = (np.cumsum(is_k)[is_f] for is_k in (is_v, is_vt, is_vn))
+        idx = _resolve(fields["v"], v_before[face_of_corner], n_v, what, text, face_of_corner, "vertex")
+        for name, before, total, label in (("vt", vt_before, n_vt, "texture coordinate"), ("vn", vn_before, n_vn, "normal")):
+            if name in fields:
+                _resolve(fields[name], before[face_of_corner], total, what, text, face_of_corner, label)
+        offsets = np.concatenate([[0], np.cumsum(sizes)]).astype(np.int64)
+        return _meshio.build_mesh(V, idx, offsets, what)
 
     kinds = np.array(_KIND_RE.findall(text), dtype="S2")
     is_v, is_vt, is_vn, is_f = (kinds == k for k in (b"v", b"vt", b"vn", b"f"))
