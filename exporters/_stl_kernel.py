@@ -1,6 +1,6 @@
 """The compiled (numba) kernel that fills binary STL records, loaded through
 :func:`splinekit._kernels.load` by :func:`exporters._meshio.stl_fill_kernel`. The numpy path it must
-agree with byte for byte is :func:`exporters.stl._binary_records` (the tests compare them)."""
+agree with byte for byte is :func:`exporters.stl._write_records` (the tests compare them)."""
 
 import numpy as np
 from numba import njit
