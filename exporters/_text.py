@@ -54,29 +54,34 @@ def _layout(fields: list, literals: list[bytes]) -> bytes:
     return flat[flat != 0].tobytes()
 
 
-def int_rows(values: np.ndarray, literals: list[bytes]) -> bytes:
+def _emit(parts, sink):
+    """``parts`` (an iterable of bytes) joined, or handed to ``sink`` one by one (then None)."""
+    if sink is None:
+        return b"".join(parts)
+    for part in parts:
+        sink(part)
+    return None
+
+
+def int_rows(values: np.ndarray, literals: list[bytes], sink=None) -> bytes | None:
     """One row per row of ``values`` ``(n, c)`` (non-negative integers): ``literals[0]``, the first
     value in decimal, ``literals[1]``, ... , the last value, ``literals[c]``; ``c + 1`` literals.
 
-    Same text as ``(literals[0] + "%d" + ... + literals[c]) % row`` for every row.
+    Same text as ``(literals[0] + "%d" + ... + literals[c]) % row`` for every row. Returned as
+    bytes, or, with ``sink``, passed to ``sink(chunk)`` a chunk of rows at a time.
     """
     values = np.asarray(values, dtype=np.int64)
     n, c = values.shape
     if len(literals) != c + 1:
         raise ValueError(f"{c} values per row need {c + 1} literals, got {len(literals)}")
-    if not n:
-        return b""
-    if values.min() < 0:
+    if n and values.min() < 0:
         raise ValueError("int_rows writes non-negative integers only")
-    width = len(str(int(values.max())))
-    parts = []
-    for s in range(0, n, ROWS_PER_CHUNK):
-        block = values[s:s + ROWS_PER_CHUNK]
-        parts.append(_layout([_digits(block[:, j], width) for j in range(c)], literals))
-    return b"".join(parts)
+    width = len(str(int(values.max()))) if n else 1
+    blocks = (values[s:s + ROWS_PER_CHUNK] for s in range(0, n, ROWS_PER_CHUNK))
+    return _emit((_layout([_digits(b[:, j], width) for j in range(c)], literals) for b in blocks), sink)
 
 
-def fixed_rows(values: np.ndarray, literals: list[bytes], decimals: int = 15) -> bytes:
+def fixed_rows(values: np.ndarray, literals: list[bytes], decimals: int = 15, sink=None) -> bytes | None:
     """Like :func:`int_rows` for numbers ``|x| <= 1`` (unit normals), each written with at most
     ``decimals`` digits after the point: ``x`` rounded to the nearest multiple of ``10**-decimals``
     (so within ``0.5e-15`` plus one float64 rounding of ``x`` for 15), trailing zeros and a bare
@@ -88,32 +93,26 @@ def fixed_rows(values: np.ndarray, literals: list[bytes], decimals: int = 15) ->
         raise ValueError(f"{c} values per row need {c + 1} literals, got {len(literals)}")
     if not 0 < decimals <= 15:
         raise ValueError(f"decimals must be 1..15, got {decimals}")
-    if not n:
-        return b""
     if not (np.abs(values) <= 1.0).all():
         raise ValueError("fixed_rows writes numbers of magnitude at most 1")
+    blocks = (values[s:s + ROWS_PER_CHUNK] for s in range(0, n, ROWS_PER_CHUNK))
+    return _emit((_layout([_fixed(b[:, j], decimals) for j in range(c)], literals) for b in blocks), sink)
+
+
+def _fixed(x: np.ndarray, decimals: int) -> np.ndarray:
+    """``(n, 3 + decimals)`` uint8 NUL-padded fields (sign, whole digit, point, decimals) of the
+    numbers ``x`` ``(n,)``, ``|x| <= 1``; trailing zero decimals, and then the point, are padding."""
     scale = 10 ** decimals
-    parts = []
-    for s in range(0, n, ROWS_PER_CHUNK):
-        block = values[s:s + ROWS_PER_CHUNK]
-        fields = []
-        for j in range(c):
-            m = np.rint(np.abs(block[:, j]) * scale).astype(np.int64)
-            whole, frac = m // scale, m % scale
-            f = np.zeros((m.size, 3 + decimals), dtype=np.uint8)  # sign, whole digit, point, decimals
-            f[:, 0] = np.where((block[:, j] < 0) & (m > 0), ord("-"), 0)
-            f[:, 1] = whole + 48
-            # the decimals, zero-padded on the left, then trailing zeros turned to padding
-            digits = np.empty((m.size, decimals), dtype=np.uint8)
-            v = frac.copy()
-            trailing = np.ones(m.size, dtype=bool)  # still inside the run of trailing zeros
-            for w in range(decimals - 1, -1, -1):
-                d = (v % 10).astype(np.uint8)
-                trailing &= d == 0
-                digits[:, w] = np.where(trailing, 0, d + 48)
-                v //= 10
-            f[:, 3:] = digits
-            f[:, 2] = np.where(frac > 0, ord("."), 0)
-            fields.append(f)
-        parts.append(_layout(fields, literals))
-    return b"".join(parts)
+    m = np.rint(np.abs(x) * scale).astype(np.int64)
+    frac = m % scale
+    f = np.zeros((m.size, 3 + decimals), dtype=np.uint8)
+    f[:, 0] = np.where((x < 0) & (m > 0), ord("-"), 0)
+    f[:, 1] = m // scale + 48
+    f[:, 2] = np.where(frac > 0, ord("."), 0)
+    trailing = np.ones(m.size, dtype=bool)  # still inside the run of trailing zeros
+    for w in range(decimals - 1, -1, -1):
+        d = (frac % 10).astype(np.uint8)
+        trailing &= d == 0
+        f[:, 3 + w] = np.where(trailing, 0, d + 48)
+        frac //= 10
+    return f

@@ -55,16 +55,16 @@ def export_obj(path, mesh, normals=True) -> str:
     def write(fh):
         _meshio.write_part(fh, f"# written by splinekit: {len(V)} vertices, {mesh.n_faces} faces\n")
         _meshio.format_rows("v %r %r %r\n", V, fh)
-        if N is not None:
-            # (a unit component may round to 1 + 2e-16)
-            _meshio.write_part(fh, _text.fixed_rows(np.clip(N, -1.0, 1.0), [b"vn ", b" ", b" ", b"\n"], NORMAL_DECIMALS))
+        sink = lambda chunk: _meshio.write_part(fh, chunk)  # noqa: E731
+        if N is not None:  # (a unit component may round to 1 + 2e-16)
+            _text.fixed_rows(np.clip(N, -1.0, 1.0), [b"vn ", b" ", b" ", b"\n"], NORMAL_DECIMALS, sink)
         if k:  # all faces of k sides: the face lines built in numpy
             corners = idx.reshape(-1, k)
             if N is not None:
                 literals = [b"f "] + [b"//", b" "] * (k - 1) + [b"//", b"\n"]
-                _meshio.write_part(fh, _text.int_rows(np.repeat(corners, 2, axis=1), literals))
+                _text.int_rows(np.repeat(corners, 2, axis=1), literals, sink)
             else:
-                _meshio.write_part(fh, _text.int_rows(corners, [b"f "] + [b" "] * (k - 1) + [b"\n"]))
+                _text.int_rows(corners, [b"f "] + [b" "] * (k - 1) + [b"\n"], sink)
         elif N is not None:
             _meshio.format_polygons("f ", "%d//%d", np.stack([idx, idx], axis=1), mesh.face_offsets, fh)
         else:

@@ -50,3 +50,14 @@ def test_bad_input_is_refused():
     with pytest.raises(ValueError):
         _text.int_rows(np.array([[1, 2]]), [b"", b""])
     assert _text.int_rows(np.zeros((0, 2), dtype=np.int64), [b"", b" ", b""]) == b""
+
+
+def test_sink_gets_the_same_text_chunk_by_chunk(monkeypatch):
+    monkeypatch.setattr(_text, "ROWS_PER_CHUNK", 7)
+    rng = np.random.default_rng(1)
+    ints = rng.integers(0, 10**6, (50, 3))
+    floats = rng.uniform(-1, 1, (50, 3))
+    for fn, values in ((_text.int_rows, ints), (_text.fixed_rows, floats)):
+        chunks = []
+        assert fn(values, [b"<", b",", b",", b">\n"], sink=chunks.append) is None
+        assert len(chunks) == 8 and b"".join(chunks) == fn(values, [b"<", b",", b",", b">\n"])
