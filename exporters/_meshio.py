@@ -327,14 +327,29 @@ def finite_or_raise(V: np.ndarray, what: str, item: str = "vertex") -> None:
         raise FileFormatError(f"{what}: {item} {i} has non-finite coordinates {V[i].tolist()}")
 
 
-def row_hash(U: np.ndarray) -> np.ndarray:
-    """A 64-bit hash ``(m,)`` of each row of the ``(m, 3)`` uint64 array ``U`` (multiply-xorshift;
-    integer overflow wraps, as intended)."""
-    h = U[:, 0] * np.uint64(0x9E3779B97F4A7C15)
-    h ^= U[:, 1] * np.uint64(0xC2B2AE3D27D4EB4F)
+def _mix(h: np.ndarray) -> np.ndarray:
+    """The splitmix64 finaliser of ``h`` (uint64), in place: a bijection that spreads every input
+    bit over all output bits (integer overflow wraps, as intended)."""
+    h ^= h >> np.uint64(30)
+    h *= np.uint64(0xBF58476D1CE4E5B9)
+    h ^= h >> np.uint64(27)
+    h *= np.uint64(0x94D049BB133111EB)
     h ^= h >> np.uint64(31)
-    h ^= U[:, 2] * np.uint64(0x165667B19E3779F9)
-    h ^= h >> np.uint64(29)
+    return h
+
+
+def row_hash(U: np.ndarray) -> np.ndarray:
+    """A 64-bit hash ``(m,)`` of each row of the ``(m, 3)`` uint64 array ``U``.
+
+    Each column is folded in through a full mix (``h = mix(mix(mix(u0) ^ u1) ^ u2)``). A cheaper
+    multiply-xor of the columns collided on symmetric meshes, whose mirrored points differ only in
+    sign bits that cancelled (5,000 points of a torus from float32 data gave 2,600 hashes, and every
+    read then fell back to the exact row sort: 3x slower).
+    """
+    h = _mix(U[:, 0].copy())
+    for c in range(1, U.shape[1]):
+        h ^= U[:, c]
+        _mix(h)
     return h
 
 

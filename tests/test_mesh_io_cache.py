@@ -125,3 +125,14 @@ def test_without_fallocate_the_write_still_happens(tmp_path, monkeypatch):
     monkeypatch.delattr(os, "posix_fallocate", raising=False)
     exporters.export_ply(tmp_path / "a.ply", mesh)
     assert exporters.import_ply(tmp_path / "a.ply") == mesh
+
+
+def test_row_hash_separates_mirrored_points():
+    """Points mirrored through the coordinate planes differ only in sign bits: the STL reader's row
+    hash must still tell them apart (else every read falls back to the exact row sort)."""
+    rng = np.random.default_rng(5)
+    P = rng.uniform(0.1, 1.0, (500, 3)).astype(np.float32).astype(np.float64)
+    signs = np.array([[sx, sy, sz] for sx in (1, -1) for sy in (1, -1) for sz in (1, -1)], dtype=np.float64)
+    Q = (P[:, None, :] * signs[None]).reshape(-1, 3)
+    U = np.ascontiguousarray(Q).view(np.uint64)
+    assert len(np.unique(_meshio.row_hash(U))) == len(np.unique(U, axis=0)) == 4000
