@@ -109,7 +109,10 @@ class Topology:
             raise MeshTopologyError(f"face {int(self.corner_face[c])} uses vertex {int(idx[c])} more than once")
 
     def _check_edges(self):
-        counts = np.bincount(self.halfedge_edge, minlength=len(self.edges))
+        _ = self._edge_table  # builds the half-edge count of every edge (unless a refinement gave the table)
+        counts = self.__dict__.get("_edge_counts")
+        if counts is None:
+            counts = np.bincount(self.halfedge_edge, minlength=len(self.edges))
         over = np.flatnonzero(counts > 2)
         if over.size:
             e = int(over[0])
@@ -206,8 +209,10 @@ class Topology:
         np.not_equal(sorted_key[1:], sorted_key[:-1], out=first[1:])
         starts = np.flatnonzero(first)
         h0 = order[starts]
-        edges = np.column_stack([lo[h0], hi[h0]])  # a gather: int64 division costs as much as the sort
+        edges = np.empty((starts.size, 2), dtype=np.int64)  # gathered: int64 division costs as much as the sort
+        edges[:, 0], edges[:, 1] = lo[h0], hi[h0]
         count = np.diff(np.append(starts, key.size))
+        self.__dict__.setdefault("_edge_counts", count)
         inverse = np.empty(key.size, dtype=np.int64)
         inverse[order] = np.repeat(np.arange(starts.size), count)  # (a cumsum of bools is slower)
         h1 = np.where(count >= 2, order[np.minimum(starts + 1, max(key.size - 1, 0))], -1)
