@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["CHUNK", "cross", "cross_norm", "dot", "normalize_rows", "per_vertex"]
+__all__ = ["CHUNK", "cross", "cross_norm", "cross_rows", "dot", "normalize_rows", "per_vertex"]
 
 CHUNK = 65_536
 """Rows per pass where a helper works in chunks (the temporaries of a chunk stay in cache)."""
@@ -19,6 +19,18 @@ CHUNK = 65_536
 def cross(u, v):
     """Cross product of 3-D vectors stored by component: ``u, v`` are ``(3, m)``."""
     return np.stack([u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]])
+
+
+def cross_rows(a, b, out):
+    """``out[i] = a[i] x b[i]`` for rows of 3-D vectors ``a, b`` ``(m, 3)``: the same products in
+    the same order as :func:`cross`, column by column into ``out`` ``(m, 3)`` (fewer temporaries)."""
+    np.multiply(a[:, 1], b[:, 2], out=out[:, 0])
+    out[:, 0] -= a[:, 2] * b[:, 1]
+    np.multiply(a[:, 2], b[:, 0], out=out[:, 1])
+    out[:, 1] -= a[:, 0] * b[:, 2]
+    np.multiply(a[:, 0], b[:, 1], out=out[:, 2])
+    out[:, 2] -= a[:, 1] * b[:, 0]
+    return out
 
 
 def cross_norm(u, v):

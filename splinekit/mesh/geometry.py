@@ -209,13 +209,15 @@ class _Geometry:
     @cached_property
     def face_vector_areas(self):
         """``(F, 3)`` vector areas (3-D only)."""
-        tri_vec = np.empty((3, len(self.tris)))
-        for s in range(0, len(self.tris), _rows.CHUNK):  # by chunks: the gathered corners stay in cache
-            X = self.U[self.tris[s:s + _rows.CHUNK]].T  # (3 coordinates, 3 corners, t)
-            tri_vec[:, s:s + _rows.CHUNK] = 0.5 * _rows.cross(X[:, 1] - X[:, 0], X[:, 2] - X[:, 0])
+        tri_vec = np.empty((len(self.tris), 3))
+        # by chunks of rows (the gathered corners stay in cache), into contiguous (t, 3) rows
+        for s in range(0, len(self.tris), _rows.CHUNK):
+            P = self.U[self.tris[s:s + _rows.CHUNK]]  # (t, 3 corners, 3 coordinates)
+            _rows.cross_rows(P[:, 1] - P[:, 0], P[:, 2] - P[:, 0], out=tri_vec[s:s + _rows.CHUNK])
+        tri_vec *= 0.5
         if len(self.tri_face) == self.topology.n_faces:  # all triangles: no per-face sum
-            return np.ascontiguousarray(tri_vec.T)
-        return _rows.per_vertex(self.tri_face, tri_vec, self.topology.n_faces)
+            return tri_vec
+        return _rows.per_vertex(self.tri_face, tri_vec.T, self.topology.n_faces)
 
     @cached_property
     def face_normals(self):
