@@ -18,6 +18,7 @@ import exporters
 from exporters import _objscan
 from splinekit.errors import SplineKitError
 from splinekit.mesh import primitives
+from splinekit.mesh.geometry import triangulate
 
 
 def read_both(path, monkeypatch):
@@ -165,3 +166,24 @@ def test_edge_cases_read_the_same_both_ways(tmp_path, monkeypatch, text):
     path.write_bytes(text)
     fast, general = read_both(path, monkeypatch)
     assert fast == general
+
+
+@settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(seed=st.integers(0, 2**32 - 1), normals=st.booleans())
+def test_random_meshes_written_by_trimesh_read_back(tmp_path, monkeypatch, seed, normals):
+    """Random coordinates and vertex labels on a triangulated torus, written by trimesh with or
+    without normals: both paths read the same mesh, the one written up to trimesh's 8 decimals."""
+    trimesh = pytest.importorskip("trimesh")
+    rng = np.random.default_rng(seed)
+    base = primitives.torus(int(rng.integers(3, 12)), int(rng.integers(3, 9)))
+    label = rng.permutation(base.n_vertices)  # vertex i of the torus is written as vertex label[i]
+    V = np.empty((base.n_vertices, 3))
+    V[label] = rng.uniform(-1e3, 1e3, (base.n_vertices, 3))
+    F = label[triangulate(base)[0]]
+    path = tmp_path / "r.obj"
+    path.write_text(trimesh.exchange.obj.export_obj(trimesh.Trimesh(V, F, process=False), include_normals=normals))
+    assert _objscan.scan(path.read_bytes()) is not None
+    fast, general = read_both(path, monkeypatch)
+    assert fast == general
+    assert np.abs(fast.vertices - V).max() <= 5e-9
+    np.testing.assert_array_equal(fast.faces, F)
