@@ -45,6 +45,7 @@ __all__ = [
     "merge_vertices",
     "read_bytes",
     "register",
+    "reserve",
     "save",
     "triangles",
     "write_part",
@@ -141,7 +142,7 @@ MIN_COMPILED_TRIANGLES = _kernels.MIN_WORK
 """Binary STL records of at least this many triangles are filled by a numba kernel (one pass, no
 temporaries, :mod:`exporters._stl_kernel`) when :mod:`splinekit._kernels` serves compiled code;
 smaller meshes, and every mesh without numba, take the numpy path. Both give the same bytes (the
-tests compare them): the numpy path computes the same float64 normal of the float32 triangle."""
+tests compare them): the mesh's cached float64 normals and the corners, rounded to float32."""
 
 
 RECORD_WORK = 1 / 8
@@ -156,11 +157,11 @@ takes the kernel (2x faster warm)."""
 
 
 def stl_fill_kernel(n_triangles: int):
-    """The compiled ``fill(V, tris, out)`` that writes binary STL records, or None (use numpy).
+    """The compiled ``fill`` that writes binary STL records, or None (use numpy).
 
-    ``V`` ``(n, 3)`` float64, ``tris`` ``(T, 3)`` int64, ``out`` ``(T, 12)`` float32 (a view of the
-    records: normal then the three corners, all rounded to float32 before the normal is computed,
-    as the numpy path does).
+    Called as ``fill(V, tris, N, out)``: ``V`` ``(n, 3)`` float64, ``tris`` ``(T, 3)`` int64, ``N``
+    ``(T, 3)`` float64 unit normals, ``out`` ``(T, 12)`` float32 (a view of the records: normal then
+    the three corners, all rounded to float32, as the numpy path does).
     """
     K = _kernels.load("exporters._stl_kernel", work=n_triangles * RECORD_WORK,
                       min_work=MIN_COMPILED_TRIANGLES * RECORD_WORK)
@@ -193,7 +194,27 @@ def check_target(path, what: str) -> str:
     return path
 
 
-def save(path, write, what: str) -> str:
+def reserve(fh, size: int) -> None:
+    """Allocate ``size`` bytes for the file ``fh`` is about to fill (``posix_fallocate``), where the
+    platform and file system allow; otherwise nothing.
+
+    Why: renaming a new file over an existing one makes ext4 (its default ``auto_da_alloc``) allocate
+    the new file's delayed blocks inside the rename. Measured on ext4 (the project's 2-core machine),
+    the rename cost 7 ms for 5 MB and 35 ms for 50 MB; with the blocks allocated up front the whole
+    atomic write of 5 MB took 3.1 ms instead of 7.1 ms (a plain truncating ``open(path, "wb")`` write:
+    5.4 ms). What the rename still costs is freeing the replaced file (2.9 ms for 5 MB, as unlinking
+    it would). The file grows to ``size`` at once: :func:`save` truncates it to what was written.
+    """
+    allocate = getattr(os, "posix_fallocate", None)
+    if allocate is None or size <= 0:
+        return
+    try:
+        allocate(fh.fileno(), 0, size)
+    except OSError:  # not supported here (or no space: the write itself then reports it)
+        pass
+
+
+def save(path, write, what: str, size: int | None = None) -> str:
     """Write a file atomically: ``write(fh)`` fills a temporary binary file beside ``path``, which is
     then renamed onto ``path``. Returns ``path`` as a string.
 
@@ -201,12 +222,20 @@ def save(path, write, what: str) -> str:
     not a regular file, or an OSError while writing raises :class:`~splinekit.errors.ExportError`
     (naming ``what`` and the path); in every failure the temporary file is removed and an existing
     target is left byte-for-byte as it was. A symbolic link is kept and the file it names replaced.
+
+    ``size``, when the writer knows it (binary formats), is the file's length in bytes: the space is
+    reserved before writing (:func:`reserve`), which makes the final rename cheap; the file ends where
+    ``write`` stopped, whatever ``size`` said.
     """
     path = check_target(path, what)
 
     def fill(tmp):
         with open(tmp, "wb") as fh:
+            if size:
+                reserve(fh, size)
             write(fh)
+            if size:
+                fh.truncate()  # at the end of what was written
 
     return atomic_write(path, fill, what)
 
@@ -299,14 +328,29 @@ def finite_or_raise(V: np.ndarray, what: str, item: str = "vertex") -> None:
         raise FileFormatError(f"{what}: {item} {i} has non-finite coordinates {V[i].tolist()}")
 
 
-def row_hash(U: np.ndarray) -> np.ndarray:
-    """A 64-bit hash ``(m,)`` of each row of the ``(m, 3)`` uint64 array ``U`` (multiply-xorshift;
-    integer overflow wraps, as intended)."""
-    h = U[:, 0] * np.uint64(0x9E3779B97F4A7C15)
-    h ^= U[:, 1] * np.uint64(0xC2B2AE3D27D4EB4F)
+def _mix(h: np.ndarray) -> np.ndarray:
+    """The splitmix64 finaliser of ``h`` (uint64), in place: a bijection that spreads every input
+    bit over all output bits (integer overflow wraps, as intended)."""
+    h ^= h >> np.uint64(30)
+    h *= np.uint64(0xBF58476D1CE4E5B9)
+    h ^= h >> np.uint64(27)
+    h *= np.uint64(0x94D049BB133111EB)
     h ^= h >> np.uint64(31)
-    h ^= U[:, 2] * np.uint64(0x165667B19E3779F9)
-    h ^= h >> np.uint64(29)
+    return h
+
+
+def row_hash(U: np.ndarray) -> np.ndarray:
+    """A 64-bit hash ``(m,)`` of each row of the ``(m, 3)`` uint64 array ``U``.
+
+    Each column is folded in through a full mix (``h = mix(mix(mix(u0) ^ u1) ^ u2)``). A cheaper
+    multiply-xor of the columns collided on symmetric meshes, whose mirrored points differ only in
+    sign bits that cancelled (5,000 points of a torus from float32 data gave 2,600 hashes, and every
+    read then fell back to the exact row sort: 3x slower).
+    """
+    h = _mix(U[:, 0].copy())
+    for c in range(1, U.shape[1]):
+        h ^= U[:, c]
+        _mix(h)
     return h
 
 

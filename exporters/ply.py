@@ -96,14 +96,17 @@ def export_ply(path, mesh, binary=True) -> str:
             _meshio.write_part(fh, header)
             _meshio.write_part(fh, np.ascontiguousarray(V, dtype="<f8"))
             _meshio.write_part(fh, faces)
+
+        size = len(header) + V.nbytes + faces.nbytes
     else:
+        size = None
 
         def write(fh):
             _meshio.write_part(fh, header)
             _meshio.format_rows("%r %r %r\n", V, fh)
             _meshio.format_polygons("%d ", "%d", idx[:, None], offsets, fh, face_values=sizes)
 
-    return _meshio.save(path, write, "PLY file")
+    return _meshio.save(path, write, "PLY file", size=size)
 
 
 # -- reading ----------------------------------------------------------------------------------

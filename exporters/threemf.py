@@ -27,7 +27,7 @@ import numpy as np
 from splinekit import limits
 from splinekit.errors import FileFormatError, ParameterError, SplineKitError
 
-from . import _meshio
+from . import _meshio, _text
 # the reader's limits (MAX_..., MODEL_BYTES_FACTOR) stay importable from this module
 from ._threemf_model import (  # noqa: F401
     _CORE_NS,
@@ -116,7 +116,8 @@ def export_3mf(path, mesh, *, name="splinekit", unit="millimeter") -> str:
                 _meshio.write_part(model, head.encode("utf-8"))
                 _meshio.format_rows('     <vertex x="%r" y="%r" z="%r"/>\n', mesh.vertices, model)
                 _meshio.write_part(model, middle)
-                _meshio.format_rows('     <triangle v1="%d" v2="%d" v3="%d"/>\n', tris, model)
+                _text.int_rows(tris, [b'     <triangle v1="', b'" v2="', b'" v3="', b'"/>\n'],
+                               lambda chunk: _meshio.write_part(model, chunk))
                 _meshio.write_part(model, tail)
 
     return _meshio.save(path, write, "3MF file")

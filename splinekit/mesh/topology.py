@@ -89,7 +89,18 @@ class Topology:
         if small.size:
             f = int(small[0])
             raise MeshTopologyError(f"face {f} has {int(self.face_sizes[f])} vertices; a face needs at least 3")
-        # a repeated vertex inside one face: sort (face, vertex) pairs and look for equal neighbours
+        # a repeated vertex inside one face: with all faces of k <= 6 sides, compare the k(k-1)/2
+        # corner pairs directly (no sort: 6 ms -> under 1 ms for 200k triangles); else sort
+        # (face, vertex) pairs and look for equal neighbours
+        F, k = self.n_faces, (int(self.face_sizes[0]) if self.n_faces else 0)
+        if 0 < k <= 6 and idx.size == F * k:
+            corners = idx.reshape(F, k)
+            same = np.zeros(F, dtype=bool)
+            for i in range(k - 1):  # a loop over corner pairs, not faces
+                for j in range(i + 1, k):
+                    same |= corners[:, i] == corners[:, j]
+            if not same.any():
+                return
         key = self.corner_face * max(n, 1) + idx
         order = np.argsort(key, kind="stable")
         dup = np.flatnonzero(np.diff(key[order]) == 0)
@@ -98,7 +109,10 @@ class Topology:
             raise MeshTopologyError(f"face {int(self.corner_face[c])} uses vertex {int(idx[c])} more than once")
 
     def _check_edges(self):
-        counts = np.bincount(self.halfedge_edge, minlength=len(self.edges))
+        _ = self._edge_table  # builds the half-edge count of every edge (unless a refinement gave the table)
+        counts = self.__dict__.get("_edge_counts")
+        if counts is None:
+            counts = np.bincount(self.halfedge_edge, minlength=len(self.edges))
         over = np.flatnonzero(counts > 2)
         if over.size:
             e = int(over[0])
@@ -180,13 +194,30 @@ class Topology:
     def _edge_table(self):
         if self._build_edges():
             return self.__dict__["_edge_table"]
+        # One stable sort of the half-edges by undirected key gives the edges (sorted, as
+        # np.unique would), each half-edge's edge and each edge's half-edges (in half-edge order,
+        # so h0 < h1) together. A stable sort: numpy's timsort runs 1-7x faster than its quicksort
+        # on these keys (faces listed in mesh order leave long sorted runs; 200k triangles:
+        # 9 ms against 67 ms; shuffled: no slower), and np.unique + a second argsort took 140 ms.
         a, b = self.halfedge_src, self.halfedge_dst
         lo, hi = np.minimum(a, b), np.maximum(a, b)
         key = lo * max(self.n_vertices, 1) + hi
-        uniq, inverse = np.unique(key, return_inverse=True)
-        n = max(self.n_vertices, 1)
-        edges = np.column_stack([uniq // n, uniq % n])
-        return edges, inverse.ravel()
+        order = np.argsort(key, kind="stable")
+        sorted_key = key[order]
+        first = np.empty(key.size, dtype=bool)
+        first[:1] = True
+        np.not_equal(sorted_key[1:], sorted_key[:-1], out=first[1:])
+        starts = np.flatnonzero(first)
+        h0 = order[starts]
+        edges = np.empty((starts.size, 2), dtype=np.int64)  # gathered: int64 division costs as much as the sort
+        edges[:, 0], edges[:, 1] = lo[h0], hi[h0]
+        count = np.diff(np.append(starts, key.size))
+        self.__dict__.setdefault("_edge_counts", count)
+        inverse = np.empty(key.size, dtype=np.int64)
+        inverse[order] = np.repeat(np.arange(starts.size), count)  # (a cumsum of bools is slower)
+        h1 = np.where(count >= 2, order[np.minimum(starts + 1, max(key.size - 1, 0))], -1)
+        self.__dict__.setdefault("_edge_halfedge_pairs", (h0, h1))
+        return edges, inverse
 
     @property
     def edges(self) -> np.ndarray:
@@ -227,13 +258,8 @@ class Topology:
         """``(h0, h1)`` ``(E,)`` each: the half-edges of every edge, ``h1 = -1`` on the boundary."""
         if self._build_edges():
             return self.__dict__["_edge_halfedge_pairs"]
-        E = self.n_edges
-        order = np.argsort(self.halfedge_edge, kind="stable")
-        first = np.searchsorted(self.halfedge_edge[order], np.arange(E), side="left")
-        count = np.bincount(self.halfedge_edge, minlength=E)
-        h0 = order[first]
-        h1 = np.where(count >= 2, order[np.minimum(first + 1, order.size - 1)], -1)
-        return h0, h1
+        _ = self._edge_table  # builds them with the edges
+        return self.__dict__["_edge_halfedge_pairs"]
 
     @cached_property
     def edge_halfedges(self) -> np.ndarray:
