@@ -1,20 +1,18 @@
 """Green's theorem rule of :mod:`.integrate` for trimmed faces: ``integral over D of g du dv =
 closed integral over dD of G(u, v) dv`` with ``G(u, v) = integral from u_ref to u of g(s, v) ds``
 (``u_ref`` left of the trims). The outer integral runs along the pcurves (pieces split at their
-knots, K15 along each, bisected by :func:`.integrate.integrate` where needed); the inner one is an
-adaptive K15 in ``s``, broken at the surface's u-knots, whose error is carried into the outer
+knots, a Gauss-Kronrod rule along each, bisected by :func:`.integrate.integrate` where needed);
+the inner one is an adaptive Gauss-Kronrod rule in ``s``, broken at the surface's u-knots, whose error is carried into the outer
 piece's error."""
 
 from __future__ import annotations
+
+from dataclasses import dataclass
 
 import numpy as np
 
 from .. import limits
 from ..basis.bspline import basis_ders_t, find_span
-from .kronrod import NODES01 as _T
-from .kronrod import NQ as _NQ
-from .kronrod import W_GAUSS as _W_G
-from .kronrod import W_KRONROD as _W_K
 from .trim_domain import OUTSIDE_DOMAIN, check_in_domain, closed_pcurves, gauss_on, trim_bounds
 
 __all__ = ["GreenRule", "cell_derivatives", "MAX_INNER_LEVELS", "MAX_PIECES"]
@@ -62,51 +60,38 @@ class GreenRule:
     """Green's theorem along the trimming loops of a trimmed face; pieces ``(m, 3)`` =
     ``[edge index, t0, t1]`` of the face's pcurves."""
 
-    def __init__(self, face, integrand):
+    def __init__(self, face, integrand, gk, inner_gk):
+        self.gk, self.inner_gk = gk, inner_gk  # Gauss-Kronrod pairs along the trims and across the face
         self.surface = face.surface
         self.sign = -1.0 if face.reversed else 1.0
         self.integrand = integrand
-        (ua, ub), (v0, v1) = self.surface.domain
-        self.pcurves = closed_pcurves(face.loops, 1e-14 * max(ub - ua, v1 - v0))
-        check_in_domain(face, self.pcurves)
-        # G is integrated from the left of the trims (any constant u_ref will do); trims a little
-        # past the domain take the surface's polynomial extension, as OCC does. The margin keeps
-        # nodes past the trims' extremes unclipped (clipping cut 5e-6 off a disc tangent to
-        # the domain's sides at tolerances below 1e-8).
-        lo, hi = trim_bounds(self.pcurves)
-        mu, mv = OUTSIDE_DOMAIN * (ub - ua), OUTSIDE_DOMAIN * (v1 - v0)
-        self.u_ref, self.u_end = min(ua, float(lo[0])) - mu, max(ub, float(hi[0])) + mu
-        self.v_range = (min(v0, float(lo[1])) - mv, max(v1, float(hi[1])) + mv)
-        self.width = max(self.u_end - self.u_ref, np.finfo(float).tiny)
-        bu = self.surface.bezier_breakpoints()[0]
-        self.u_breaks = np.concatenate([[self.u_ref], bu[(bu > self.u_ref) & (bu < self.u_end)], [self.u_end]])
-        # total variation of v along the loops: bounds how inner errors add up in the outer sum
-        total = 0.0
-        for c in self.pcurves:
-            t, w = gauss_on(c.bezier_breakpoints())
-            total += float(w @ np.abs(c.derivatives(t, 1)[1][:, 1]))
-        self.v_length = max(total, np.finfo(float).tiny)
+        trims = _trims(face)
+        self.pcurves, self.affine, self.initial_pieces = trims.pcurves, trims.affine, trims.pieces
+        self.u_ref, self.u_end, self.v_range, self.width = trims.u_ref, trims.u_end, trims.v_range, trims.width
+        self.u_breaks, self.v_length = trims.u_breaks, trims.v_length
         self.inner_scale = None  # per-component magnitude of g, set on the first pass
+        degree = getattr(integrand, "polynomial_degree", None)
+        # on a plane, g is a polynomial of the integrand's degree in s: a Gauss rule of that
+        # order gives G exactly, no adaptive inner integral needed
+        self.exact_inner = None
+        if self.affine is not None and degree is not None:
+            self.exact_inner = np.polynomial.legendre.leggauss(int(degree) // 2 + 1)
 
     def initial(self):
-        rows = []
-        for i, c in enumerate(self.pcurves):
-            b = c.bezier_breakpoints()
-            rows.append(np.stack([np.full(len(b) - 1, float(i)), b[:-1], b[1:]], axis=1))
-        return np.concatenate(rows)
+        return self.initial_pieces
 
     def _pcurve_points(self, pieces):
-        """``uv (m, 15, 2)`` and ``d(uv)/dt (m, 15, 2)`` at the K15 nodes of the pieces."""
+        """``uv (m, n, 2)`` and ``d(uv)/dt (m, n, 2)`` at the n Kronrod nodes of the pieces."""
         m = len(pieces)
-        t = pieces[:, 1, None] + (pieces[:, 2] - pieces[:, 1])[:, None] * _T
-        uv = np.empty((m, _NQ, 2))
-        duv = np.empty((m, _NQ, 2))
+        t = pieces[:, 1, None] + (pieces[:, 2] - pieces[:, 1])[:, None] * self.gk.t
+        uv = np.empty((m, self.gk.n, 2))
+        duv = np.empty((m, self.gk.n, 2))
         edge = pieces[:, 0].astype(np.intp)
         for i in np.unique(edge):  # one vectorized call per pcurve
             sel = edge == i
             d = self.pcurves[i].derivatives(t[sel].ravel(), 1)
-            uv[sel] = d[0].reshape(-1, _NQ, 2)
-            duv[sel] = d[1].reshape(-1, _NQ, 2)
+            uv[sel] = d[0].reshape(-1, self.gk.n, 2)
+            duv[sel] = d[1].reshape(-1, self.gk.n, 2)
         return uv, duv
 
     def evaluate(self, pieces, targets):
@@ -116,12 +101,12 @@ class GreenRule:
         G, G_err, n_eval = self._inner(uv[..., 0].ravel(), uv[..., 1].ravel(), inner_tol)
         k = G.shape[-1]
         half = 0.5 * (pieces[:, 2] - pieces[:, 1])
-        vt = duv[..., 1] * half[:, None]  # dv/dt times the Jacobian of the map to [-1, 1]: (m, 15)
-        f = G.reshape(m, _NQ, k) * vt[..., None]
-        qk = np.einsum("i,mic->mc", _W_K, f)
-        qg = np.einsum("i,mic->mc", _W_G, f)
-        inner = np.einsum("i,mic->mc", _W_K, G_err.reshape(m, _NQ, k) * np.abs(vt)[..., None])
-        absval = np.einsum("i,mic->mc", _W_K, np.abs(f))
+        vt = duv[..., 1] * half[:, None]  # dv/dt times the Jacobian of the map to [-1, 1]: (m, n)
+        f = G.reshape(m, self.gk.n, k) * vt[..., None]
+        qk = np.einsum("i,mic->mc", self.gk.wk, f)
+        qg = np.einsum("i,mic->mc", self.gk.wg, f)
+        inner = np.einsum("i,mic->mc", self.gk.wk, G_err.reshape(m, self.gk.n, k) * np.abs(vt)[..., None])
+        absval = np.einsum("i,mic->mc", self.gk.wk, np.abs(f))
         return qk, np.abs(qk - qg) + inner, absval, None, n_eval
 
     def split(self, pieces, info, targets):
@@ -131,13 +116,29 @@ class GreenRule:
         return np.concatenate([a, b])
 
     def _g(self, s, v):
-        """The integrand at the nodes ``s`` ``(q, 15)`` of ``q`` intervals, each at its ``v`` ``(q,)``."""
+        """The integrand at the nodes ``s`` ``(q, n)`` of ``q`` intervals, each at its ``v`` ``(q,)``."""
         S, Su, Sv = (x.reshape(-1, 3) for x in cell_derivatives(self.surface, s, v[:, None]))
         return self.integrand(S, Su, Sv, self.sign)
 
+    def _inner_exact(self, u, v):
+        """:meth:`_inner` on an affine surface for an integrand polynomial of degree
+        ``integrand.polynomial_degree`` in the point: a Gauss rule exact for that degree on
+        ``[u_ref, u]``. The error is rounding: 64 machine epsilons of the integral of ``|g|``."""
+        x, w = self.exact_inner
+        origin, du, dv = self.affine
+        h = u - self.u_ref
+        s = self.u_ref + 0.5 * h[:, None] * (x + 1.0)  # (n, g)
+        S = origin + s[..., None] * du + v[:, None, None] * dv
+        S = S.reshape(-1, 3)
+        f = self.integrand(S, np.broadcast_to(du, S.shape), np.broadcast_to(dv, S.shape), self.sign)
+        f = f.reshape(s.shape + f.shape[-1:]) * (0.5 * h)[:, None, None]
+        G = np.einsum("g,ngc->nc", w, f)
+        err = 64.0 * np.finfo(float).eps * np.einsum("g,ngc->nc", w, np.abs(f))
+        return G, err, f.shape[0] * f.shape[1]
+
     def _inner(self, u, v, tol):
         """``G(u, v) = integral from u_ref to u of g(s, v) ds`` at ``n`` points: ``(G (n, k),
-        error (n, k), evaluations)``, adaptive K15 broken at the surface's u-knots.
+        error (n, k), evaluations)``, adaptive Gauss-Kronrod broken at the surface's u-knots.
 
         An interval is accepted when its error is within ``tol * length / width`` (``tol``:
         ``(k,)`` absolute tolerance of G per component), so every G meets ``tol``. On the first
@@ -147,6 +148,8 @@ class GreenRule:
         # rounding of the pcurves' evaluation: stay within the range the trims span
         u = np.clip(u, self.u_ref, self.u_end)
         v = np.clip(v, *self.v_range)
+        if self.exact_inner is not None:
+            return self._inner_exact(u, v)
         interior = self.u_breaks[1:-1]
         # intervals [u_ref, b1], [b1, b2], ..., [b_j, u] for the breaks b below u
         count = np.searchsorted(interior, u, side="left")  # breaks strictly below u (u > b)
@@ -161,19 +164,19 @@ class GreenRule:
         n_eval = 0
         for level in range(MAX_INNER_LEVELS + 1):
             q = s0.size
-            limits.check(q * _NQ * 8 * 24, "inner quadrature nodes")
+            limits.check(q * self.inner_gk.n * 8 * 24, "inner quadrature nodes")
             h = s1 - s0
-            s = s0[:, None] + h[:, None] * _T
-            f = self._g(s, vv).reshape(q, _NQ, -1)
-            n_eval += f.shape[0] * _NQ
+            s = s0[:, None] + h[:, None] * self.inner_gk.t
+            f = self._g(s, vv).reshape(q, self.inner_gk.n, -1)
+            n_eval += f.shape[0] * self.inner_gk.n
             if G is None:
                 k = f.shape[-1]
                 G, G_err = np.zeros((n, k)), np.zeros((n, k))
                 if self.inner_scale is None:
                     self.inner_scale = np.maximum(np.abs(f).max(axis=(0, 1)), np.finfo(float).tiny)
             f = f * (0.5 * h)[:, None, None]
-            qk = np.einsum("i,qic->qc", _W_K, f)
-            err = np.abs(qk - np.einsum("i,qic->qc", _W_G, f))
+            qk = np.einsum("i,qic->qc", self.inner_gk.wk, f)
+            err = np.abs(qk - np.einsum("i,qic->qc", self.inner_gk.wg, f))
             if tol is None:
                 allowed = 1e-13 * self.inner_scale * np.abs(h)[:, None]
             else:
@@ -193,3 +196,63 @@ class GreenRule:
             owners = np.concatenate([owners[keep], owners[keep]])
             vv = np.concatenate([vv[keep], vv[keep]])
         return G, G_err, n_eval
+
+
+@dataclass(frozen=True)
+class _Trims:
+    """What Green's rule needs of a face's trims, whatever the integrand (cached on the face)."""
+
+    pcurves: list  # the loops' pcurves, gaps closed by straight pieces
+    pieces: np.ndarray  # (m, 3) initial pieces [pcurve index, t0, t1]: the pcurves' Bézier spans
+    u_ref: float  # the inner integrals run from u_ref ...
+    u_end: float  # ... to at most u_end
+    v_range: tuple  # (lo, hi) of v along the trims, with a margin
+    width: float  # u_end - u_ref
+    u_breaks: np.ndarray  # u_ref, the surface's u-knots between, u_end: the inner intervals' breaks
+    v_length: float  # total variation of v along the loops
+    affine: tuple | None  # (origin, Su, Sv) when the surface is a plane (:func:`_affine_map`)
+
+
+def _trims(face) -> _Trims:
+    if "green trims" in face._cache:
+        return face._cache["green trims"]
+    surface = face.surface
+    (ua, ub), (v0, v1) = surface.domain
+    pcurves = closed_pcurves(face.loops, 1e-14 * max(ub - ua, v1 - v0))
+    check_in_domain(face, pcurves)
+    # G is integrated from the left of the trims (any constant u_ref will do); trims a little
+    # past the domain take the surface's polynomial extension, as OCC does. The margin keeps
+    # nodes past the trims' extremes unclipped (clipping cut 5e-6 off a disc tangent to
+    # the domain's sides at tolerances below 1e-8).
+    lo, hi = trim_bounds(pcurves)
+    mu, mv = OUTSIDE_DOMAIN * (ub - ua), OUTSIDE_DOMAIN * (v1 - v0)
+    u_ref, u_end = min(ua, float(lo[0])) - mu, max(ub, float(hi[0])) + mu
+    bu = surface.bezier_breakpoints()[0]
+    # total variation of v along the loops: bounds how inner errors add up in the outer sum
+    total, rows = 0.0, []
+    for i, c in enumerate(pcurves):
+        b = c.bezier_breakpoints()
+        rows.append(np.stack([np.full(len(b) - 1, float(i)), b[:-1], b[1:]], axis=1))
+        t, w = gauss_on(b)
+        total += float(w @ np.abs(c.derivatives(t, 1)[1][:, 1]))
+    trims = _Trims(pcurves=pcurves, pieces=np.concatenate(rows), u_ref=u_ref, u_end=u_end,
+                   v_range=(min(v0, float(lo[1])) - mv, max(v1, float(hi[1])) + mv),
+                   width=max(u_end - u_ref, np.finfo(float).tiny),
+                   u_breaks=np.concatenate([[u_ref], bu[(bu > u_ref) & (bu < u_end)], [u_end]]),
+                   v_length=max(total, np.finfo(float).tiny), affine=_affine_map(surface))
+    face._cache["green trims"] = trims
+    return trims
+
+
+def _affine_map(surface, rel: float = 1e-14):
+    """``(origin, Su, Sv)`` (each ``(3,)``) with ``S(u, v) = origin + u Su + v Sv`` when the surface
+    is that affine map (a non-rational bilinear patch whose net is a parallelogram: a plane, as
+    STEP files and OCC write them), else None."""
+    if surface._rational or (surface._pu, surface._pv) != (1, 1) or surface._coefs.shape[:2] != (2, 2):
+        return None
+    P = surface._coefs
+    if np.abs(P[1, 1] - P[1, 0] - P[0, 1] + P[0, 0]).max() > rel * max(np.abs(P).max(), np.finfo(float).tiny):
+        return None
+    (u0, u1), (v0, v1) = surface.domain
+    Su, Sv = (P[1, 0] - P[0, 0]) / (u1 - u0), (P[0, 1] - P[0, 0]) / (v1 - v0)
+    return P[0, 0] - u0 * Su - v0 * Sv, Su, Sv

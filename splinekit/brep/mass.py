@@ -125,6 +125,7 @@ def _integrand(center, parts):
             cols += _volume_columns(x, N, sign) if "volume moments" in parts else _volume_columns(x, N, sign)[:1]
         return np.concatenate(cols, axis=1)
 
+    f.polynomial_degree = 3  # with Su, Sv constant: at most x_i x_j (x . N), cubic in S
     return f
 
 

@@ -1,5 +1,6 @@
 """Tensor-product rule of :mod:`.integrate` for untrimmed faces (natural domain, or one loop around
-an axis-parallel rectangle): K15 x K15 on cells of the faces' Bézier patches.
+an axis-parallel rectangle): a Gauss-Kronrod pair in both directions on cells of the faces'
+Bézier patches.
 
 Every face of the same degrees is held in one rule, so a pass of the adaptive loop evaluates the
 new cells of all of them at once (the Newell teapot's 32 patches: one evaluation per pass
@@ -18,11 +19,6 @@ import numpy as np
 
 from .. import limits
 from ..basis.algebra import bezier_segments
-from .kronrod import NODES01 as _T
-from .kronrod import NQ as _NQ
-from .kronrod import W_GAUSS as _W_G
-from .kronrod import W_KRONROD as _W_K
-from .trim_domain import check_in_domain
 
 __all__ = ["TensorRule", "bezier_nets", "group_key"]
 
@@ -62,43 +58,32 @@ def bernstein_ders(p: int, t: np.ndarray) -> np.ndarray:
 
 
 class TensorRule:
-    """K15 x K15 on cells ``(m, 5)`` = ``[patch, a0, a1, b0, b1]`` of the Bézier patches of
-    ``faces`` (all of one :func:`group_key`); ``rects[i]`` is the face's axis-parallel rectangle
-    ``(u0, u1, v0, v1)`` when its only loop is one, else None (natural domain)."""
+    """The Gauss-Kronrod pair ``gk`` (:mod:`.kronrod`) in both directions on cells ``(m, 5)`` =
+    ``[patch, a0, a1, b0, b1]`` of the Bézier patches of ``faces`` (all of one :func:`group_key`);
+    ``rects[i]`` is the face's axis-parallel rectangle ``(u0, u1, v0, v1)`` when its only loop is
+    one, else None (natural domain)."""
 
-    def __init__(self, faces, rects, integrand):
+    def __init__(self, faces, rects, integrand, gk):
         first = faces[0].surface
+        self.gk = gk
         self.p, self.q, self.rational = first._pu, first._pv, first._rational
         self.integrand = integrand
-        nets, hu, hv, sign, cells = [], [], [], [], []
-        count = 0
-        for face, rect in zip(faces, rects):
-            surface = face.surface
-            if rect is not None:  # the rectangle's sides: the same domain check as Green's trims
-                check_in_domain(face, [e.pcurve for e in face.loops[0]])
-            bu, bv = surface.bezier_breakpoints()
-            net = bezier_nets(surface)
-            iu, au = _spans(bu, None if rect is None else rect[:2])
-            iv, av = _spans(bv, None if rect is None else rect[2:])
-            patch = count + np.arange(len(iu))[:, None] * len(iv) + np.arange(len(iv))
-            nets.append(net[iu][:, :, iv].transpose(0, 2, 1, 3, 4).reshape((-1,) + net.shape[1:2] + net.shape[3:]))
-            hu.append(np.repeat(np.diff(bu)[iu], len(iv)))
-            hv.append(np.tile(np.diff(bv)[iv], len(iu)))
-            sign.append(np.full(len(iu) * len(iv), -1.0 if face.reversed else 1.0))
-            A0, B0 = np.meshgrid(au[:, 0], av[:, 0], indexing="ij")
-            A1, B1 = np.meshgrid(au[:, 1], av[:, 1], indexing="ij")
-            cells.append(np.stack([patch.ravel(), A0.ravel(), A1.ravel(), B0.ravel(), B1.ravel()], axis=1).astype(float))
-            count += len(iu) * len(iv)
-        self.nets = np.concatenate(nets)  # (patches, p + 1, q + 1, k)
-        self.hu, self.hv, self.sign = np.concatenate(hu), np.concatenate(hv), np.concatenate(sign)
-        self._initial = np.concatenate(cells)
+        parts = [_patches(face, rect) for face, rect in zip(faces, rects)]
+        self.nets = np.concatenate([p[0] for p in parts])  # (patches, p + 1, q + 1, k)
+        self.hu = np.concatenate([p[1] for p in parts])  # (patches,) the patches' widths in u, v
+        self.hv = np.concatenate([p[2] for p in parts])
+        self.sign = np.concatenate([np.full(len(p[0]), -1.0 if f.reversed else 1.0) for p, f in zip(parts, faces)])
+        cells = np.concatenate([p[3] for p in parts])
+        offsets = np.cumsum([0] + [len(p[0]) for p in parts[:-1]])
+        cells[:, 0] += np.repeat(offsets, [len(p[3]) for p in parts])  # the face's patch -> the rule's
+        self._initial = cells
 
     def initial(self):
         return self._initial
 
     def _derivatives(self, patch, a, b):
-        """``S``, ``Su``, ``Sv`` ``(m, 15, 15, 3)`` on the grids ``a[c] x b[c]`` (local
-        parameters ``(m, 15)`` of the patches ``patch`` ``(m,)``), derivatives with respect to the
+        """``S``, ``Su``, ``Sv`` ``(m, n, n, 3)`` on the grids ``a[c] x b[c]`` (local
+        parameters ``(m, n)`` of the patches ``patch`` ``(m,)``), derivatives with respect to the
         faces' own parameters. Two small contractions per cell: the Bernstein values in u with
         the net, then in v."""
         m, n = a.shape
@@ -122,23 +107,24 @@ class TensorRule:
 
     def evaluate(self, cells, targets):
         m = len(cells)
-        limits.check(m * _NQ * _NQ * 8 * 24, "tensor quadrature nodes")
+        limits.check(m * self.gk.n * self.gk.n * 8 * 24, "tensor quadrature nodes")
         patch = cells[:, 0].astype(np.intp)
         da, db = cells[:, 2] - cells[:, 1], cells[:, 4] - cells[:, 3]
-        a = cells[:, 1, None] + da[:, None] * _T  # (m, 15)
-        b = cells[:, 3, None] + db[:, None] * _T
+        a = cells[:, 1, None] + da[:, None] * self.gk.t  # (m, n)
+        b = cells[:, 3, None] + db[:, None] * self.gk.t
         S, Su, Sv = (x.reshape(-1, 3) for x in self._derivatives(patch, a, b))
-        f = self.integrand(S, Su, Sv, np.repeat(self.sign[patch], _NQ * _NQ))  # (m * 225, k)
+        n = self.gk.n
+        f = self.integrand(S, Su, Sv, np.repeat(self.sign[patch], n * n))  # (m * n * n, k)
         k = f.shape[-1]
         jac = 0.25 * da * db * self.hu[patch] * self.hv[patch]
-        f = (f.reshape(m, _NQ, _NQ, k) * jac[:, None, None, None]).transpose(0, 3, 1, 2)  # (m, k, i, j)
-        W = np.stack([_W_K, _W_G])  # (2, 15): the Kronrod and Gauss weights
+        f = (f.reshape(m, n, n, k) * jac[:, None, None, None]).transpose(0, 3, 1, 2)  # (m, k, i, j)
+        W = np.stack([self.gk.wk, self.gk.wg])  # (2, n): the Kronrod and Gauss weights
         # q[m, c, r, s] = sum_ij W[r, i] W[s, j] f[m, c, i, j]: kk, kg (r, s = K, G), gk
         q = W @ (f @ W.T)
         kk, kg, gk = q[:, :, 0, 0], q[:, :, 0, 1], q[:, :, 1, 0]
-        absval = (np.abs(f) @ _W_K) @ _W_K  # (m, k)
+        absval = (np.abs(f) @ self.gk.wk) @ self.gk.wk  # (m, k)
         err_u, err_v = np.abs(kk - gk), np.abs(kk - kg)
-        return kk, err_u + err_v, absval, (err_u, err_v), m * _NQ * _NQ
+        return kk, err_u + err_v, absval, (err_u, err_v), m * n * n
 
     def split(self, cells, info, targets):
         err_u, err_v = info
@@ -149,6 +135,28 @@ class TensorRule:
         lo[in_u, 2] = hi[in_u, 1] = mid_a[in_u]
         lo[~in_u, 4] = hi[~in_u, 3] = mid_b[~in_u]
         return np.concatenate([lo, hi])
+
+
+def _patches(face, rect):
+    """``(nets (P, p + 1, q + 1, k), hu (P,), hv (P,), cells (P, 5))``: the face's Bézier patches
+    that meet its rectangle ``rect`` (all when None), their widths in u and v, and one initial
+    cell on each (patch indices from 0). Cached on the face."""
+    key = ("tensor patches", rect)
+    if key in face._cache:
+        return face._cache[key]
+    surface = face.surface
+    bu, bv = surface.bezier_breakpoints()
+    net = bezier_nets(surface)
+    iu, au = _spans(bu, None if rect is None else rect[:2])
+    iv, av = _spans(bv, None if rect is None else rect[2:])
+    nets = net[iu][:, :, iv].transpose(0, 2, 1, 3, 4).reshape((-1,) + net.shape[1:2] + net.shape[3:])
+    A0, B0 = np.meshgrid(au[:, 0], av[:, 0], indexing="ij")
+    A1, B1 = np.meshgrid(au[:, 1], av[:, 1], indexing="ij")
+    index = np.arange(len(iu) * len(iv), dtype=float)
+    out = (nets, np.repeat(np.diff(bu)[iu], len(iv)), np.tile(np.diff(bv)[iv], len(iu)),
+           np.stack([index, A0.ravel(), A1.ravel(), B0.ravel(), B1.ravel()], axis=1))
+    face._cache[key] = out
+    return out
 
 
 def _spans(breaks, interval):

@@ -19,7 +19,7 @@ OUTSIDE_EDGE_TOLERANCES = 4.0  # and then by at most this many edge tolerances, 
 
 
 __all__ = ["OUTSIDE_DOMAIN", "OUTSIDE_EDGE_TOLERANCES", "check_in_domain", "closed_pcurves", "gauss_on",
-           "rectangle", "trim_bounds"]
+           "layout", "rectangle", "trim_bounds"]
 
 
 def _samples(curve, per_piece: int = 33):
@@ -111,6 +111,19 @@ def gauss_on(breaks):
     breaks = np.asarray(breaks, dtype=float)
     mid, half = 0.5 * (breaks[1:] + breaks[:-1]), 0.5 * (breaks[1:] - breaks[:-1])
     return (mid[:, None] + half[:, None] * g).ravel(), (half[:, None] * w).ravel()
+
+
+def layout(face):
+    """``(kind, rect)``: ``("natural", None)`` for an untrimmed face, ``("rectangle", (u0, u1, v0,
+    v1))`` for a face whose only loop is an axis-parallel rectangle (its sides checked against
+    the domain like any trim), ``("trimmed", None)`` otherwise. Cached on the face."""
+    if "layout" not in face._cache:
+        rect = rectangle(face) if face.is_trimmed else None
+        if rect is not None:
+            check_in_domain(face, [e.pcurve for e in face.loops[0]])
+        kind = "natural" if not face.is_trimmed else "trimmed" if rect is None else "rectangle"
+        face._cache["layout"] = (kind, rect)
+    return face._cache["layout"]
 
 
 def rectangle(face, rel: float = 1e-12):
