@@ -15,6 +15,8 @@ too large are bisected across the direction with the larger part.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from .. import limits
@@ -52,16 +54,23 @@ def bezier_nets(surface) -> np.ndarray:
 
 def bernstein_ders(p: int, t: np.ndarray) -> np.ndarray:
     """``(2, p + 1) + t.shape``: the degree-``p`` Bernstein polynomials and their derivatives at
-    ``t`` (by the recurrence ``B^p_i = (1 - t) B^(p-1)_i + t B^(p-1)_(i-1)``, stable on [0, 1] and
-    the polynomial extension just outside it)."""
+    ``t``, from the power form ``C(p, i) t^i (1 - t)^(p - i)`` (positive terms on [0, 1]: a few
+    ulps; the polynomial extension just outside it), derivatives
+    ``p (B^(p-1)_(i-1) - B^(p-1)_i)``."""
     s = 1.0 - t
-    B = np.ones((1,) + t.shape)  # degree 0
-    zero = np.zeros((1,) + t.shape)
-    for _ in range(p - 1):  # up to degree p - 1
-        B = np.concatenate([B, zero]) * s + np.concatenate([zero, B]) * t
-    # B^(p-1)_i and B^(p-1)_(i-1): the values by one more step, the derivatives by their difference
-    low, high = np.concatenate([B, zero]), np.concatenate([zero, B])
-    return np.stack([s * low + t * high, p * (high - low)])
+    tp, sp = np.empty((p + 1,) + t.shape), np.empty((p + 1,) + t.shape)
+    tp[0] = sp[0] = 1.0
+    for i in range(1, p + 1):  # powers t^i, (1 - t)^i: p small products
+        np.multiply(tp[i - 1], t, out=tp[i])
+        np.multiply(sp[i - 1], s, out=sp[i])
+    expand = (slice(None),) + (None,) * t.ndim
+    out = np.empty((2, p + 1) + t.shape)
+    out[0] = np.array([math.comb(p, i) for i in range(p + 1)], float)[expand] * tp * sp[::-1]
+    low = np.array([math.comb(p - 1, i) for i in range(p)], float)[expand] * tp[:-1] * sp[-2::-1]  # degree p - 1
+    out[1, 0] = -p * low[0]
+    out[1, 1:-1] = p * (low[:-1] - low[1:])
+    out[1, -1] = p * low[-1]
+    return out
 
 
 class TensorRule:
