@@ -7,12 +7,15 @@ piece's error."""
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 
 import numpy as np
 
 from .. import limits
+from ..basis.algebra import bezier_elevation_matrix, bezier_segments
 from ..basis.bspline import basis_ders_t, find_span
+from .tensor_rule import bernstein_ders
 from .trim_domain import OUTSIDE_DOMAIN, check_in_domain, closed_pcurves, gauss_on, trim_bounds
 
 __all__ = ["GreenRule", "cell_derivatives", "MAX_INNER_LEVELS", "MAX_PIECES"]
@@ -58,7 +61,8 @@ def cell_derivatives(surface, u, v):
 
 class GreenRule:
     """Green's theorem along the trimming loops of a trimmed face; pieces ``(m, 3)`` =
-    ``[edge index, t0, t1]`` of the face's pcurves."""
+    ``[segment, a0, a1]``: intervals in the local ``[0, 1]`` parameters of the Bézier segments of
+    the face's pcurves."""
 
     def __init__(self, face, integrand, gk, inner_gk):
         self.gk, self.inner_gk = gk, inner_gk  # Gauss-Kronrod pairs along the trims and across the face
@@ -67,6 +71,7 @@ class GreenRule:
         self.integrand = integrand
         trims = _trims(face)
         self.pcurves, self.affine, self.initial_pieces = trims.pcurves, trims.affine, trims.pieces
+        self.segments, self.seg_width = trims.segments, trims.seg_width
         self.u_ref, self.u_end, self.v_range, self.width = trims.u_ref, trims.u_end, trims.v_range, trims.width
         self.u_breaks, self.v_length = trims.u_breaks, trims.v_length
         self.inner_scale = None  # per-component magnitude of g, set on the first pass
@@ -75,23 +80,21 @@ class GreenRule:
         # order gives G exactly, no adaptive inner integral needed
         self.exact_inner = None
         if self.affine is not None and degree is not None:
-            self.exact_inner = np.polynomial.legendre.leggauss(int(degree) // 2 + 1)
+            self.exact_inner = _gauss_legendre(int(degree) // 2 + 1)
 
     def initial(self):
         return self.initial_pieces
 
     def _pcurve_points(self, pieces):
-        """``uv (m, n, 2)`` and ``d(uv)/dt (m, n, 2)`` at the n Kronrod nodes of the pieces."""
-        m = len(pieces)
-        t = pieces[:, 1, None] + (pieces[:, 2] - pieces[:, 1])[:, None] * self.gk.t
-        uv = np.empty((m, self.gk.n, 2))
-        duv = np.empty((m, self.gk.n, 2))
-        edge = pieces[:, 0].astype(np.intp)
-        for i in np.unique(edge):  # one vectorized call per pcurve
-            sel = edge == i
-            d = self.pcurves[i].derivatives(t[sel].ravel(), 1)
-            uv[sel] = d[0].reshape(-1, self.gk.n, 2)
-            duv[sel] = d[1].reshape(-1, self.gk.n, 2)
+        """``uv (m, n, 2)`` and ``d(uv)/dt (m, n, 2)`` at the n Kronrod nodes of the pieces, all
+        in one evaluation of the trims' Bézier segments (raised to one degree)."""
+        seg = pieces[:, 0].astype(np.intp)
+        a = pieces[:, 1, None] + (pieces[:, 2] - pieces[:, 1])[:, None] * self.gk.t  # (m, n) local
+        B = bernstein_ders(self.segments.shape[1] - 1, a)  # (2, P + 1, m, n)
+        H = np.einsum("dimn,mik->dmnk", B, self.segments[seg])  # homogeneous (w u, w v, w) and d/da
+        w = H[0, ..., 2:]
+        uv = H[0, ..., :2] / w
+        duv = (H[1, ..., :2] - H[1, ..., 2:] * uv) / (w * self.seg_width[seg][:, None, None])
         return uv, duv
 
     def evaluate(self, pieces, targets):
@@ -100,7 +103,7 @@ class GreenRule:
         inner_tol = None if targets is None else 0.1 * targets / self.v_length
         G, G_err, n_eval = self._inner(uv[..., 0].ravel(), uv[..., 1].ravel(), inner_tol)
         k = G.shape[-1]
-        half = 0.5 * (pieces[:, 2] - pieces[:, 1])
+        half = 0.5 * (pieces[:, 2] - pieces[:, 1]) * self.seg_width[pieces[:, 0].astype(np.intp)]  # in t
         vt = duv[..., 1] * half[:, None]  # dv/dt times the Jacobian of the map to [-1, 1]: (m, n)
         f = G.reshape(m, self.gk.n, k) * vt[..., None]
         qk = np.einsum("i,mic->mc", self.gk.wk, f)
@@ -198,12 +201,20 @@ class GreenRule:
         return G, G_err, n_eval
 
 
+@functools.lru_cache(maxsize=8)
+def _gauss_legendre(n: int) -> tuple[np.ndarray, np.ndarray]:
+    """numpy's n-point Gauss-Legendre rule on [-1, 1], computed once per n."""
+    return np.polynomial.legendre.leggauss(n)
+
+
 @dataclass(frozen=True)
 class _Trims:
     """What Green's rule needs of a face's trims, whatever the integrand (cached on the face)."""
 
     pcurves: list  # the loops' pcurves, gaps closed by straight pieces
-    pieces: np.ndarray  # (m, 3) initial pieces [pcurve index, t0, t1]: the pcurves' Bézier spans
+    segments: np.ndarray  # (s, P + 1, 3) their Bézier segments, homogeneous, raised to one degree P
+    seg_width: np.ndarray  # (s,) the segments' lengths in their curves' parameters
+    pieces: np.ndarray  # (s, 3) initial pieces [segment, a0, a1] (local parameters): the segments
     u_ref: float  # the inner integrals run from u_ref ...
     u_end: float  # ... to at most u_end
     v_range: tuple  # (lo, hi) of v along the trims, with a margin
@@ -229,13 +240,22 @@ def _trims(face) -> _Trims:
     u_ref, u_end = min(ua, float(lo[0])) - mu, max(ub, float(hi[0])) + mu
     bu = surface.bezier_breakpoints()[0]
     # total variation of v along the loops: bounds how inner errors add up in the outer sum
-    total, rows = 0.0, []
-    for i, c in enumerate(pcurves):
-        b = c.bezier_breakpoints()
-        rows.append(np.stack([np.full(len(b) - 1, float(i)), b[:-1], b[1:]], axis=1))
-        t, w = gauss_on(b)
+    total, segments, widths = 0.0, [], []
+    for c in pcurves:
+        breaks, seg = bezier_segments(c._degree, c._knots, c._coefs)  # (s, p + 1, 2 or 3)
+        if not c._rational:
+            seg = np.concatenate([seg, np.ones(seg.shape[:2] + (1,))], axis=2)
+        segments.append(seg)
+        widths.append(np.diff(breaks))
+        t, w = gauss_on(breaks)
         total += float(w @ np.abs(c.derivatives(t, 1)[1][:, 1]))
-    trims = _Trims(pcurves=pcurves, pieces=np.concatenate(rows), u_ref=u_ref, u_end=u_end,
+    top = max(s.shape[1] for s in segments) - 1
+    segments = np.concatenate([np.einsum("ij,sjk->sik", bezier_elevation_matrix(s.shape[1] - 1, top - s.shape[1] + 1), s)
+                               if s.shape[1] - 1 < top else s for s in segments])
+    count = len(segments)
+    trims = _Trims(pcurves=pcurves, segments=segments, seg_width=np.concatenate(widths),
+                   pieces=np.stack([np.arange(count, dtype=float), np.zeros(count), np.ones(count)], axis=1),
+                   u_ref=u_ref, u_end=u_end,
                    v_range=(min(v0, float(lo[1])) - mv, max(v1, float(hi[1])) + mv),
                    width=max(u_end - u_ref, np.finfo(float).tiny),
                    u_breaks=np.concatenate([[u_ref], bu[(bu > u_ref) & (bu < u_end)], [u_end]]),
