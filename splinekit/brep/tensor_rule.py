@@ -81,6 +81,7 @@ class TensorRule:
     def __init__(self, faces, rects, integrand, gk):
         first = faces[0].surface
         self.gk = gk
+        self._weights = np.stack([gk.wk, gk.wg])  # (2, n): the Kronrod and Gauss weights
         self.p, self.q, self.rational = first._pu, first._pv, first._rational
         self.integrand = integrand
         parts = [_patches(face, rect) for face, rect in zip(faces, rects)]
@@ -96,21 +97,21 @@ class TensorRule:
     def initial(self):
         return self._initial
 
-    def _derivatives(self, patch, a, b):
-        """``S``, ``Su``, ``Sv`` ``(m, n, n, 3)`` on the grids ``a[c] x b[c]`` (local
-        parameters ``(m, n)`` of the patches ``patch`` ``(m,)``), derivatives with respect to the
-        faces' own parameters. Two small contractions per cell: the Bernstein values in u with
-        the net, then in v."""
-        m, n = a.shape
+    def _derivatives(self, patch, Ba, Bb):
+        """``S``, ``Su``, ``Sv`` ``(m, n, n, 3)`` on the tensor grids of ``m`` cells of the
+        patches ``patch`` ``(m,)``, given the Bernstein values and derivatives at the cells' local
+        nodes, ``Ba`` ``(2, m, n, p + 1)`` in u and ``Bb`` ``(2, m, n, q + 1)`` in v; derivatives
+        with respect to the faces' own parameters. Two small contractions per cell: the
+        Bernstein values in u with the net, then in v."""
+        m, n = Ba.shape[1:3]
         net = self.nets[patch]  # (m, p + 1, q + 1, k)
         p1, q1, k = net.shape[1:]
         # batched matrix products on contiguous operands, each output contiguous in (m, i, j, k)
         # so that the integrand gets (m n n, k) rows without a copy (einsum's generic loop, a
         # transposed result or a strided operand cost 5-10x more here)
         net = net.reshape(m, 1, p1, q1 * k)
-        Ba = np.ascontiguousarray(bernstein_ders(self.p, a).transpose(0, 2, 3, 1))  # (d/du, m, i, p + 1)
         A0, A1 = ((Ba[d][:, None] @ net).reshape(m, n, q1, k) for d in (0, 1))  # (m, i, q + 1, k)
-        Bb = np.ascontiguousarray(bernstein_ders(self.q, b).transpose(0, 2, 3, 1))[:, :, None]  # (d/dv, m, 1, j, q + 1)
+        Bb = Bb[:, :, None]  # (d/dv, m, 1, j, q + 1)
         D = {(0, 0): Bb[0] @ A0, (1, 0): Bb[0] @ A1, (0, 1): Bb[1] @ A0}  # (m, i, j, k)
         hu = self.hu[patch][:, None, None, None]
         hv = self.hv[patch][:, None, None, None]
@@ -123,34 +124,36 @@ class TensorRule:
         return S, Su, Sv
 
     def evaluate(self, cells, targets):
-        # no memory check: the temporaries are those of one chunk, whatever the number of cells
-        step = max(1, CHUNK_POINTS // (self.gk.n * self.gk.n))
-        parts = [self._evaluate(cells[i:i + step]) for i in range(0, len(cells), step)]
-        if len(parts) == 1:
-            return parts[0]
-        kk, err, absval, info, used = zip(*parts)
-        info = tuple(np.concatenate(c) for c in zip(*info))
-        return np.concatenate(kk), np.concatenate(err), np.concatenate(absval), info, sum(used)
-
-    def _evaluate(self, cells):
-        m = len(cells)
+        # what is per cell is computed for all of them; the per-node work runs in chunks, whose
+        # temporaries are bounded (no memory check needed whatever the number of cells)
+        n = self.gk.n
         patch = cells[:, 0].astype(np.intp)
         da, db = cells[:, 2] - cells[:, 1], cells[:, 4] - cells[:, 3]
-        a = cells[:, 1, None] + da[:, None] * self.gk.t  # (m, n)
+        a = cells[:, 1, None] + da[:, None] * self.gk.t  # (m, n) local parameters
         b = cells[:, 3, None] + db[:, None] * self.gk.t
-        S, Su, Sv = (x.reshape(-1, 3) for x in self._derivatives(patch, a, b))
-        n = self.gk.n
+        Ba = np.ascontiguousarray(bernstein_ders(self.p, a).transpose(0, 2, 3, 1))  # (d/du, m, i, p + 1)
+        Bb = np.ascontiguousarray(bernstein_ders(self.q, b).transpose(0, 2, 3, 1))  # (d/dv, m, j, q + 1)
+        jac = (0.25 * da * db * self.hu[patch] * self.hv[patch])[:, None]
+        step = max(1, CHUNK_POINTS // (n * n))
+        q, absval = zip(*(self._sums(patch[i:i + step], Ba[:, i:i + step], Bb[:, i:i + step])
+                          for i in range(0, len(cells), step)))
+        q, absval = np.concatenate(q), np.concatenate(absval) * jac
+        kk, kg, gk = q[:, 0, 0] * jac, q[:, 0, 1] * jac, q[:, 1, 0] * jac
+        err_u, err_v = np.abs(kk - gk), np.abs(kk - kg)
+        return kk, err_u + err_v, absval, (err_u, err_v), len(cells) * n * n
+
+    def _sums(self, patch, Ba, Bb):
+        """The weighted sums of the integrand over one chunk of cells, before their Jacobians:
+        ``q (m, 2, 2, k)`` (u rule, v rule: Kronrod 0, Gauss 1) and ``absval (m, k)`` (Kronrod,
+        of ``|f|``)."""
+        m, n = Ba.shape[1:3]
+        S, Su, Sv = (x.reshape(-1, 3) for x in self._derivatives(patch, Ba, Bb))
         f = self.integrand(S, Su, Sv, np.repeat(self.sign[patch], n * n))  # (m * n * n, k)
         k = f.shape[-1]
-        jac = (0.25 * da * db * self.hu[patch] * self.hv[patch])[:, None]
         f = f.reshape(m, n, n, k)  # (m, i, j, k): u node i, v node j
-        W = np.stack([self.gk.wk, self.gk.wg])  # (2, n): the Kronrod and Gauss weights
         # contract j then i with matmuls on contiguous arrays (transposed operands were slower)
-        q = (W @ (W @ f).reshape(m, n, 2 * k)).reshape(m, 2, 2, k)  # [m, u rule, v rule, k]
-        kk, kg, gk = q[:, 0, 0] * jac, q[:, 0, 1] * jac, q[:, 1, 0] * jac
-        absval = (self.gk.wk @ (self.gk.wk @ np.abs(f))) * jac  # (m, k)
-        err_u, err_v = np.abs(kk - gk), np.abs(kk - kg)
-        return kk, err_u + err_v, absval, (err_u, err_v), m * n * n
+        q = (self._weights @ (self._weights @ f).reshape(m, n, 2 * k)).reshape(m, 2, 2, k)
+        return q, self.gk.wk @ (self.gk.wk @ np.abs(f))
 
     def split(self, cells, info, targets):
         err_u, err_v = info
