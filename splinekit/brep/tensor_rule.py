@@ -88,7 +88,7 @@ class TensorRule:
         self.nets = np.concatenate([p[0] for p in parts])  # (patches, p + 1, q + 1, k)
         self.hu = np.concatenate([p[1] for p in parts])  # (patches,) the patches' widths in u, v
         self.hv = np.concatenate([p[2] for p in parts])
-        self.sign = np.concatenate([np.full(len(p[0]), -1.0 if f.reversed else 1.0) for p, f in zip(parts, faces)])
+        self.sign = np.concatenate([p[4] for p in parts])  # (patches,) -1 on reversed faces
         cells = np.concatenate([p[3] for p in parts])
         offsets = np.cumsum([0] + [len(p[0]) for p in parts[:-1]])
         cells[:, 0] += np.repeat(offsets, [len(p[3]) for p in parts])  # the face's patch -> the rule's
@@ -167,9 +167,9 @@ class TensorRule:
 
 
 def _patches(face, rect):
-    """``(nets (P, p + 1, q + 1, k), hu (P,), hv (P,), cells (P, 5))``: the face's Bézier patches
-    that meet its rectangle ``rect`` (all when None), their widths in u and v, and one initial
-    cell on each (patch indices from 0). Cached on the face."""
+    """``(nets (P, p + 1, q + 1, k), hu (P,), hv (P,), cells (P, 5), sign (P,))``: the face's
+    Bézier patches that meet its rectangle ``rect`` (all when None), their widths in u and v, one
+    initial cell on each (patch indices from 0), the face's orientation. Cached on the face."""
     key = ("tensor patches", rect)
     if key in face._cache:
         return face._cache[key]
@@ -183,7 +183,8 @@ def _patches(face, rect):
     A1, B1 = np.meshgrid(au[:, 1], av[:, 1], indexing="ij")
     index = np.arange(len(iu) * len(iv), dtype=float)
     out = (nets, np.repeat(np.diff(bu)[iu], len(iv)), np.tile(np.diff(bv)[iv], len(iu)),
-           np.stack([index, A0.ravel(), A1.ravel(), B0.ravel(), B1.ravel()], axis=1))
+           np.stack([index, A0.ravel(), A1.ravel(), B0.ravel(), B1.ravel()], axis=1),
+           np.full(index.size, -1.0 if face.reversed else 1.0))
     face._cache[key] = out
     return out
 
