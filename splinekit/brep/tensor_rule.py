@@ -113,15 +113,11 @@ class TensorRule:
         A0, A1 = ((Ba[d][:, None] @ net).reshape(m, n, q1, k) for d in (0, 1))  # (m, i, q + 1, k)
         Bb = Bb[:, :, None]  # (d/dv, m, 1, j, q + 1)
         D = {(0, 0): Bb[0] @ A0, (1, 0): Bb[0] @ A1, (0, 1): Bb[1] @ A0}  # (m, i, j, k)
-        hu = self.hu[patch][:, None, None, None]
-        hv = self.hv[patch][:, None, None, None]
         if not self.rational:
-            return D[0, 0], D[1, 0] / hu, D[0, 1] / hv
+            return D[0, 0], D[1, 0], D[0, 1]
         w, wu, wv = D[0, 0][..., -1:], D[1, 0][..., -1:], D[0, 1][..., -1:]
         S = D[0, 0][..., :-1] / w
-        Su = (D[1, 0][..., :-1] - wu * S) / (w * hu)
-        Sv = (D[0, 1][..., :-1] - wv * S) / (w * hv)
-        return S, Su, Sv
+        return S, (D[1, 0][..., :-1] - wu * S) / w, (D[0, 1][..., :-1] - wv * S) / w
 
     def evaluate(self, cells, targets):
         # what is per cell is computed for all of them; the per-node work runs in chunks, whose
@@ -133,6 +129,8 @@ class TensorRule:
         b = cells[:, 3, None] + db[:, None] * self.gk.t
         Ba = np.ascontiguousarray(bernstein_ders(self.p, a).transpose(0, 2, 3, 1))  # (d/du, m, i, p + 1)
         Bb = np.ascontiguousarray(bernstein_ders(self.q, b).transpose(0, 2, 3, 1))  # (d/dv, m, j, q + 1)
+        Ba[1] /= self.hu[patch][:, None, None]  # d/da -> d/du: the patch's width
+        Bb[1] /= self.hv[patch][:, None, None]
         jac = (0.25 * da * db * self.hu[patch] * self.hv[patch])[:, None]
         step = max(1, CHUNK_POINTS // (n * n))
         q, absval = zip(*(self._sums(patch[i:i + step], Ba[:, i:i + step], Bb[:, i:i + step])
