@@ -137,10 +137,18 @@ def _integrand(center, parts):
 
     def f(S, Su, Sv, sign):
         N = _cross(Su, Sv)
-        x = S - center
-        cols = (_area_columns(x, N, area_moments) if area else []) + \
-            (_volume_columns(x, N, sign, volume_moments) if volume else [])
-        return cols[0] if len(cols) == 1 else np.concatenate(cols, axis=1)
+        if area_moments or volume_moments:
+            x = S - center
+            cols = (_area_columns(x, N, area_moments) if area else []) + \
+                (_volume_columns(x, N, sign, volume_moments) if volume else [])
+            return np.concatenate(cols, axis=1)
+        # area and/or volume alone (the common case): written into one array
+        out = np.empty((len(S), int(area) + int(volume)))
+        if area:
+            np.sqrt(_dot(N, N), out=out[:, 0])
+        if volume:
+            np.multiply(_dot(S - center, N), sign / 3.0, out=out[:, -1])
+        return out
 
     f.polynomial_degree = 3  # with Su, Sv constant: at most x_i x_j (x . N), cubic in S
     return f
