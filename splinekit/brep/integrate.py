@@ -1,11 +1,12 @@
 """Adaptive quadrature over trimmed faces: integrals of smooth integrands over a face's (u, v)
 domain to a requested relative tolerance, with an error estimate.
 
-Two rules, both built on the 7-15 point Gauss-Kronrod pair (:mod:`.kronrod`):
+Two rules, both built on a Gauss-Kronrod pair (:mod:`.kronrod`: 7-15, or 10-21 for tolerances
+below :data:`HIGHER_ORDER_BELOW`):
 
 - **Untrimmed faces** (natural domain, or one loop around an axis-parallel rectangle):
-  :class:`.tensor_rule.TensorRule`, K15 x K15 on cells of the surfaces' Bézier patches, every face
-  of the same degrees in one rule.
+  :class:`.tensor_rule.TensorRule`, the pair in both directions on cells of the surfaces' Bézier
+  patches, every face of the same degrees in one rule.
 - **Trimmed faces**: :class:`.green_rule.GreenRule`, Green's theorem along the pcurves with an
   adaptive inner integral across the face.
 
@@ -13,13 +14,16 @@ Both are *globally* adaptive over every face passed at once: each pass evaluates
 (cells or pcurve intervals) of every rule (one vectorized evaluation per rule), sums values and
 error estimates, and bisects the pieces carrying the largest share of the error until the total
 error of every component is below ``tol`` times that component's scale. The estimate
-``|K15 - G7|`` is the error of the 7-point rule, an upper bound in practice for the 15-point
-value returned: it brackets the true error on smooth integrands.
+``|K - G|`` is the error of the embedded Gauss rule, an upper bound in practice for the Kronrod
+value returned: it brackets the true error on smooth integrands (tests check it on closed forms
+at every tolerance).
 
 An integrand is a callable ``f(S, Su, Sv, sign) -> (n, k)`` given the points ``S`` ``(n, 3)``,
 the partial derivatives ``Su``, ``Sv`` ``(n, 3)`` and the faces' orientations ``sign`` (+1, or -1
 for a reversed face: a float, or an ``(n,)`` array when the points come from several faces);
-``k`` integrals are computed at once.
+``k`` integrals are computed at once. An integrand may declare ``f.polynomial_degree = d``: when
+``Su`` and ``Sv`` are constant (a plane), ``f`` is a polynomial of degree at most ``d`` in ``S``;
+Green's rule then integrates across planar faces with a Gauss rule exact for that degree.
 """
 
 from __future__ import annotations
@@ -99,7 +103,8 @@ def integrate(faces, integrand, *, tol: float = DEFAULT_TOLERANCE, scale=None) -
     faces : sequence of TrimmedFace
     integrand : callable ``f(S, Su, Sv, sign) -> (n, k)``
         ``S``, ``Su``, ``Sv``: ``(n, 3)`` points and partial derivatives; ``sign``: -1.0 for a
-        reversed face, else 1.0. Integrated with respect to ``du dv``.
+        reversed face, else 1.0 (a float, or ``(n,)`` per point). Integrated with respect to
+        ``du dv``. Optional attribute ``polynomial_degree`` (see the module's docstring).
     tol : float
         Relative tolerance: the loop stops when every component's error estimate is at most
         ``tol * scale`` of that component.

@@ -19,6 +19,7 @@ import math
 
 import numpy as np
 
+from .. import limits
 from ..basis.algebra import bezier_segments
 
 __all__ = ["TensorRule", "bezier_nets", "group_key"]
@@ -26,9 +27,9 @@ __all__ = ["TensorRule", "bezier_nets", "group_key"]
 CHUNK_POINTS = 4000
 """Cells are evaluated in chunks of at most this many nodes (at least one cell): every temporary
 ``(points, 3)`` or homogeneous ``(points, 4)`` array then stays under glibc's 128 KiB mmap
-threshold and is recycled from the heap, where larger ones were mapped afresh each time and first-touch page faults cost more than
-the arithmetic (the teapot's 192 cells at 10-21: 3300 faults and 15.5 ms CPU per evaluation in
-one block, none and 9.4 ms in chunks of 4096 nodes)."""
+threshold and is recycled from the heap, where larger ones were mapped afresh each time and
+first-touch page faults cost more than the arithmetic (the teapot's 192 cells at 10-21: 3300
+faults and 15.5 ms CPU per evaluation in one block, none and 9.4 ms in chunks of 4096 nodes)."""
 
 
 def group_key(surface) -> tuple:
@@ -121,8 +122,9 @@ class TensorRule:
 
     def evaluate(self, cells, targets):
         # what is per cell is computed for all of them; the per-node work runs in chunks, whose
-        # temporaries are bounded (no memory check needed whatever the number of cells)
+        # temporaries are bounded: only the per-cell arrays grow with the number of cells
         n = self.gk.n
+        limits.check(len(cells) * n * 2 * (self.p + self.q + 2) * 8, "tensor quadrature Bernstein values")
         patch = cells[:, 0].astype(np.intp)
         da, db = cells[:, 2] - cells[:, 1], cells[:, 4] - cells[:, 3]
         a = cells[:, 1, None] + da[:, None] * self.gk.t  # (m, n) local parameters
