@@ -2,8 +2,8 @@
 closed integral over dD of G(u, v) dv`` with ``G(u, v) = integral from u_ref to u of g(s, v) ds``
 (``u_ref`` left of the trims). The outer integral runs along the pcurves (pieces split at their
 knots, a Gauss-Kronrod rule along each, bisected by :func:`.integrate.integrate` where needed);
-the inner one is an adaptive Gauss-Kronrod rule in ``s``, broken at the surface's u-knots, whose error is carried into the outer
-piece's error."""
+the inner one is an adaptive Gauss-Kronrod rule in ``s``, broken at the surface's u-knots, whose
+error is carried into the outer piece's error."""
 
 from __future__ import annotations
 
@@ -49,14 +49,14 @@ def cell_derivatives(surface, u, v):
     Nv = basis_ders_t(q, V, np.repeat(sv, b), v.ravel(), 1).reshape(2, q + 1, m, b)
     net = C[(su[:, None] - p + np.arange(p + 1))[:, :, None], (sv[:, None] - q + np.arange(q + 1))[:, None, :]]
     A = np.einsum("dami,mabk->dmibk", Nu, net)  # contracted in u: (2, m, a, q + 1, k)
-    D = np.einsum("dmibk,ebmj->demijk", A, Nv)  # (2, 2, m, a, b, k)
+    # then in v by batched matmuls on contiguous operands (einsum's generic loop was 5x slower)
+    Nv = np.ascontiguousarray(Nv.transpose(0, 2, 3, 1))[:, :, None]  # (2, m, 1, b, q + 1)
+    D00, D10, D01 = Nv[0] @ A[0], Nv[0] @ A[1], Nv[1] @ A[0]  # (m, a, b, k)
     if not surface._rational:
-        return D[0, 0], D[1, 0], D[0, 1]
-    w = D[..., -1:]
-    S = D[0, 0, ..., :-1] / w[0, 0]
-    Su = (D[1, 0, ..., :-1] - w[1, 0] * S) / w[0, 0]
-    Sv = (D[0, 1, ..., :-1] - w[0, 1] * S) / w[0, 0]
-    return S, Su, Sv
+        return D00, D10, D01
+    w = D00[..., -1:]
+    S = D00[..., :-1] / w
+    return S, (D10[..., :-1] - D10[..., -1:] * S) / w, (D01[..., :-1] - D01[..., -1:] * S) / w
 
 
 class GreenRule:
