@@ -101,9 +101,10 @@ class TensorRule:
     def _derivatives(self, patch, Ba, Bb):
         """``S``, ``Su``, ``Sv`` ``(m, n, n, 3)`` on the tensor grids of ``m`` cells of the
         patches ``patch`` ``(m,)``, given the Bernstein values and derivatives at the cells' local
-        nodes, ``Ba`` ``(2, m, n, p + 1)`` in u and ``Bb`` ``(2, m, n, q + 1)`` in v; derivatives
-        with respect to the faces' own parameters. Two small contractions per cell: the
-        Bernstein values in u with the net, then in v."""
+        nodes, ``Ba`` ``(2, m, n, p + 1)`` in u and ``Bb`` ``(2, m, n, q + 1)`` in v, their
+        derivatives already divided by the patches' widths (so ``Su``, ``Sv`` are derivatives with
+        respect to the faces' own parameters). Two small contractions per cell: the Bernstein
+        values in u with the net, then in v."""
         m, n = Ba.shape[1:3]
         net = self.nets[patch]  # (m, p + 1, q + 1, k)
         p1, q1, k = net.shape[1:]
