@@ -101,30 +101,56 @@ def _reference_point(faces) -> tuple[np.ndarray, float]:
     return 0.5 * (lo + hi), max(0.5 * float(np.linalg.norm(hi - lo)), np.finfo(float).tiny)
 
 
-def _area_columns(x, N):
-    a = np.linalg.norm(N, axis=1)
-    return [a[:, None], a[:, None] * x, a[:, None] * x[:, _I] * x[:, _J]]
+def _dot(a, b):
+    """Row-wise dot product of ``(n, 3)`` arrays (einsum took 6x longer on the integrator's
+    4096-row chunks)."""
+    return a[:, 0] * b[:, 0] + a[:, 1] * b[:, 1] + a[:, 2] * b[:, 2]
 
 
-def _volume_columns(x, N, sign):
-    w = sign * np.einsum("ij,ij->i", x, N)
-    return [w[:, None] / 3.0, w[:, None] * x / 4.0, w[:, None] * x[:, _I] * x[:, _J] / 5.0]
+def _area_columns(x, N, moments):
+    a = np.sqrt(_dot(N, N))[:, None]
+    return [a, a * x, a * x[:, _I] * x[:, _J]] if moments else [a]
+
+
+def _volume_columns(x, N, sign, moments):
+    w = (sign * _dot(x, N))[:, None]
+    return [w / 3.0, w * x / 4.0, w * x[:, _I] * x[:, _J] / 5.0] if moments else [w / 3.0]
+
+
+def _cross(a, b):
+    """Row-wise cross product of ``(n, 3)`` arrays (np.cross's axis handling cost more than the
+    arithmetic on the integrator's batches)."""
+    a0, a1, a2 = a[:, 0], a[:, 1], a[:, 2]
+    b0, b1, b2 = b[:, 0], b[:, 1], b[:, 2]
+    out = np.empty(a.shape)
+    out[:, 0] = a1 * b2 - a2 * b1
+    out[:, 1] = a2 * b0 - a0 * b2
+    out[:, 2] = a0 * b1 - a1 * b0
+    return out
 
 
 def _integrand(center, parts):
     """The integrand of :func:`integrate` for the groups ``parts`` (subset of ``"area"``,
     ``"volume"``, ``"area moments"``, ``"volume moments"``)."""
+    area, volume = "area" in parts, "volume" in parts
+    area_moments, volume_moments = "area moments" in parts, "volume moments" in parts
 
     def f(S, Su, Sv, sign):
-        N = np.cross(Su, Sv)
-        x = S - center
-        cols = []
-        if "area" in parts:
-            cols += _area_columns(x, N) if "area moments" in parts else _area_columns(x, N)[:1]
-        if "volume" in parts:
-            cols += _volume_columns(x, N, sign) if "volume moments" in parts else _volume_columns(x, N, sign)[:1]
-        return np.concatenate(cols, axis=1)
+        N = _cross(Su, Sv)
+        if area_moments or volume_moments:
+            x = S - center
+            cols = (_area_columns(x, N, area_moments) if area else []) + \
+                (_volume_columns(x, N, sign, volume_moments) if volume else [])
+            return np.concatenate(cols, axis=1)
+        # area and/or volume alone (the common case): written into one array
+        out = np.empty((len(S), int(area) + int(volume)))
+        if area:
+            np.sqrt(_dot(N, N), out=out[:, 0])
+        if volume:
+            np.multiply(_dot(S - center, N), sign / 3.0, out=out[:, -1])
+        return out
 
+    f.polynomial_degree = 3  # with Su, Sv constant: at most x_i x_j (x . N), cubic in S
     return f
 
 
