@@ -13,10 +13,11 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from test_sdf_grid import star_mesh
 
-from splinekit.errors import NotManifoldError
+from splinekit import limits
+from splinekit.errors import NotManifoldError, ResourceLimitError
 from splinekit.mesh import primitives
 from splinekit.mesh.geometry import triangulate
-from splinekit.pointcloud import _gridscan
+from splinekit.pointcloud import _gridscan, _meshsetup
 from splinekit.pointcloud.meshdistance import MeshDistance
 
 pytest.importorskip("numba")
@@ -114,6 +115,27 @@ def test_a_degenerate_triangle_falls_back(monkeypatch):
     monkeypatch.setenv("SPLINEKIT_NUMBA", "1")
     d = MeshDistance(V, T)
     assert d._grid_arrays.normals is None and d._grid_arrays.adjacency is None
+
+
+@pytest.mark.parametrize("extra", [0, 1])
+def test_a_vertex_of_many_triangles_falls_back(extra, monkeypatch):
+    # a closed cone: apex and base centre each in as many triangles as the compiled twin search takes, and one more
+    n = _meshsetup.MAX_VALENCE + extra
+    a = 2 * np.pi * np.arange(n) / n
+    V = np.concatenate([np.column_stack([np.cos(a), np.sin(a), np.zeros(n)]), [[0, 0, 1.0], [0, 0, 0]]])
+    i, j = np.arange(n), (np.arange(n) + 1) % n
+    T = np.concatenate([np.column_stack([i, j, np.full(n, n)]), np.column_stack([j, i, np.full(n, n + 1)])])
+    assert_same(V, T, monkeypatch, compiled_normals=not extra)
+
+
+def test_the_setup_is_checked_against_the_memory_budget(monkeypatch):
+    V, T = lumpy(2)
+    monkeypatch.setenv("SPLINEKIT_NUMBA", "1")
+    need = _meshsetup.SETUP_BYTES * len(T)
+    with limits.budget(need - 1), pytest.raises(ResourceLimitError, match="grid set-up"):
+        MeshDistance(V, T)._grid_arrays
+    with limits.budget(need):
+        assert MeshDistance(V, T)._grid_arrays.normals is not None
 
 
 @settings(max_examples=40, deadline=None)

@@ -18,7 +18,17 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .. import limits
+
 SETUP_KERNELS = "splinekit.pointcloud._meshsetup_kernels"
+
+MAX_VALENCE = 64
+"""Most triangles at a vertex for the compiled connectivity: it finds twins and sorts neighbours
+by scanning each vertex's corners (quadratic in the valence); a mesh with a busier vertex (a fan
+of thousands of triangles) takes the numpy builders' sorts instead."""
+
+SETUP_BYTES = 640
+"""Bytes per triangle of the compiled set-up's arrays (about 80 numbers), for the memory budget."""
 
 
 @dataclass(frozen=True)
@@ -29,8 +39,9 @@ class GridArrays:
     ``_bvh_prisms``; ``normals``: ``(face (m, 3), edge (m, 3, 3), vertex per corner (m, 3, 3))``
     pseudo-normals as ``MeshDistance._bvh_normals``, and ``adjacency``: the region scan's
     connectivity as :func:`._gridscan.adjacency` gives it; both None unless the mesh is closed
-    and consistently oriented (every half-edge has exactly one opposite), when the numpy
-    builders serve (and name what is wrong)."""
+    and consistently oriented (every half-edge has exactly one opposite) with at most
+    :data:`MAX_VALENCE` triangles at a vertex, when the numpy builders serve (and name what is
+    wrong)."""
 
     plane: np.ndarray
     ball: np.ndarray
@@ -44,6 +55,7 @@ def grid_arrays(K, V, T, bvh, thin):
     hierarchy ``bvh``; ``K``: the compiled module :data:`SETUP_KERNELS`; ``thin``: a triangle
     whose cross product is at most ``thin`` times its two edges' lengths gets no plane."""
     m, nv = len(T), len(V)
+    limits.check(SETUP_BYTES * m, f"the grid set-up's arrays for {m:,} triangles")
     tri, order = bvh.tri, bvh.order
     fn, plane = np.empty((m, 3)), np.empty((m, 3))
     ball, prism = np.empty((m, 4)), np.empty((m, 20))
@@ -53,7 +65,7 @@ def grid_arrays(K, V, T, bvh, thin):
     vorder, new, at = K.renumber(T, order, nv, nT)
     ptr, corner, ahead, distinct = K.corners(T, at, new)
     twin = np.empty(3 * m, dtype=np.int64)
-    if not distinct or K.twins(nT, ptr, corner, ahead, twin) > 0:
+    if not distinct or np.diff(ptr).max() > MAX_VALENCE or K.twins(nT, ptr, corner, ahead, twin) > 0:
         return GridArrays(plane, ball, prism, None, None)
     # numpy's arctan2, as the numpy builder's (it may round otherwise than the C library's)
     ang = np.arctan2(sin_ang, cos_ang)
