@@ -1,7 +1,9 @@
 """Compiled (numba) set-up of :class:`~splinekit.pointcloud.meshdistance.MeshDistance`'s compiled
 searches: the triangle hierarchy (:class:`~._trianglebvh.TriangleBVH`) and, for a closed mesh,
-every per-triangle and per-vertex array the region scan reads (:mod:`._meshsetup`), in parallel
-passes over the triangles in the hierarchy's order.
+every per-triangle and per-vertex array the region scan reads (:mod:`._meshsetup`), in the
+hierarchy's triangle order. The three passes over triangles and vertices run in parallel; the
+small ones (the hierarchy, twins, renumbering, edges: 1-4 ms each) stay serial, as a parallel
+launch on a loaded machine can wait milliseconds for its second thread.
 
 Loaded through :func:`splinekit._kernels.load`. Each array equals, bit for bit, what the numpy
 builders make (``TriangleBVH`` without kernels, ``_pseudo_normals``, ``MeshDistance._bvh_planes``
