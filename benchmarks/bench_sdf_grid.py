@@ -61,7 +61,8 @@ a parallel launch can wait milliseconds for its second thread (an empty ``prange
 a launch at load 1.9), so the set-up keeps its small passes serial; the scan's columns (4.05 M
 non-empty for 2.93 M distances) are now its largest part. The full run at load 6.4: from_mesh
 1.41 s wall, pysdf 10.4 (7.4x), Open3D 64 (45x), libigl 68 (48x); ``--threads`` at load 7.5:
-from_mesh 0.61-0.87 CPU s against pysdf's 4.3-5.0 (5.8-7.4x in CPU).
+from_mesh 0.61-0.87 CPU s against pysdf's 4.3-5.0 (5.8-7.4x in CPU); at load 1.8, two threads:
+from_mesh 0.32-0.48 s wall (scan 0.17, cuts 0.06, coarse grid 0.04, set-up 0.045), pysdf 2.13-2.25.
 
 Seventh session: a whole different structure, as the sixth session's profile called for (every
 level of the block hierarchy cost about what it saved): no blocks, no candidate lists. The
