@@ -31,12 +31,38 @@ the output, the float64 grid. Agreement with splinekit (max |difference|, differ
 is printed; on the full case Open3D's ray-parity sign is wrong at a few samples (the
 generalized winding number, by brute force, agrees with splinekit there).
 
-Profile of ``from_mesh`` at 128^3 (81,920 triangles), one thread, CPU seconds (``cProfile`` on
-``process_time``, load 4-5): 0.97 in all; the region scan (``MeshDistance.grid_signed``; the
-kernel is ``splinekit/pointcloud/_gridsdf_scan.py``, whose notes give the argument) 0.90: scan
-0.40, regions and their cuts 0.21, the coarse grid's exact distances 0.05 (these three run on
-all threads), connectivity 0.04, pseudo-normals 0.08, the hierarchy 0.05, bound coefficients
-0.03; the component sign pass 0.04. So on two idle threads about 0.3 s stays serial.
+Profile of ``from_mesh`` at 128^3 (81,920 triangles), one thread, CPU seconds (``cProfile`` and
+``thread_time``, load 4.5-5, so about 1.3-1.5x the idle figures): 0.54-0.56 in all, against
+0.94-0.98 before the eighth session in the same runs; the region scan (``MeshDistance.grid_signed``;
+the kernel is ``splinekit/pointcloud/_gridsdf_scan.py``, whose notes give the argument) 0.35
+(per region 0.06, columns 0.15, exact distances and signs 0.135), regions and their cuts 0.08,
+the coarse grid's exact distances 0.055 (these three run on all threads), the serial set-up
+0.04, the sign pass 0.0024. Eighth session, the serial numpy set-up before the kernels (0.22-0.24
+of one thread: pseudo-normals with their ``np.unique`` edge table and ``bincount`` scatters,
+planes and prisms, ``fn[order]`` copies, the hierarchy's argsorts, the scan's connectivity) went
+into compiled passes (``splinekit/pointcloud/_meshsetup.py``): the hierarchy by radix-sorted Morton
+codes, one parallel pass per triangle for planes, prisms, face normals and corner-angle
+arguments (``numpy.arctan2`` between, as the numpy builder's may round otherwise than libm's),
+twins through vertex -> corner lists, edge and vertex pseudo-normals gathered, everything in the
+hierarchy's order and a renumbering where mesh neighbours are memory neighbours: 0.044-0.051
+against 0.221-0.243 (interleaved in one process, load 1.8), the same arrays bit for bit (tested
+against the numpy builders, which stay for ``SPLINEKIT_NUMBA=0`` and for meshes that are not
+closed and consistently oriented). The component pass (``scipy.ndimage.label`` and two bincounts,
+0.05) runs only when some two 6-neighbours beyond half a step differ in sign; a compiled check
+that also writes the signed grid (0.0024) finds none on a clean mesh, and then every component
+has one sign and the labelling could change nothing (self-intersecting meshes still get it,
+tested). The region helpers were called with 15-19 array arguments from ``cut_all`` and ``scan``;
+inlined (``geometry``, ``polytope``, ``cut``, the vertex rays): ``cut_all`` 0.150-0.213 -> 0.080,
+``scan`` 0.43-0.75 -> 0.34-0.48 (interleaved processes, load 3.3-3.7); not inlining ``cut`` and
+the rays saved 8 of the 89 s of the first compile but cost about 5 % of both kernels. The first
+compile (once per install) takes 89 s of CPU at load 4 against 46 s before. Every step left the
+benchmark grid (and a band, and the quick case) bit for bit as it was. Left: on a loaded machine
+a parallel launch can wait milliseconds for its second thread (an empty ``prange`` measured 8 ms
+a launch at load 1.9), so the set-up keeps its small passes serial; the scan's columns (4.05 M
+non-empty for 2.93 M distances) are now its largest part. The full run at load 6.4: from_mesh
+1.41 s wall, pysdf 10.4 (7.4x), Open3D 64 (45x), libigl 68 (48x); ``--threads`` at load 7.5:
+from_mesh 0.61-0.87 CPU s against pysdf's 4.3-5.0 (5.8-7.4x in CPU); at load 1.8, two threads:
+from_mesh 0.32-0.48 s wall (scan 0.17, cuts 0.06, coarse grid 0.04, set-up 0.045), pysdf 2.13-2.25.
 
 Seventh session: a whole different structure, as the sixth session's profile called for (every
 level of the block hierarchy cost about what it saved): no blocks, no candidate lists. The

@@ -8,13 +8,16 @@ Aanaes 2005), which is exact for a closed, consistently oriented mesh: both from
 which scans the characteristic regions of the mesh's faces, edges and vertices).
 Voxels farther than half a voxel from the surface take the majority sign of their 6-connected
 component (no such component can straddle the surface), which protects them against a rounding
-slip of the pseudo-normal test.
+slip of the pseudo-normal test. On a dense grid with compiled code a pass that checks whether any
+two such neighbours differ in sign comes first (:mod:`._frommesh_kernels`); where none do,
+every component has one sign and the majority changes nothing, so the labelling is skipped.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
+from .. import _kernels
 from ..errors import NotManifoldError, ParameterError
 from ..mesh.geometry import triangulate
 from ..mesh.polymesh import PolyMesh
@@ -24,6 +27,8 @@ from .narrowband import NarrowBandSDF
 from .sampled import SampledSDF, _check_count, _grid_layout, _interp_name
 
 __all__ = ["from_mesh"]
+
+SIGN_KERNELS = "splinekit.implicit._frommesh_kernels"
 
 
 def closed_triangles(mesh, what: str = "the mesh", needs: str = "a signed distance"):
@@ -102,12 +107,18 @@ def from_mesh(mesh, resolution, *, band=None, padding: float = 0.1, interpolatio
             raise ParameterError(f"band = {band!r} must be at least two voxel diagonals ({need:.6g}) for this grid")
     dist = MeshDistance(V, T)
     limit = np.inf if band is None else band
-    d = dist.grid_signed(lo, spacing, shape, limit)  # compiled, by blocks of samples
+    d = dist.grid_signed(lo, spacing, shape, limit)  # compiled, by regions or blocks of samples
+    gap = 0.5 * float(spacing.max())
     if d is None:
         d, found = _signed_by_chunks(dist, lo, spacing, shape, limit)
     else:
+        kern = _kernels.load(SIGN_KERNELS) if band is None else None
+        if kern is not None:
+            signed = np.empty_like(d)
+            if kern.settle_signs(d, gap, signed) == 0:  # every far component has one sign
+                return SampledSDF(signed, lo, spacing, interpolation)
         found = np.isfinite(d)
-    inside = _component_signs(d, found, 0.5 * float(spacing.max()))
+    inside = _component_signs(d, found, gap)
     d = np.where(found, np.abs(d), np.inf)
     signed = np.where(inside, -d, d)
     if band is None:

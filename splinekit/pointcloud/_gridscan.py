@@ -32,7 +32,10 @@ def adjacency(dist):
     triangle at each (so that the regions of edges and vertices come in the hierarchy's spatial
     order, as the faces do, and the scan's writes stay local): vertices, triangles, edges
     ``(a, b)``, their two half-edges ``(E, 2)`` (``3 t + k`` is edge ``k`` of triangle ``t``),
-    vertex -> neighbour CSR ``(ptr, nbr)`` and a triangle at each vertex."""
+    vertex -> neighbour CSR ``(ptr, nbr)`` and a triangle at each vertex. From the compiled
+    set-up when it has them (:mod:`._meshsetup`, the same arrays)."""
+    if dist._grid_arrays is not None and dist._grid_arrays.adjacency is not None:
+        return dist._grid_arrays.adjacency
     topo, order = dist.topology, dist.bvh.order
     m, nv = len(order), len(dist.unit_vertices)
     at = np.empty(m, dtype=np.int64)  # original triangle -> its place in the hierarchy

@@ -62,7 +62,7 @@ def _beaten(R, geo, G, go, gh):
     return u * (1.0 + 1e-9) + 1e-12 < R
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def cut(geo, rmax, step, G, go, gh):
     """A radius beyond which a region holds no nearest point, at most ``rmax``: ``rmax`` when
     :func:`_beaten` rejects it (a region running out of the grid unopposed: one test), else
@@ -92,7 +92,7 @@ def _unit3(x, y, z):
     return x / ln, y / ln, z / ln, ln
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _rays(v, V, ptr, nbr, e, rays):
     """The extreme rays of vertex ``v``'s cone ``{y : y . e_j <= 0}`` (``e_j`` its unit edge
     directions, written to ``e``): unit normals of planes through two edges that satisfy every
@@ -129,7 +129,7 @@ def _rays(v, V, ptr, nbr, e, rays):
     return n
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def geometry(r, V, T, tri, plane, prism, ea, eb, eh, ptr, nbr, vown, geo, e, rays):
     """Region ``r``'s cone into ``geo``: centre ``m`` (0-2), unit axis ``a`` (3-5), the radius
     ``rho`` of its feature about ``m`` (6), the spread (7: every point at distance ``R`` from
@@ -229,7 +229,7 @@ def _corner(cor, n, x, y, z, origin, spacing):
     return n + 1
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def polytope(r, kind, R, V, T, tri, plane, prism, ea, eb, ptr, nbr, geo, e, rays, origin, spacing, hs, cor):
     """Region ``r`` (after :func:`geometry`, whose ``geo``, ``e``, ``rays`` it reads) cut at
     radius ``R``: its half-spaces ``a . x <= b`` into ``hs`` and its corners in sample-index

@@ -46,6 +46,7 @@ from ..mesh.polymesh import PolyMesh
 from ..mesh.topology import Topology
 from ._cloud import as_cloud, kd_tree
 from ._gridscan import SCAN_KERNELS, scan_grid
+from ._meshsetup import SETUP_KERNELS, grid_arrays
 from ._trianglebvh import TriangleBVH
 
 __all__ = ["MeshDistance", "closest_points_on_mesh", "closest_points_on_triangles"]
@@ -259,8 +260,9 @@ class MeshDistance:
 
     @cached_property
     def bvh(self) -> TriangleBVH:
-        """Bounding-volume hierarchy over the triangles (the compiled search)."""
-        return TriangleBVH(self.unit_vertices, self.tris)
+        """Bounding-volume hierarchy over the triangles (the compiled search; built by compiled
+        passes too unless compiled code is switched off)."""
+        return TriangleBVH(self.unit_vertices, self.tris, _kernels.load(SETUP_KERNELS))
 
     @cached_property
     def topology(self) -> Topology:
@@ -273,9 +275,18 @@ class MeshDistance:
         return _pseudo_normals(self.unit_vertices, self.tris, self.topology)
 
     @cached_property
+    def _grid_arrays(self):
+        """The arrays below (and the region scan's connectivity) from the compiled set-up
+        (:mod:`._meshsetup`), or None when compiled code is switched off."""
+        K = _kernels.load(SETUP_KERNELS)
+        return None if K is None else grid_arrays(K, self.unit_vertices, self.tris, self.bvh, THIN)
+
+    @cached_property
     def _bvh_normals(self):
         """Pseudo-normals in the hierarchy's triangle order: face ``(m, 3)``, edge ``(m, 3, 3)``
         and, per triangle corner, vertex ``(m, 3, 3)``."""
+        if self._grid_arrays is not None and self._grid_arrays.normals is not None:
+            return self._grid_arrays.normals
         fn, en, vn = self.pseudo_normals
         order = self.bvh.order
         return (np.ascontiguousarray(fn[order]), np.ascontiguousarray(en[order]),
@@ -286,6 +297,8 @@ class MeshDistance:
         """Per triangle in the hierarchy's order: unit plane normal ``(m, 3)`` (zero for a
         triangle too thin for its normal to be accurate) and bounding ball ``(m, 4)`` (centroid,
         radius), for the bounds of :mod:`._gridsdf_kernels`."""
+        if self._grid_arrays is not None:
+            return self._grid_arrays.plane, self._grid_arrays.ball
         tri = self.bvh.tri
         e1, e2 = tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]
         n = np.cross(e1, e2)
@@ -304,6 +317,8 @@ class MeshDistance:
         """Per triangle in the hierarchy's order, ``(m, 20)``: plane ``(n, n . a)``, edge lines
         ``(u_k, u_k . a_k)`` (unit in-plane normals pointing out) and bounding disk (centroid,
         radius), for the bound of :mod:`._gridsdf_kernels` (none for a triangle too thin)."""
+        if self._grid_arrays is not None:
+            return self._grid_arrays.prism
         tri = self.bvh.tri
         plane, ball = self._bvh_planes
         out = np.zeros((len(tri), 20))
