@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from _compiled import compiled_or_skip
 from scipy.spatial import cKDTree
 from scipy.spatial.distance import cdist
 
@@ -24,9 +25,7 @@ pytest.importorskip("numba")
 @pytest.fixture
 def compiled(monkeypatch):
     """The compiled path at every size (the loader would leave small clouds to numpy)."""
-    kernels = _kernels.load(_pointtree.KERNELS)
-    if kernels is None:
-        pytest.skip("numba kernels unavailable")
+    kernels = compiled_or_skip(_pointtree.KERNELS)
     monkeypatch.setattr(_pointtree, "_kernels_for", lambda n, k: kernels)
     return kernels
 
@@ -65,9 +64,7 @@ def brute_knn_distances(P, k):
 @given(kind=st.sampled_from(KINDS), path=st.sampled_from([None, *PATHS]), n=st.integers(1, 300),
        k=st.integers(1, 24), seed=st.integers(0, 2**32 - 1))
 def test_knn_matches_brute_force(kind, path, n, k, seed):
-    kernels = _kernels.load(_pointtree.KERNELS)
-    if kernels is None:
-        pytest.skip("numba kernels unavailable")
+    kernels = compiled_or_skip(_pointtree.KERNELS)
     k = min(k, n)
     P = cloud(kind, n, np.random.default_rng(seed))
     original = _pointtree._kernels_for, _pointtree.CROWDING
@@ -120,9 +117,7 @@ def sym3(kernels, C):
 @settings(max_examples=60, deadline=None)
 @given(seed=st.integers(0, 2**32 - 1), thinness=st.floats(1e-6, 1.0), log_scale=st.floats(-3, 3))
 def test_scalar_eigen_solve_is_the_vectorized_one(seed, thinness, log_scale):
-    kernels = _kernels.load(_pointtree.KERNELS)
-    if kernels is None:
-        pytest.skip("numba kernels unavailable")
+    kernels = compiled_or_skip(_pointtree.KERNELS)
     rng = np.random.default_rng(seed)
     Q, _ = np.linalg.qr(rng.normal(size=(3, 3)))
     lam = np.sort(rng.uniform(0.2, 1.0, 3)) * 10.0**log_scale

@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from _compiled import compiled_or_skip
 from test_sdf_grid import brute_distance, star_mesh, winding_number
 
 from splinekit import _kernels, limits
@@ -30,8 +31,7 @@ from splinekit.pointcloud._gridsdf_bounds import tangent  # noqa: E402
 @contextlib.contextmanager
 def forced():
     """Compiled kernels for every job size (the loader leaves small grids to numpy)."""
-    if _kernels.load(meshdistance.GRID_KERNELS) is None:
-        pytest.skip("numba kernels unavailable")
+    compiled_or_skip(meshdistance.GRID_KERNELS)
     with pytest.MonkeyPatch.context() as mp:
         mp.setenv("SPLINEKIT_NUMBA", "1")
         mp.setattr(_kernels, "MIN_WORK", 0)

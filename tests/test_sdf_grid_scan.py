@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from _compiled import compiled_or_skip
 from test_sdf_grid import brute_distance, star_mesh, winding_number
 
 from splinekit import _kernels, limits
@@ -24,10 +25,7 @@ pytest.importorskip("numba")
 
 @pytest.fixture(scope="module")
 def kern():
-    k = _kernels.load(_gridscan.SCAN_KERNELS)
-    if k is None:
-        pytest.skip("numba kernels unavailable")
-    return k
+    return compiled_or_skip(_gridscan.SCAN_KERNELS)
 
 
 def grid_points(origin, step, shape):
@@ -227,8 +225,7 @@ def test_the_scan_gives_the_block_kernels_values_to_the_last_bit(kern, monkeypat
     # triangles may round the distance to it 1 ulp apart, and the scan measures both
     from splinekit.pointcloud import meshdistance
 
-    if _kernels.load(meshdistance.GRID_KERNELS) is None:
-        pytest.skip("numba kernels unavailable")
+    compiled_or_skip(meshdistance.GRID_KERNELS)
     monkeypatch.setattr(_kernels, "MIN_WORK", 0)
     monkeypatch.setenv("SPLINEKIT_NUMBA", "1")
     V, T = of(star_mesh())

@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from _compiled import compiled_or_skip
 from test_sdf_grid import star_mesh
 
 from splinekit import _kernels
@@ -20,10 +21,7 @@ pytest.importorskip("numba")
 
 @pytest.fixture(scope="module")
 def kern():
-    k = _kernels.load(frommesh.SIGN_KERNELS)
-    if k is None:
-        pytest.skip("numba kernels unavailable")
-    return k
+    return compiled_or_skip(frommesh.SIGN_KERNELS)
 
 
 @settings(max_examples=60, deadline=None)

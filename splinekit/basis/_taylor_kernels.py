@@ -93,6 +93,8 @@ def curve_derivatives(breaks, table, u, order, rational, binom, out):
                     for d in range(kdim):
                         out[r, i, d] = h[r, d]
                 continue
+            # the quotient rule of _numba_kernels.curve_derivatives, repeated here: numba's disk
+            # cache keys a kernel on its own file, so a helper shared across files could go stale
             w0 = h[0, kdim - 1]
             for r in range(order + 1):
                 for d in range(kdim - 1):
