@@ -66,8 +66,12 @@ the kernels' ``MIN_WORK`` and took the numpy/scipy rules, about 1.5 ms each in p
 two compiled levels made 16 ms of CPU against libigl's 25 ms. A refinement now asks for the
 kernels once with its finest level's size and refines every level with them: 6.6 ms CPU. In
 wall time the kernels lost a further 3-8x to OpenMP workers spinning between kernel calls while
-other processes wanted the cores (125 ms wall for 16 ms CPU); ``splinekit._kernels`` now starts
-them with ``OMP_WAIT_POLICY=PASSIVE`` (18.4 -> 6.3 ms wall, libigl 29-41 ms in the same runs).
+other processes wanted the cores (125 ms wall for 16 ms CPU); ``OMP_WAIT_POLICY=PASSIVE`` gave
+18.4 -> 6.3 ms wall there (libigl 29-41 ms in the same runs). It is not the library's default: on
+the idle machine (load 1.1-1.9, alternating runs of ``--quick``) passive workers cost more than
+they save, Loop level 6 / libigl 2.2x passive against 5.4-9.7x spinning, and the 400 x 400 grid
+of ``bench_eval.py`` 0.88x splipy against 1.9-3.9x. On a shared, oversubscribed machine set
+``OMP_WAIT_POLICY=PASSIVE`` before the first kernel loads.
 """
 
 from __future__ import annotations

@@ -107,12 +107,6 @@ def load(module: str, work: float | None = None, *, min_work: float | None = Non
             if _served < LOAD_WORK:
                 return None
     if module not in _modules:
-        if not loaded():
-            # OpenMP threads that wait passively: spinning workers (libgomp's default) take a core
-            # from the main thread between kernel calls; on a busy 2-core machine icosahedron ->
-            # Loop level 6 took 125 ms spinning, 32 ms passive, 15 ms on one thread. Read when
-            # numba first starts its thread pool; a value the user set is kept.
-            os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")
         try:
             _modules[module] = importlib.import_module(module)
         except ImportError as exc:  # numba absent or broken: the numpy path serves

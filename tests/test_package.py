@@ -223,24 +223,6 @@ def test_first_small_tessellation_does_not_import_numba():
     assert out == "True False"
 
 
-@pytest.mark.parametrize("preset", [None, "ACTIVE"])
-def test_kernels_start_openmp_workers_waiting_passively_unless_told(preset):
-    """Loading the first kernel module sets OMP_WAIT_POLICY=PASSIVE (spinning workers took a core
-    from the main thread between kernel calls, bench_subdiv.py's docstring), keeping a user's value."""
-    pytest.importorskip("numba")
-    code = (
-        "import os, numpy as np\n"
-        + ("os.environ.pop('OMP_WAIT_POLICY', None)\n" if preset is None else f"os.environ['OMP_WAIT_POLICY'] = {preset!r}\n")
-        + "os.environ['SPLINEKIT_NUMBA'] = '1'\n"
-        "import splinekit as sk\n"
-        "from splinekit import _kernels\n"
-        "before = os.environ.get('OMP_WAIT_POLICY')\n"
-        "sk.BSplineCurve.uniform(3, np.random.rand(10, 3)).evaluate(np.linspace(0, 1, _kernels.MIN_WORK))\n"
-        "print(before, os.environ.get('OMP_WAIT_POLICY'), _kernels.loaded())"
-    )
-    assert _run(code) == f"{preset} {preset or 'PASSIVE'} True"
-
-
 def test_env_switch_is_read_at_call_time(monkeypatch):
     module = "splinekit.basis._numba_kernels"
     monkeypatch.setenv("SPLINEKIT_NUMBA", "0")
