@@ -28,6 +28,7 @@ from splinekit.errors import (
     ParameterError,
 )
 from splinekit.mesh import PolyMesh
+from splinekit.mesh._rows import cross_rows
 from splinekit.mesh.geometry import triangulate
 from splinekit.mesh.topology import Topology
 
@@ -124,13 +125,7 @@ def triangle_normals(P: np.ndarray, scale: bool = True) -> np.ndarray:
         P = np.ldexp(P, -np.frexp(big)[1][:, None, None])
     a = P[:, 1] - P[:, 0]
     b = P[:, 2] - P[:, 0]
-    n = np.empty((len(P), 3))
-    np.multiply(a[:, 1], b[:, 2], out=n[:, 0])
-    n[:, 0] -= a[:, 2] * b[:, 1]
-    np.multiply(a[:, 2], b[:, 0], out=n[:, 1])
-    n[:, 1] -= a[:, 0] * b[:, 2]
-    np.multiply(a[:, 0], b[:, 1], out=n[:, 2])
-    n[:, 2] -= a[:, 1] * b[:, 0]
+    n = cross_rows(a, b, np.empty((len(P), 3)))
     length = np.sqrt(np.einsum("ij,ij->i", n, n))
     ok = length > 0  # zero area: a zero vector, never NaN
     n /= np.where(ok, length, 1.0)[:, None]
